@@ -1,0 +1,17 @@
+"""The Typer application every verb module registers on (one module per verb)."""
+
+from __future__ import annotations
+
+import typer
+
+app = typer.Typer(
+    name="snncc",
+    help=(
+        "snncc: compile trained spiking networks (CUBA LIF RSNN/FFSNN) and LSTMs for Loihi and "
+        "Jetson, and prove what each target loses against one reference simulation."
+    ),
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)

@@ -1,0 +1,31 @@
+"""``snncc inspect``: what a frontend understood of a model file, as an IR summary."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from snncc.cli.app import app
+from snncc.cli.output import print_json
+from snncc.cli.render import print_graph_summary
+from snncc.frontends import LoadOptions, load_model
+from snncc.ir.summary import graph_summary
+
+
+@app.command("inspect")
+def inspect_command(
+    model: Path = typer.Argument(..., help="Model file (.pt, .nir, .snnir)."),
+    params: Optional[Path] = typer.Option(None, "--params", help="Parameters file for a SpyTorch weight list."),
+    dt: Optional[float] = typer.Option(None, "--dt", help="Time step (s) for formats without one."),
+    reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats without one."),
+    json_out: bool = typer.Option(False, "--json", help="Print as JSON."),
+) -> None:
+    """Load a model, validate its IR and print it: nodes, sizes, time constants, delays, reset."""
+    graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
+    summary = graph_summary(graph)
+    if json_out:
+        print_json(summary)
+    else:
+        print_graph_summary(summary)

@@ -1,0 +1,83 @@
+"""Frontends: every supported model file becomes a validated IR graph through ``load_model``.
+
+Dispatch is by file suffix to a loader ``(path, LoadOptions) -> Graph``; ``.pt``-like files are
+then told apart by content (snncc checkpoint or SpyTorch weight list). Loaders are imported
+lazily and more can be registered (``register_frontend``) without touching this module.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from snncc.atomic import file_sha256
+from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.ir.validate import validate
+
+
+@dataclass
+class LoadOptions:
+    """What a user can tell a frontend that a file cannot: parameters file, dt, reset mode."""
+
+    params: Path | None = None
+    dt: float | None = None
+    reset: str | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+Loader = Callable[[Path, LoadOptions], Graph]
+
+# suffix -> "module:function" (imported on first use) or a callable
+_LOADERS: dict[str, str | Loader] = {
+    ".snnir": "snncc.frontends.ir_file:load",
+    ".nir": "snncc.frontends.nir:load",
+    ".pt": "snncc.frontends.torch_models:load",
+    ".pth": "snncc.frontends.torch_models:load",
+    ".ckpt": "snncc.frontends.torch_models:load",
+}
+
+
+def register_frontend(suffix: str, loader: str | Loader) -> None:
+    """Add or replace the loader for files ending in ``suffix``."""
+    _LOADERS[suffix.lower()] = loader
+
+
+def _resolve(spec: str | Loader, suffix: str, path: Path) -> Loader:
+    if callable(spec):
+        return spec
+    module_name, func = spec.split(":")
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as ex:
+        if ex.name == module_name:
+            raise SnnccError(f"no frontend for {suffix} files is installed in this snncc", file=str(path), field="format") from None
+        raise
+    return getattr(module, func)
+
+
+def load_model(path: str | Path, options: LoadOptions | None = None) -> Graph:
+    """Load ``path`` with the frontend for its format, validate the graph and stamp its source hash."""
+    path = Path(path)
+    options = options or LoadOptions()
+    if not path.exists():
+        raise SnnccError("file does not exist", file=str(path), field="path")
+    suffix = path.suffix.lower()
+    spec = _LOADERS.get(suffix, _LOADERS[".pt"])
+    try:
+        graph = _resolve(spec, suffix, path)(path, options)
+        validate(graph)
+    except SnnccError as err:
+        raise err.with_file(str(path)) from None
+    graph.metadata.setdefault("source_file", path.name)
+    graph.metadata["source_sha256"] = file_sha256(path)
+    return graph
+
+
+def graph_from_object(obj: Any, source: str = "<object>", options: LoadOptions | None = None) -> Graph:
+    """An IR graph from an in-memory model: a zoo module, a checkpoint dict or a weight list."""
+    from snncc.frontends import torch_models
+
+    return validate(torch_models.from_object(obj, Path(source), options or LoadOptions()))

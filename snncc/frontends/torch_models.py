@@ -1,0 +1,37 @@
+"""``.pt`` files: snncc checkpoints and the authors' SpyTorch weight lists, told apart by content."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from snncc.errors import SnnccError
+from snncc.frontends.checkpoint import is_checkpoint, module_from_checkpoint
+from snncc.frontends.module import graph_from_module
+from snncc.frontends.spytorch import is_weight_list, load_weight_list
+from snncc.frontends.torchfile import load_torch_file
+from snncc.ir.graph import Graph
+
+
+def from_object(obj: Any, path: Path, options) -> Graph:
+    if isinstance(obj, torch.nn.Module):
+        return graph_from_module(obj)
+    if is_checkpoint(obj):
+        module = module_from_checkpoint(obj, source=str(path))
+        meta = obj.get("metadata") if isinstance(obj.get("metadata"), dict) else {}
+        return graph_from_module(module, metadata={**meta, "source_format": "snncc-checkpoint"})
+    if is_weight_list(obj):
+        return load_weight_list(obj, path, options.params)
+    if isinstance(obj, dict) and all(isinstance(v, torch.Tensor) for v in obj.values()):
+        raise SnnccError("a bare state dict has no architecture record; save an snncc checkpoint "
+                         "(snncc.frontends.checkpoint.save_checkpoint) or the authors' weight list",
+                         file=str(path), field="contents")
+    kind = type(obj).__name__
+    raise SnnccError(f"holds a {kind}, which is neither an snncc checkpoint nor a SpyTorch weight list "
+                     "([W_in, W_out(, V_rec)])", file=str(path), field="contents")
+
+
+def load(path: Path, options) -> Graph:
+    return from_object(load_torch_file(path), path, options)

@@ -1,0 +1,51 @@
+"""Loading ``.pt`` files safely: ``torch.load(weights_only=True, map_location="cpu")`` only.
+
+A pickle that needs arbitrary globals is refused, never executed. Every failure becomes one
+SnnccError naming the file and what it is not.
+"""
+
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from snncc.errors import SnnccError
+
+
+def _classify(path: Path) -> str:
+    head = path.read_bytes()[:4]
+    if head.startswith(b"PK"):
+        try:
+            with zipfile.ZipFile(path) as zf:
+                names = zf.namelist()
+        except zipfile.BadZipFile:
+            return "a truncated or damaged zip archive, not a readable torch file"
+        if not any(n.endswith("data.pkl") for n in names):
+            return "a zip archive that is not a torch file (no data.pkl inside)"
+        return "a damaged torch archive"
+    if head[:1] == b"\x80":
+        return "a pickle that is not a torch tensor file"
+    return "not a torch model file (unrecognised bytes)"
+
+
+REFUSED = ("refused: the file's pickle needs arbitrary Python objects (loaded with weights_only=True); "
+           "snncc never executes code from a model file")
+
+
+def load_torch_file(path: str | Path) -> Any:
+    """The object stored in ``path``, loaded with weights_only=True onto the CPU."""
+    path = Path(path)
+    if not path.is_file():
+        raise SnnccError("file does not exist", file=str(path), field="path")
+    if path.stat().st_size == 0:
+        raise SnnccError("file is empty", file=str(path), field="contents")
+    try:
+        return torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as ex:  # torch raises many types for bad bytes; all become one line
+        msg = str(ex)
+        if "GLOBAL" in msg or "Unsupported global" in msg or "Unsupported class" in msg:
+            raise SnnccError(REFUSED, file=str(path), field="pickle") from None
+        raise SnnccError(_classify(path), file=str(path), field="contents") from None

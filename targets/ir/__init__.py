@@ -1,0 +1,38 @@
+"""The ``ir`` target: the validated IR graph itself, written as a ``.snnir`` file.
+
+Useful to inspect what a frontend understood and to hand a model between tools; ``snncc
+compile out.snnir --target ...`` reads it back.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from snncc.ir.graph import Graph
+from snncc.ir.serialize import save_graph
+from snncc.ir.summary import graph_summary
+
+
+@dataclass
+class IRArtefact:
+    graph: Graph
+
+    def write(self, path: str | Path) -> None:
+        save_graph(self.graph, path)
+
+    def summary(self) -> dict[str, Any]:
+        return graph_summary(self.graph)
+
+
+class IRTarget:
+    name = "ir"
+    description = "snncc's IR as a .snnir file (validated graph, explicit dt, delays, reset)"
+    output_kind = "file"
+
+    def lower(self, graph: Graph, options: dict[str, Any]) -> IRArtefact:
+        return IRArtefact(graph.copy())
+
+
+target = IRTarget()

@@ -1,0 +1,66 @@
+"""A Loihi network as plain data: what the bundle stores, the emulator runs and the mapper places.
+
+Layer 0 is the input (``n`` input axons, no neurons). Every other layer is a population of CUBA
+compartments fed by the previous layer through ``weight`` (out, in) and, for ``dense_rec``, by
+itself through ``weight_rec`` (n, n). Integer fields follow Loihi's registers:
+
+    w_chip = weight * 2**(6 + wgt_exp)         weight: even integers in [-256, 254]
+    threshold on chip = v_th_mant * 2**6
+    u <- u*(4096 - i_decay)/4096 + q ;  v <- v*(4096 - v_decay)/4096 + u + bias * 2**bias_exp
+    ref_delay: steps a neuron stays silent after a spike, including the spike step (1 = none)
+    delay / delay_rec: extra synaptic delay in steps (0..62) on top of the one-step delivery;
+    a scalar for the whole projection or an int array shaped like the weights
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+LAYER_KINDS = ("input", "dense", "dense_rec")
+
+
+@dataclass(eq=False)
+class LoihiLayer:
+    name: str
+    kind: str
+    n: int
+    weight: np.ndarray | None = None        # (n, n_prev) even ints, None for the input layer
+    weight_rec: np.ndarray | None = None    # (n, n) even ints for dense_rec
+    wgt_exp: int = 0
+    wgt_exp_rec: int = 0                    # snncc extension: exponent of the recurrent matrix
+    delay: Any = 0                          # extra synaptic delay (steps), int or int array like weight
+    delay_rec: Any = 0
+    bias: np.ndarray | None = None          # bias mantissa per neuron
+    bias_exp: int = 6                       # netx reads bias with exponent 6
+    v_th_mant: int = 0
+    i_decay: int = 0
+    v_decay: int = 0
+    ref_delay: int = 1
+    vmin: int = -(2**23 - 1)
+    vmax: int = 2**23 - 1
+
+    @property
+    def fan_in(self) -> int:
+        """Input axons this layer's neurons listen to (feed-forward plus recurrent)."""
+        if self.weight is None:
+            return 0
+        return int(self.weight.shape[1] + (self.n if self.weight_rec is not None else 0))
+
+
+@dataclass(eq=False)
+class LoihiNetwork:
+    layers: list[LoihiLayer]
+    t_sample: int
+    metadata: dict[str, Any] = field(default_factory=dict)
+    core_map: dict[str, Any] | None = None   # set by the mapper (targets/loihi/partition.py)
+
+    @property
+    def input_width(self) -> int:
+        return self.layers[0].n
+
+    @property
+    def n_outputs(self) -> int:
+        return self.layers[-1].n
