@@ -1,0 +1,515 @@
+"""NIR graphs (``.nir``, the ``nir`` package) -> snncc IR.
+
+NIR is continuous-time and stores neither a time step nor a reset mode. snncc discretises every
+neuron with forward Euler at step ``dt``, current first, then voltage (what snnTorch does with
+the graphs it exports), and records ``discretisation="euler"`` in each IR LIF.
+
+CubaLIF (NIR):  tau_syn dI/dt = -I + w_in*S,   tau_mem dv/dt = (v_leak - v) + r*I,
+                spike v > v_threshold, v <- v_reset.
+Forward Euler at dt, with a = w_in*dt/tau_syn and m = r*dt/tau_mem (per neuron):
+    I[t] = (1 - dt/tau_syn) I[t-1] + a S[t]
+    v[t] = (1 - dt/tau_mem) v[t-1] + m I[t] + (dt/tau_mem) v_leak
+With the IR current J = m*I this is exactly the IR LIF (alpha = 1 - dt/tau_syn,
+beta = 1 - dt/tau_mem, V = v unchanged, threshold = v_threshold unchanged):
+    J[t] = alpha J[t-1] + (a*m) S[t]          -> the gain g = a*m scales the rows of the incoming
+                                                 weights AND biases (Affine biases stay on the
+                                                 current: the Dense bias, filtered by alpha)
+    V[t] = beta V[t-1] + J[t] + (dt/tau_mem) v_leak   -> a voltage bias (exact)
+snnTorch exports r = tau_mem/dt and w_in = tau_syn/dt, so g = 1 there (|g - 1| <= 1e-9 is float
+noise of that export and is snapped to exactly 1). v_reset != 0 is refused: the IR's V rests and
+resets at 0 and starts at 0, so a shifted reset cannot be expressed exactly.
+LIF/LI: the same with no synapse (IR tau_syn = dt, so alpha = 0 exactly), g = r*dt/tau.
+IF/I: no leak (IR tau_mem = 1e30 s, so beta == 1.0 exactly in float64), g = r*dt.
+Threshold: a memoryless comparator (tau_syn = tau_mem = dt: alpha = beta = 0, V = input).
+LI, CubaLI and I never spike (threshold +inf) and send their voltage (edge port "voltage").
+
+dt: ``--dt`` if given; else the ``snncc`` record of a graph snncc exported; else a ``dt`` key in
+the graph's metadata; else inferred from the snnTorch convention r = tau_mem/dt (dt = tau_mem/r,
+which must agree for every neuron and lie below every time constant) -- said in the graph's
+``import_notes``; otherwise refused with a line asking for ``--dt``.
+Reset: ``--reset zero|subtract``; default ``zero`` (NIR's own equation v <- v_reset = 0).
+Delays: a NIR ``Delay`` node becomes an IR edge delay of round(delay/dt) steps (non-integer or
+per-neuron differing delays are refused). Every other edge is delay 0 (snnTorch and Norse
+evaluate a feed-forward chain within one step), except that a cycle with no Delay node on it gets
+delay 1 on the edge leaving its last neuron population before the loop closes -- snnTorch's
+RSynaptic/RLeaky and Norse's recurrent cells feed back the PREVIOUS step's spikes.
+Sub-graphs (nested NIRGraph nodes, edges addressed as ``sub`` or ``sub.node``) are flattened;
+node names become dotted paths.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.ir.nodes import LIF, RESETS, Dense, Input, Output, Readout
+
+SNNCC_KEY = "snncc"          # graph-metadata key of the record snncc's exporter writes
+RECORD_FORMAT = "snncc-nir"
+GAIN_SNAP = 1e-9             # |gain - 1| below this is float noise of an r = tau/dt export
+NO_LEAK_TAU = 1e30           # IF/I: 1 - dt/1e30 == 1.0 exactly in float64
+SUPPORTED = ("Input", "Output", "Affine", "Linear", "Scale", "Delay", "Flatten", "LIF", "CubaLIF",
+             "LI", "CubaLI", "I", "IF", "Threshold", "NIRGraph")
+NEURONS = ("LIF", "CubaLIF", "LI", "CubaLI", "I", "IF", "Threshold")
+PASS_THROUGH = ("Delay", "Flatten", "SubInput", "SubOutput")
+
+
+@dataclass
+class _Flat:
+    """A NIR graph with sub-graphs flattened: primitive nodes by dotted path, edges between them."""
+
+    nodes: dict[str, Any] = field(default_factory=dict)
+    kinds: dict[str, str] = field(default_factory=dict)
+    edges: list[tuple[str, str]] = field(default_factory=list)
+
+
+def _kind(node: Any) -> str:
+    return type(node).__name__
+
+
+def _flatten(graph: Any, prefix: str, flat: _Flat, top: bool) -> None:
+    import nir
+
+    for name, node in graph.nodes.items():
+        path = prefix + str(name)
+        if "/" in path:
+            raise SnnccError("NIR node names must not contain '/'", field=f"node '{path}'")
+        if isinstance(node, nir.NIRGraph):
+            _flatten(node, path + ".", flat, top=False)
+            continue
+        kind = _kind(node)
+        if not top and kind in ("Input", "Output"):
+            kind = "Sub" + kind
+        flat.nodes[path] = node
+        flat.kinds[path] = kind
+    for src, dst in graph.edges:
+        flat.edges.append((_endpoint(graph, prefix, str(src), "source"), _endpoint(graph, prefix, str(dst), "destination")))
+
+
+def _endpoint(graph: Any, prefix: str, name: str, role: str) -> str:
+    """Resolve an edge end inside ``graph``: a node, a sub-graph (its single Input/Output) or ``sub.node``."""
+    import nir
+
+    if name in graph.nodes:
+        node = graph.nodes[name]
+        if isinstance(node, nir.NIRGraph):
+            want = nir.Output if role == "source" else nir.Input
+            ends = [k for k, n in node.nodes.items() if isinstance(n, want)]
+            if len(ends) != 1:
+                raise SnnccError(f"an edge {'leaves' if role == 'source' else 'enters'} sub-graph '{prefix + name}', "
+                                 f"which has {len(ends)} {want.__name__} nodes (need exactly 1)",
+                                 field=f"node '{prefix + name}'")
+            return _endpoint(node, prefix + name + ".", ends[0], role)
+        return prefix + name
+    head, _, rest = name.partition(".")
+    if rest and head in graph.nodes and isinstance(graph.nodes[head], nir.NIRGraph):
+        return _endpoint(graph.nodes[head], prefix + head + ".", rest, role)
+    raise SnnccError(f"edge {role} '{name}' is not a node of the graph", field=f"edges of '{prefix or '<top>'}'")
+
+
+def _arr(node: Any, attr: str, name: str) -> np.ndarray:
+    value = getattr(node, attr, None)
+    if value is None:
+        raise SnnccError(f"missing parameter {attr}", field=f"node '{name}'.{attr}")
+    arr = np.asarray(value, dtype=np.float64).reshape(-1)
+    if not np.all(np.isfinite(arr)) and attr not in ("v_threshold", "threshold"):
+        raise SnnccError("contains NaN or Inf", field=f"node '{name}'.{attr}")
+    return arr
+
+
+def _record(nir_graph: Any) -> dict[str, Any] | None:
+    """The snncc export record stored in the graph metadata, if any."""
+    meta = getattr(nir_graph, "metadata", None) or {}
+    raw = meta.get(SNNCC_KEY) if isinstance(meta, dict) else None
+    if raw is None:
+        return None
+    if isinstance(raw, bytes):
+        raw = raw.decode("utf-8")
+    try:
+        rec = json.loads(str(raw))
+    except ValueError:
+        raise SnnccError("metadata entry 'snncc' is not valid JSON", field="metadata.snncc") from None
+    if not isinstance(rec, dict) or rec.get("format") != RECORD_FORMAT:
+        raise SnnccError(f"metadata entry 'snncc' is not a {RECORD_FORMAT} record", field="metadata.snncc")
+    return rec
+
+
+# -- dt ------------------------------------------------------------------------------------------
+def infer_dt(flat: _Flat) -> float:
+    """dt from the snnTorch convention r = tau_mem/dt, consistent over every (Cuba)LIF/LI neuron."""
+    candidates, taus = [], []
+    for name, kind in flat.kinds.items():
+        node = flat.nodes[name]
+        if kind in ("CubaLIF", "CubaLI"):
+            tau_mem = _arr(node, "tau_mem", name)
+            taus += [tau_mem, _arr(node, "tau_syn", name)]
+        elif kind in ("LIF", "LI"):
+            tau_mem = _arr(node, "tau", name)
+            taus.append(tau_mem)
+        else:
+            continue
+        r = _arr(node, "r", name)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            candidates.append((name, tau_mem / r))
+    if not candidates:
+        raise SnnccError("NIR stores no time step and this graph has no leaky neuron to infer one from "
+                         "(snnTorch convention r = tau_mem/dt); pass --dt", field="dt")
+    ref = candidates[0][1].reshape(-1)[0]
+    for name, values in candidates:
+        if not (np.all(np.isfinite(values)) and np.all(values > 0) and np.allclose(values, ref, rtol=1e-6, atol=0)):
+            raise SnnccError("cannot infer dt: r/tau_mem differs between neurons, so the graph does not follow "
+                             "the snnTorch convention r = tau_mem/dt; pass --dt", field=f"node '{name}'.r")
+    dt = float(f"{float(ref):.12g}")
+    if dt >= float(np.min(np.concatenate(taus))):
+        raise SnnccError(f"cannot infer dt: r = tau_mem/dt would give dt = {dt:g} s, not below every time constant "
+                         "(r = 1 is Norse's convention, not snnTorch's); pass --dt", field="dt")
+    return dt
+
+
+def _graph_meta_dt(nir_graph: Any) -> float | None:
+    meta = getattr(nir_graph, "metadata", None) or {}
+    if isinstance(meta, dict) and "dt" in meta:
+        try:
+            return float(np.asarray(meta["dt"]).reshape(-1)[0])
+        except (TypeError, ValueError, IndexError):
+            raise SnnccError("metadata 'dt' is not a number", field="metadata.dt") from None
+    return None
+
+
+# -- nodes ---------------------------------------------------------------------------------------
+@dataclass
+class _Neuron:
+    lif: LIF
+    gain: np.ndarray
+    port: str
+
+
+def _neuron(name: str, kind: str, node: Any, dt: float, reset: str) -> _Neuron:
+    """An IR LIF for a NIR neuron node, and the gain to fold into its incoming weights."""
+    spiking = kind in ("CubaLIF", "LIF", "IF", "Threshold")
+    if kind == "Threshold":
+        thr = _arr(node, "threshold", name)
+        return _Neuron(LIF(n=thr.size, tau_syn=dt, tau_mem=dt, threshold=thr, reset="zero",
+                           discretisation="euler"), np.ones(thr.size), "spikes")
+    r = _arr(node, "r", name)
+    n = r.size
+    if spiking:
+        v_reset = _arr(node, "v_reset", name) if getattr(node, "v_reset", None) is not None else np.zeros(n)
+        if np.any(v_reset != 0):
+            raise SnnccError("v_reset != 0 cannot be expressed exactly (the IR's membrane starts, rests and "
+                             "resets at 0)", field=f"node '{name}'.v_reset")
+        threshold = _arr(node, "v_threshold", name)
+        if np.any(np.isnan(threshold)):
+            raise SnnccError("contains NaN", field=f"node '{name}'.v_threshold")
+    else:
+        threshold = np.full(n, np.inf)
+    v_leak = np.zeros(n)
+    if kind in ("CubaLIF", "CubaLI"):
+        tau_syn, tau_mem = _arr(node, "tau_syn", name), _arr(node, "tau_mem", name)
+        w_in = _arr(node, "w_in", name) if getattr(node, "w_in", None) is not None else np.ones(n)
+        gain = (w_in * dt / tau_syn) * (r * dt / tau_mem)
+        v_leak = _arr(node, "v_leak", name)
+    elif kind in ("LIF", "LI"):
+        tau_mem = _arr(node, "tau", name)
+        tau_syn = np.full(n, dt)
+        gain = r * dt / tau_mem
+        v_leak = _arr(node, "v_leak", name)
+    else:  # IF, I
+        tau_syn, tau_mem = np.full(n, dt), np.full(n, NO_LEAK_TAU)
+        gain = r * dt
+    for label, tau in (("tau_syn", tau_syn), ("tau_mem", tau_mem)):
+        if np.any(tau <= 0):
+            raise SnnccError("time constants must be positive", field=f"node '{name}'.{label}")
+        if np.any(dt > tau):
+            raise SnnccError(f"dt = {dt:g} s exceeds a time constant ({float(np.min(tau)):g} s): forward Euler "
+                             "would give a negative decay; use a smaller --dt", field=f"node '{name}'.{label}")
+    gain = np.where(np.abs(gain - 1.0) <= GAIN_SNAP, 1.0, gain)
+    if np.any(gain == 0) or not np.all(np.isfinite(gain)):
+        raise SnnccError("r and w_in must be non-zero and finite", field=f"node '{name}'.r")
+    bias = None
+    if np.any(v_leak != 0):
+        bias = v_leak * dt / tau_mem
+    lif = LIF(n=n, tau_syn=tau_syn, tau_mem=tau_mem, threshold=threshold, reset=reset if spiking else "zero",
+              refractory=1, discretisation="euler", bias=bias, bias_placement="voltage")
+    return _Neuron(lif, gain, "spikes" if spiking else "voltage")
+
+
+def _delay_steps(name: str, node: Any, dt: float) -> int:
+    delay = _arr(node, "delay", name)
+    if delay.size == 0 or np.any(delay != delay[0]):
+        raise SnnccError("per-channel delays differ; the IR has one delay per edge", field=f"node '{name}'.delay")
+    steps = float(delay[0]) / dt
+    if steps < 0 or abs(steps - round(steps)) > 1e-6 * max(1.0, abs(steps)):
+        raise SnnccError(f"delay {float(delay[0]):g} s is not a whole number of steps of dt = {dt:g} s",
+                         field=f"node '{name}'.delay")
+    return int(round(steps))
+
+
+# -- assembly ------------------------------------------------------------------------------------
+class _Builder:
+    """Turns a flattened NIR graph into IR nodes and delayed edges."""
+
+    def __init__(self, flat: _Flat, dt: float, reset: str):
+        self.flat, self.dt, self.reset = flat, dt, reset
+        self.ops: dict[str, Any] = {}
+        self.ports: dict[str, str] = {}
+        self.gains: dict[str, np.ndarray] = {}
+        self.through: dict[str, int] = {}   # pass-through node -> its delay in steps
+        self.edges: dict[tuple[str, str], int] = {}
+
+    def nodes(self) -> None:
+        for name, kind in self.flat.kinds.items():
+            node = self.flat.nodes[name]
+            if kind not in SUPPORTED and kind not in PASS_THROUGH:
+                raise SnnccError(f"NIR node type {kind} is not supported by snncc (flat networks of "
+                                 f"{', '.join(k for k in SUPPORTED if k != 'NIRGraph')} only)", field=f"node '{name}'")
+            if kind == "Input":
+                width = int(np.prod(np.asarray(node.input_type["input"]).reshape(-1)))
+                self.ops[name] = Input(width=width, signal="spikes")
+            elif kind == "Output":
+                width = int(np.prod(np.asarray(node.output_type["output"]).reshape(-1)))
+                self.ops[name] = Output(width=width)
+            elif kind in ("Affine", "Linear"):
+                w = np.asarray(node.weight, dtype=np.float64)
+                if w.ndim != 2:
+                    raise SnnccError(f"weight must be 2-D (out, in), got shape {w.shape}", field=f"node '{name}'.weight")
+                bias = None
+                if kind == "Affine" and node.bias is not None:
+                    bias = np.asarray(node.bias, dtype=np.float64).reshape(-1)
+                    if np.all(bias == 0):
+                        bias = None if np.ndim(node.bias) == 0 else bias
+                self.ops[name] = Dense(weight=w, bias=bias)
+            elif kind == "Scale":
+                self.ops[name] = Dense(weight=np.diag(_arr(node, "scale", name)))
+            elif kind == "Delay":
+                self.through[name] = _delay_steps(name, node, self.dt)
+            elif kind in ("Flatten", "SubInput", "SubOutput"):
+                self.through[name] = 0
+            else:
+                neuron = _neuron(name, kind, node, self.dt, self.reset)
+                self.ops[name], self.ports[name], self.gains[name] = neuron.lif, neuron.port, neuron.gain
+
+    def contract(self) -> None:
+        """Edges between IR nodes, summing the delays of the pass-through nodes on each path."""
+        succ: dict[str, list[str]] = {}
+        for u, v in self.flat.edges:
+            succ.setdefault(u, []).append(v)
+
+        def reach(node: str, delay: int, seen: tuple[str, ...]) -> list[tuple[str, int]]:
+            out = []
+            for v in succ.get(node, []):
+                if v in self.through:
+                    if v in seen:
+                        raise SnnccError("a cycle runs through pass-through nodes only", field=f"node '{v}'")
+                    out += reach(v, delay + self.through[v], seen + (v,))
+                else:
+                    out.append((v, delay))
+            return out
+
+        for u in self.ops:
+            for v, d in reach(u, 0, ()):
+                if (u, v) in self.edges:
+                    raise SnnccError(f"two paths connect '{u}' to '{v}'; the IR has one edge per pair", field=f"node '{v}'")
+                self.edges[(u, v)] = d
+
+    def fold_scales(self) -> None:
+        """A Scale right after an Affine/Linear that feeds only it becomes part of that Dense."""
+        for name, kind in self.flat.kinds.items():
+            if kind != "Scale" or name not in self.ops:
+                continue
+            preds = [u for (u, v) in self.edges if v == name]
+            if len(preds) != 1 or self.edges[(preds[0], name)] != 0:
+                continue
+            (p,) = preds
+            if not isinstance(self.ops[p], Dense) or self.flat.kinds.get(p) == "Scale":
+                continue
+            if [v for (u, v) in self.edges if u == p] != [name]:
+                continue
+            s = np.diag(self.ops[name].weight)
+            dense = self.ops[p]
+            self.ops[p] = Dense(weight=s[:, None] * dense.weight, bias=None if dense.bias is None else s * dense.bias)
+            del self.edges[(p, name)]
+            for (u, v), d in list(self.edges.items()):
+                if u == name:
+                    del self.edges[(u, v)]
+                    self.edges[(p, v)] = d
+            del self.ops[name]
+
+    def fold_gains(self) -> None:
+        """Scale the rows of each neuron population's incoming weights and biases by its gain."""
+        for name, gain in self.gains.items():
+            if np.all(gain == 1.0):
+                continue
+            for (u, v), d in list(self.edges.items()):
+                if v != name:
+                    continue
+                op = self.ops[u]
+                sole = [w for (x, w) in self.edges if x == u] == [name]
+                if isinstance(op, Dense) and sole:
+                    self.ops[u] = Dense(weight=gain[:, None] * op.weight, bias=None if op.bias is None else gain * op.bias)
+                else:
+                    gname = f"{name}.gain_from_{u}"
+                    self.ops[gname] = Dense(weight=np.diag(gain))
+                    del self.edges[(u, v)]
+                    self.edges[(u, gname)] = d
+                    self.edges[(gname, name)] = 0
+                    self.ports[gname] = "spikes"
+
+    def move_delays_before_dense(self) -> None:
+        """population -d-> Dense(no bias) -0-> X: the IR convention puts d on the edge into the Dense."""
+        for name, op in self.ops.items():
+            if not isinstance(op, Dense) or op.bias is not None:
+                continue
+            ins = [(u, d) for (u, v), d in self.edges.items() if v == name]
+            outs = [(v, d) for (u, v), d in self.edges.items() if u == name]
+            if len(ins) == 1 and len(outs) == 1 and outs[0][1] > 0:
+                self.edges[(ins[0][0], name)] += outs[0][1]
+                self.edges[(name, outs[0][0])] = 0
+
+    def recurrent_delays(self) -> list[str]:
+        """A cycle without delay gets 1 step on the edge leaving its last population (previous step's spikes)."""
+        succ: dict[str, list[str]] = {n: [] for n in self.ops}
+        for (u, v) in self.edges:
+            succ[u].append(v)
+        state: dict[str, int] = {}
+        stack: list[str] = []
+        placed: list[str] = []
+
+        def visit(u: str) -> None:
+            state[u] = 1
+            stack.append(u)
+            for v in succ[u]:
+                if state.get(v) == 1:  # back edge u -> v closes the cycle stack[v:] + v
+                    cycle = stack[stack.index(v):] + [v]
+                    pairs = list(zip(cycle[:-1], cycle[1:]))
+                    if sum(self.edges[p] for p in pairs) == 0:
+                        for a, b in reversed(pairs):
+                            if isinstance(self.ops[a], LIF):
+                                self.edges[(a, b)] = 1
+                                placed.append(f"{a}->{b}")
+                                break
+                elif v not in state:
+                    visit(v)
+            stack.pop()
+            state[u] = 2
+
+        roots = [n for n, op in self.ops.items() if isinstance(op, Input)]
+        for root in roots + list(self.ops):
+            if root not in state:
+                visit(root)
+        return placed
+
+
+def _readout(g: Graph) -> str | None:
+    """Insert a spike-count (or membrane-max) Readout before the single Output fed by a population."""
+    outs = g.of_kind(Output)
+    if len(outs) != 1:
+        return None
+    (out,) = outs
+    preds = g.predecessors(out)
+    if len(preds) != 1 or not isinstance(g.node(preds[0]), LIF) or "readout" in g:
+        return None
+    src = preds[0]
+    port, delay = g.port(src, out), g.delay(src, out)
+    mode = "spike_count" if port == "spikes" else "membrane_max"
+    g.nx.remove_edge(src, out)
+    g.add("readout", Readout(width=g.node(out).size, mode=mode))
+    g.connect(src, "readout", delay=delay, port=port)
+    g.connect("readout", out)
+    return mode
+
+
+def graph_from_nir(nir_graph: Any, dt: float | None = None, reset: str | None = None, source: str = "<nir>") -> Graph:
+    """An IR graph from an in-memory ``nir.NIRGraph`` (see the module docstring for the rules)."""
+    import nir
+
+    if not isinstance(nir_graph, nir.NIRGraph):
+        raise SnnccError(f"expected a NIR graph, got a single {type(nir_graph).__name__} node", field="node")
+    if reset is not None and reset not in RESETS:
+        raise SnnccError(f"reset must be one of {RESETS}, got {reset!r}", field="--reset")
+    record = _record(nir_graph)
+    flat = _Flat()
+    _flatten(nir_graph, "", flat, top=True)
+    notes: list[str] = []
+
+    if record is not None:
+        step = float(record["export_dt"])
+        notes.append(f"snncc export record found: restoring the IR exactly (dt = {record['dt']:g} s)")
+    elif dt is not None:
+        step = float(dt)
+    elif _graph_meta_dt(nir_graph) is not None:
+        step = _graph_meta_dt(nir_graph)
+        notes.append(f"dt = {step:g} s taken from the graph's metadata")
+    else:
+        step = infer_dt(flat)
+        notes.append(f"dt = {step:g} s inferred from the snnTorch convention r = tau_mem/dt (pass --dt to override)")
+    if not (math.isfinite(step) and step > 0):
+        raise SnnccError(f"dt must be a positive number of seconds, got {step}", field="dt")
+    reset_mode = reset or "zero"
+    if record is None:
+        if reset is None:
+            notes.append("reset: NIR cannot say whether a reset subtracts; using 'zero' (NIR's v <- v_reset); "
+                         "pass --reset subtract for a subtract-reset model")
+        notes.append("discretisation: forward Euler, current then voltage (snnTorch's order), recorded as 'euler'")
+
+    b = _Builder(flat, step, reset_mode)
+    b.nodes()
+    b.contract()
+    b.fold_scales()
+    b.fold_gains()
+    b.move_delays_before_dense()
+    placed = b.recurrent_delays()
+    if placed and record is None:
+        notes.append("recurrent edges take the previous step's output (delay 1, as snnTorch/Norse): " + ", ".join(placed))
+
+    g = Graph(step, name=Path(source).stem or "nir", metadata={})
+    for name, op in b.ops.items():
+        g.add(name, op)
+    for (u, v), d in b.edges.items():
+        port = b.ports.get(u, "spikes") if isinstance(b.ops[u], LIF) else "spikes"
+        g.connect(u, v, delay=d, port=port)
+    if record is not None:
+        from snncc.exporters.nir import restore_from_record
+
+        g = restore_from_record(g, record, dt=dt, reset=reset)
+        if dt is not None:
+            notes.append(f"dt overridden by --dt = {dt:g} s")
+        if reset is not None:
+            notes.append(f"reset overridden by --reset {reset}")
+    else:
+        mode = _readout(g)
+        widths = [g.node(n).size for n in g.of_kind(Input)]
+        g.metadata.update({
+            "source_format": "nir", "model_kind": "nir", "update_order": "nir-euler",
+            "dt_source": "--dt" if dt is not None else ("metadata" if _graph_meta_dt(nir_graph) is not None else "inferred"),
+            "reset": reset_mode, "discretisation": "euler", "input_copies": 1,
+            "base_inputs": widths[0] if len(widths) == 1 else None,
+        })
+        if mode:
+            g.metadata["readout"] = mode
+            notes.append(f"readout: argmax of the output population's {'spike count' if mode == 'spike_count' else 'maximum voltage'}")
+    g.metadata["import_notes"] = notes
+    return g
+
+
+def load(path: Path, options: Any) -> Graph:
+    """Frontend entry for ``.nir`` files (``load_model`` validates the result)."""
+    import nir
+
+    try:
+        nir_graph = nir.read(str(path), type_check=False)
+    except (OSError, ValueError, KeyError, AssertionError, TypeError) as ex:
+        detail = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
+        raise SnnccError(f"not a readable NIR graph ({detail})", file=str(path), field="format") from None
+    g = graph_from_nir(nir_graph, dt=options.dt, reset=options.reset, source=str(path))
+    for note in g.metadata.get("import_notes", []):
+        print(f"snncc: note: {path.name}: {note}", file=sys.stderr)
+    return g

@@ -1,0 +1,290 @@
+"""Quantization for Loihi 1: the paper's PyTorch-to-Loihi rules (typos fixed), as pure functions.
+
+    w_scale = floor(256 / max_k max|W_k|)                  one integer scale for the network
+    w_q     = clip(round(W * s / 2**e / 2) * 2, -256, 254)  even 8-bit mantissas, round half to even
+    w_chip  = w_q * 2**(6 + e)                             e = wgtExp (0 under the paper's rule)
+    vThMant = round(theta * s)                             1 <= vThMant <= 2**17 - 1
+    iDecay  = int(4096 * (1 - exp(-dt / tau_syn)))         exp discretisation ("euler": int(4096*dt/tau))
+    vDecay  = int(4096 * (1 - exp(-dt / tau_mem)))
+    tSample = ceil(T_record / dt)
+
+``s`` is the layer's scale (the network's w_scale under the paper's global rule). Spikes are
+binary, so each layer may carry its own scale without changing the next layer's input.
+``quantize_graph`` returns a new Graph whose float parameters are the quantized ones read back
+in float units (W_q * 2**e / s, theta = vThMant / s, decays 1 - register/4096) plus a
+``QuantizationRecord`` saying what was done; the input graph is never modified.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.ir.nodes import LIF, Dense
+
+WEIGHT_MIN, WEIGHT_MAX = -256, 254
+V_TH_MANT_MAX = 2**17 - 1
+DECAY_ONE = 4096
+WGT_EXP_MIN, WGT_EXP_MAX = -6, 7     # below -6 the chip weight w_q * 2**(6+e) stops being an integer
+BIAS_MANT_MAX = 2**12 - 1            # Loihi 1: 13-bit signed bias mantissa
+BIAS_EXP_MAX = 7
+SCALE_RULES = ("global", "per-layer", "auto")
+
+
+# -- small pure rules (reused by other engineers) -----------------------------------------------
+def weight_scale(max_abs: float) -> int:
+    """The paper's w_scale = floor(256 / max|W|); it must be >= 1 (else a weight exponent is needed)."""
+    max_abs = float(max_abs)
+    if not (math.isfinite(max_abs) and max_abs > 0):
+        raise SnnccError(f"max |W| must be positive and finite to define w_scale, got {max_abs}", field="weights")
+    scale = math.floor(256.0 / max_abs)
+    if scale < 1:
+        raise SnnccError(f"max |W| = {max_abs:g} > 256 gives w_scale 0 under the paper's global rule; "
+                         "use --scale per-layer (weight exponents)", field="weights")
+    return int(scale)
+
+
+def quantize_weights(weight: np.ndarray, w_scale: float, wgt_exp: int = 0) -> np.ndarray:
+    """clip(round(W * w_scale / 2**wgt_exp / 2) * 2, -256, 254) as int16 (np.round: half to even)."""
+    scaled = np.asarray(weight, np.float64) * (float(w_scale) / 2.0 ** wgt_exp)
+    return np.clip(np.round(scaled / 2.0) * 2.0, WEIGHT_MIN, WEIGHT_MAX).astype(np.int16)
+
+
+def clipped_to_254(weight: np.ndarray, w_scale: float, wgt_exp: int = 0) -> int:
+    """How many weights rounded to +256 (or beyond) and were clipped to 254, or below -256."""
+    scaled = np.round(np.asarray(weight, np.float64) * (float(w_scale) / 2.0 ** wgt_exp) / 2.0) * 2.0
+    return int(np.count_nonzero((scaled > WEIGHT_MAX) | (scaled < WEIGHT_MIN)))
+
+
+def decay_register(dt: float, tau: float, discretisation: str = "exp") -> int:
+    """int(4096 * (1 - exp(-dt/tau))) for "exp", int(4096 * dt/tau) for "euler" (truncation)."""
+    if not (tau > 0 and dt > 0):
+        raise SnnccError("time constants and dt must be positive", field="tau")
+    if discretisation == "euler":
+        value = int(DECAY_ONE * dt / tau)
+    elif discretisation == "exp":
+        value = int(DECAY_ONE * (1.0 - math.exp(-dt / tau)))
+    else:
+        raise SnnccError(f"unknown discretisation {discretisation!r}", field="discretisation")
+    if not 0 <= value <= DECAY_ONE:
+        raise SnnccError(f"decay register {value} outside 0..4096 (dt/tau = {dt / tau:g}: a forward-Euler "
+                         "model with dt > tau cannot be expressed)", field="tau")
+    return value
+
+
+def threshold_mantissa(theta: float, scale: float, layer: str = "") -> int:
+    """vThMant = round(theta * scale), checked against 1 .. 2**17 - 1."""
+    value = round(float(theta) * float(scale))
+    if not 1 <= value <= V_TH_MANT_MAX:
+        raise SnnccError(f"vThMant = round({theta:g} * {scale:g}) = {value} is outside 1..{V_TH_MANT_MAX}",
+                         field=f"node '{layer}'.threshold" if layer else "threshold")
+    return int(value)
+
+
+def samples_steps(graph: Graph, input_steps: int | None = None) -> tuple[int, str]:
+    """tSample = ceil(T_record / dt) with T_record from metadata, else the input length (steps)."""
+    t_record = graph.metadata.get("recording_length_s")
+    if t_record is not None:
+        # the small epsilon keeps 1.35 / 0.005 = 270.00000000000006 from becoming 271
+        return int(math.ceil(float(t_record) / graph.dt - 1e-9)), f"ceil({t_record} s / {graph.dt} s)"
+    if input_steps is not None:
+        return int(input_steps), "the input length"
+    raise SnnccError("tSample needs graph.metadata['recording_length_s'] or an input length", field="recording_length_s")
+
+
+# -- records -------------------------------------------------------------------------------------
+@dataclass
+class ProjectionQuant:
+    """What quantization did to one projection (a Dense feeding a LIF)."""
+
+    dense: str
+    target: str
+    scale: float            # the target layer's scale s
+    wgt_exp: int
+    max_abs: float
+    clipped: int            # weights beyond the 8-bit range after rounding (+256 -> 254 included)
+    zeroed: int             # non-zero float weights that became 0
+    rms_error: float        # RMS of (W_q * 2**e / s - W), float units
+    range_used: float       # max|W| * s / 2**e / 256: the fraction of the 8-bit range in use
+
+
+@dataclass
+class LayerQuant:
+    lif: str
+    scale: float
+    v_th_mant: int
+    i_decay: int
+    v_decay: int
+    bias_mant: list[int] | None = None
+    bias_exp: int | None = None
+    bias_max_error: float | None = None
+
+
+@dataclass
+class QuantizationRecord:
+    rule: str                           # "global" | "per-layer"
+    reason: str
+    w_scale: int | None                 # the network's scale under the global rule
+    projections: list[ProjectionQuant] = field(default_factory=list)
+    layers: list[LayerQuant] = field(default_factory=list)
+    clipped_total: int = 0
+    calibration: dict[str, Any] | None = None   # scale="auto": measured errors before/after
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+# -- the pass ------------------------------------------------------------------------------------
+def projections(graph: Graph) -> list[tuple[str, str]]:
+    """(dense, lif) pairs: every Dense whose output feeds a LIF population."""
+    out = []
+    for name, op in graph.items():
+        if isinstance(op, Dense):
+            for succ in graph.successors(name):
+                if isinstance(graph.node(succ), LIF):
+                    out.append((name, succ))
+    return out
+
+
+def _uniform(arr: np.ndarray, what: str, layer: str) -> float:
+    if not np.all(arr == arr[0]):
+        raise SnnccError(f"{what} differs between neurons; the Loihi lowering needs one value per layer "
+                         "(one compartment profile)", field=f"node '{layer}'.{what}")
+    return float(arr[0])
+
+
+def exponent_for(max_abs: float, scale: float, shrink: int = 0) -> int:
+    """Smallest wgtExp in [-6, 7] with max|W| * scale / 2**e <= 256, then ``shrink`` steps finer."""
+    if max_abs <= 0:
+        return 0
+    e = math.ceil(math.log2(max_abs * scale / 256.0) - 1e-12)
+    return int(min(max(e - shrink, WGT_EXP_MIN), WGT_EXP_MAX))
+
+
+def layer_scales(graph: Graph, rule: str) -> tuple[dict[str, float], int | None]:
+    """Per-LIF scale s: the paper's single w_scale, or floor(256 / max|W| into that layer)."""
+    pairs = projections(graph)
+    if not pairs:
+        raise SnnccError("the graph has no Dense -> LIF projection to quantize", field="graph")
+    maxima = {dense: float(np.max(np.abs(graph.node(dense).weight))) for dense, _ in pairs}
+    if all(m == 0 for m in maxima.values()):
+        raise SnnccError("all weights are zero: w_scale = 256 / max|W| is undefined", field="weights")
+    if rule == "global":
+        w_scale = weight_scale(max(maxima.values()))
+        return {lif: float(w_scale) for _, lif in pairs}, w_scale
+    scales: dict[str, float] = {}
+    for _, lif in pairs:
+        m = max(maxima[d] for d, l in pairs if l == lif)
+        scales[lif] = float(math.floor(256.0 / m)) if 0 < m <= 256 else 1.0
+    return scales, None
+
+
+def quantize_graph(
+    graph: Graph,
+    rule: str = "global",
+    *,
+    exponents: dict[str, int] | None = None,
+    reason: str = "",
+) -> tuple[Graph, QuantizationRecord]:
+    """Quantize every projection and LIF of ``graph``; return (graph in quantized float units, record).
+
+    ``rule``: "global" (the paper: one w_scale, wgtExp 0) or "per-layer" (each LIF its own
+    integer scale, each projection the smallest weight exponent that fits 8 bits). ``exponents``
+    overrides wgtExp per Dense (used by the calibrated scale search).
+    """
+    if rule not in ("global", "per-layer"):
+        raise SnnccError(f"scale rule must be one of {SCALE_RULES}", field="--scale")
+    g = graph.copy()
+    scales, w_scale = layer_scales(graph, rule)
+    record = QuantizationRecord(rule=rule, reason=reason, w_scale=w_scale)
+    for dense, lif in projections(graph):
+        w = graph.node(dense).weight
+        s = scales[lif]
+        max_abs = float(np.max(np.abs(w)))
+        if exponents and dense in exponents:
+            e = int(exponents[dense])
+        else:
+            e = 0 if rule == "global" else exponent_for(max_abs, s)
+        wq = quantize_weights(w, s, e)
+        back = wq.astype(np.float64) * (2.0 ** e / s)
+        record.projections.append(ProjectionQuant(
+            dense=dense, target=lif, scale=s, wgt_exp=e, max_abs=max_abs,
+            clipped=clipped_to_254(w, s, e), zeroed=int(np.count_nonzero((wq == 0) & (w != 0))),
+            rms_error=float(np.sqrt(np.mean((back - w) ** 2))),
+            range_used=float(max_abs * s / 2.0 ** e / 256.0),
+        ))
+        g.node(dense).weight = back
+        if graph.node(dense).bias is not None:
+            raise SnnccError("a Dense bias enters the LIF current, which Loihi cannot add exactly "
+                             "(Loihi biases enter the voltage); this version of snncc refuses it rather than "
+                             "approximate it (fold the bias away or place it on the voltage)",
+                             field=f"node '{dense}'.bias")
+    record.clipped_total = sum(p.clipped for p in record.projections)
+    for name, op in graph.items():
+        if not isinstance(op, LIF):
+            continue
+        if name not in scales:
+            raise SnnccError("a LIF population without an incoming Dense projection cannot be quantized",
+                             field=f"node '{name}'")
+        s = scales[name]
+        theta = _uniform(op.threshold, "threshold", name)
+        if not math.isfinite(theta):
+            raise SnnccError("a non-spiking integrator (threshold +inf) has no Loihi equivalent here: Loihi "
+                             "reads out spikes", field=f"node '{name}'.threshold")
+        tau_syn = _uniform(op.tau_syn, "tau_syn", name)
+        tau_mem = _uniform(op.tau_mem, "tau_mem", name)
+        lq = LayerQuant(
+            lif=name, scale=s, v_th_mant=threshold_mantissa(theta, s, name),
+            i_decay=decay_register(graph.dt, tau_syn, op.discretisation),
+            v_decay=decay_register(graph.dt, tau_mem, op.discretisation),
+        )
+        q = g.node(name)
+        q.threshold = np.full(op.n, lq.v_th_mant / s)
+        q.discretisation = "exp"
+        # decays read back: alpha = 1 - iDecay/4096 expressed through an equivalent tau
+        q.tau_syn = np.full(op.n, _tau_for(graph.dt, lq.i_decay))
+        q.tau_mem = np.full(op.n, _tau_for(graph.dt, lq.v_decay))
+        if op.bias is not None:
+            if op.bias_placement != "voltage":
+                raise SnnccError("a bias on the LIF current cannot be expressed exactly on Loihi (its biases "
+                                 "enter the voltage); this version of snncc refuses it rather than approximate it",
+                                 field=f"node '{name}'.bias")
+            mant, bexp = bias_registers(op.bias, s)
+            back = mant.astype(np.float64) * 2.0 ** bexp / (64.0 * s)
+            lq.bias_mant, lq.bias_exp = [int(m) for m in mant], int(bexp)
+            lq.bias_max_error = float(np.max(np.abs(back - op.bias)))
+            q.bias = back
+        record.layers.append(lq)
+    return g, record
+
+
+def _tau_for(dt: float, register: int) -> float:
+    """The tau whose exp decay equals 1 - register/4096 (inf when register is 0: no decay)."""
+    keep = 1.0 - register / DECAY_ONE
+    if register == 0:
+        return math.inf
+    if keep <= 0:
+        return 1e-300  # full decay each step
+    return -dt / math.log(keep)
+
+
+def bias_registers(bias: np.ndarray, scale: float) -> tuple[np.ndarray, int]:
+    """Voltage bias in chip units b * s * 64 as mantissa * 2**exp (13-bit signed mantissa, exp 0..7)."""
+    chip = np.asarray(bias, np.float64) * scale * 64.0
+    peak = float(np.max(np.abs(chip))) if chip.size else 0.0
+    exp = 0
+    while peak / 2.0 ** exp > BIAS_MANT_MAX and exp < BIAS_EXP_MAX:
+        exp += 1
+    mant = np.round(chip / 2.0 ** exp)
+    if np.any(np.abs(mant) > BIAS_MANT_MAX):
+        raise SnnccError(f"bias too large for Loihi's 13-bit mantissa with exponent <= {BIAS_EXP_MAX}", field="bias")
+    return mant.astype(np.int64), exp
+
+
+def t_sample(graph: Graph, input_steps: int | None = None) -> int:
+    return samples_steps(graph, input_steps)[0]

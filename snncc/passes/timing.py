@@ -1,0 +1,147 @@
+"""Timing lowering for Loihi 1: IR edge delays and refractory periods -> synaptic delays and refDelay.
+
+On Loihi every edge delivers a spike one step after it is sent, plus an optional synaptic delay
+(0..62 steps). A projection pre -> Dense -> post with IR total delay d therefore lowers to an
+extra delay d - 1; the IR refractory period r lowers to refDelay = r.
+
+    timing="exact": keep the IR's order. A projection with d = 0 cannot be exact step for step;
+        the pass then delays whole populations (spike trains identical, shifted by s_P steps):
+        Loihi delay of pre -> post = d + s_post - s_pre >= 1 (a difference-constraint system, solved
+        by longest paths; infeasible only when a cycle has fewer delay steps than projections).
+        tSample grows by the output's shift, so spike counts over the sample are unchanged.
+    timing="paper": the authors' export: every projection delay 1 (no synaptic delay), refDelay 1.
+        This changes the update order the model was trained in; ``snncc check`` measures the cost.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.ir.nodes import LIF, Dense, Input
+
+TIMINGS = ("exact", "paper")
+MAX_EXTRA_DELAY = 62
+
+
+@dataclass
+class ProjectionTiming:
+    pre: str
+    dense: str
+    post: str
+    ir_delay: int        # total IR delay pre -> dense -> post
+    loihi_delay: int     # total steps on Loihi (>= 1): 1 (delivery) + extra
+    extra_delay: int     # the synaptic delay programmed (0..62)
+
+
+@dataclass
+class TimingRecord:
+    mode: str
+    projections: list[ProjectionTiming] = field(default_factory=list)
+    ref_delay: dict[str, int] = field(default_factory=dict)
+    shifts: dict[str, int] = field(default_factory=dict)   # population -> steps its spike train is delayed
+    output_shift: int = 0
+    changes: list[str] = field(default_factory=list)         # what differs from the IR as given
+
+    @property
+    def exact(self) -> bool:
+        return self.mode == "exact"
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def projection_paths(graph: Graph) -> list[tuple[str, str, str]]:
+    """(pre, dense, post) for every population -> Dense -> LIF path (pre is an Input or a LIF)."""
+    paths = []
+    for dense, op in graph.items():
+        if not isinstance(op, Dense):
+            continue
+        preds = graph.predecessors(dense)
+        for post in graph.successors(dense):
+            if not isinstance(graph.node(post), LIF):
+                raise SnnccError("on Loihi a Dense must feed a LIF population", field=f"edge {dense}->{post}")
+            for pre in preds:
+                if not isinstance(graph.node(pre), (Input, LIF)):
+                    raise SnnccError("on Loihi a Dense must be fed by the input or a LIF population",
+                                     field=f"edge {pre}->{dense}")
+                if graph.port(pre, dense) != "spikes":
+                    raise SnnccError("Loihi sends spikes between cores, not voltages", field=f"edge {pre}->{dense}")
+                paths.append((pre, dense, post))
+    return paths
+
+
+def total_delay(graph: Graph, pre: str, dense: str, post: str) -> int:
+    return graph.delay(pre, dense) + graph.delay(dense, post)
+
+
+def paper_order(graph: Graph) -> tuple[Graph, list[str]]:
+    """The authors' export as an IR graph: every projection delay 1, every refractory period 1."""
+    g = graph.copy()
+    changes: list[str] = []
+    for pre, dense, post in projection_paths(graph):
+        d = total_delay(graph, pre, dense, post)
+        if d != 1:
+            changes.append(f"{pre}->{post}: delay {d} -> 1")
+        g.set_delay(pre, dense, 1)
+        g.set_delay(dense, post, 0)
+    for name, op in g.items():
+        if isinstance(op, LIF) and op.refractory != 1:
+            changes.append(f"{name}: refractory {op.refractory} -> 1")
+            op.refractory = 1
+    return g, changes
+
+
+def _solve_shifts(graph: Graph, paths: list[tuple[str, str, str]]) -> dict[str, int]:
+    """Smallest s >= 0 per population with d + s_post - s_pre >= 1 on every projection (s_input = 0)."""
+    pops = [n for n, op in graph.items() if isinstance(op, (Input, LIF))]
+    shift = {p: 0 for p in pops}
+    for _ in range(len(pops) + 1):
+        changed = False
+        for pre, dense, post in paths:
+            need = shift[pre] + 1 - total_delay(graph, pre, dense, post)
+            if need > shift[post]:
+                if isinstance(graph.node(post), Input):
+                    continue
+                shift[post] = need
+                changed = True
+        if not changed:
+            return shift
+    raise SnnccError("a cycle has fewer delay steps than projections, so it cannot run on Loihi (every "
+                     "projection there takes at least one step)", field="delays")
+
+
+def lower_timing(graph: Graph, mode: str = "exact") -> tuple[Graph, TimingRecord]:
+    """Return (graph in the order Loihi will run, record of delays, refDelay and shifts)."""
+    if mode not in TIMINGS:
+        raise SnnccError(f"timing must be one of {TIMINGS}", field="--timing")
+    record = TimingRecord(mode=mode)
+    if mode == "paper":
+        g, record.changes = paper_order(graph)
+    else:
+        g = graph.copy()
+    paths = projection_paths(g)
+    shift = _solve_shifts(g, paths)
+    record.shifts = {p: s for p, s in shift.items() if s}
+    for pre, dense, post in paths:
+        d = total_delay(g, pre, dense, post)
+        loihi = d + shift[post] - shift[pre]
+        extra = loihi - 1
+        if extra > MAX_EXTRA_DELAY:
+            raise SnnccError(f"needs a synaptic delay of {extra} steps; Loihi allows at most {MAX_EXTRA_DELAY}",
+                             field=f"edge {pre}->{dense}->{post}")
+        record.projections.append(ProjectionTiming(pre, dense, post, d, loihi, extra))
+    for name, op in g.items():
+        if isinstance(op, LIF):
+            record.ref_delay[name] = int(op.refractory)
+    outs = [n for n, op in g.items() if isinstance(op, LIF) and not any(
+        isinstance(g.node(s), Dense) for s in g.successors(n))]
+    record.output_shift = max((shift[o] for o in outs), default=0)
+    if record.shifts:
+        record.changes.append(
+            "projection(s) with IR delay 0 cannot be exact step for step on Loihi (every edge delivers one step "
+            f"later): populations delayed by {record.shifts} steps; spike trains are identical but shifted, and "
+            f"tSample grows by {record.output_shift} so counts over the sample are unchanged")
+    return g, record

@@ -1,0 +1,264 @@
+"""Bit-exact emulation of Loihi 1 CUBA compartments (spec loihi.md section 3).
+
+The chip's arithmetic, per compartment and step t (integers throughout):
+
+    q  = sum over incoming synapses of  w_chip * s_pre[t - 1 - delay]     w_chip = w * 2**(6 + wgtExp)
+    q  = wrap(q, 21 bits + sign)                                          two's complement
+    u  = sign(u) * ((|u| * (4096 - iDecay)) >> 12) + q ;  u = wrap(u, 23 bits + sign)
+    v  = sign(v) * ((|v| * (4096 - vDecay)) >> 12) + u + bias * 2**bias_exp ;  v = clip(v, vmin, vmax)
+    if refractory counter > 0:  v = 0, counter -= 1
+    s  = v > vThMant * 2**6   (strict) ;  where s: v = 0, counter = refDelay - 1
+
+Every edge (input, feed-forward, recurrent) delivers one step after the spike plus its synaptic
+delay. ``reference_run`` states this literally in numpy (also runnable with float arithmetic:
+no truncation, wrap or clip, used to check the lowering with quantization switched off);
+``emulate`` runs the same rules in an event-driven numba kernel (spikes accumulate into a ring
+buffer of future q), parallel over the samples of a batch. Both count overflows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
+
+Q_BITS, U_BITS = 21, 23          # magnitude bits; plus a sign bit each
+RECORD_CHOICES = ("outputs", "all")
+MODES = ("batch", "stream")
+
+
+@dataclass
+class EmulationResult:
+    output_spikes: np.ndarray                          # (B, T, n_out) uint8
+    counts: np.ndarray                                 # (B, n_out) int64
+    prediction: np.ndarray                             # (B,) int64, argmax with ties to the lowest index
+    spikes: dict[int, np.ndarray] = field(default_factory=dict)    # layer index -> (B, T, n) uint8
+    voltage: dict[int, np.ndarray] = field(default_factory=dict)   # layer index -> (B, T, n) post-reset v
+    current: dict[int, np.ndarray] = field(default_factory=dict)   # layer index -> (B, T, n) u
+    overflow: dict[str, int] = field(default_factory=lambda: {"q_wrap": 0, "u_wrap": 0, "v_clip": 0})
+
+
+def wrap(x: np.ndarray, bits: int) -> np.ndarray:
+    """Two's complement wrap of int64 values into ``bits`` magnitude bits plus a sign bit."""
+    span = np.int64(1) << (bits + 1)
+    half = np.int64(1) << bits
+    return ((x + half) & (span - 1)) - half
+
+
+def decay(x: np.ndarray, register: int) -> np.ndarray:
+    """sign(x) * ((|x| * (4096 - register)) >> 12): the chip's truncating decay."""
+    return np.sign(x) * ((np.abs(x) * (4096 - int(register))) >> 12)
+
+
+# -- input checks ---------------------------------------------------------------------------------
+def check_inputs(inputs, width: int, source: str | None = None) -> np.ndarray:
+    """(T, C) or (B, T, C) 0/1 data (bool, ints or floats) -> (B, T, C) uint8, or a one-line error."""
+    x = np.asarray(inputs)
+    if x.ndim == 2:
+        x = x[None]
+    if x.ndim != 3:
+        raise SnnccError(f"input must have shape (T, C) or (B, T, C), got {x.shape}", file=source, field="input")
+    if x.dtype.kind not in "biuf":
+        raise SnnccError(f"input must be numeric 0/1 values, got dtype {x.dtype}", file=source, field="input")
+    if x.shape[2] != width:
+        raise SnnccError(f"input has {x.shape[2]} channels, the bundle's input layer has {width}",
+                         file=source, field="input")
+    if x.dtype.kind == "f" and not np.all(np.isfinite(x)):
+        raise SnnccError("input contains NaN or Inf; spikes must be 0 or 1", file=source, field="input")
+    if x.size and not np.all((x == 0) | (x == 1)):
+        raise SnnccError("input must be binary (0/1 spikes)", file=source, field="input")
+    return x.astype(np.uint8)
+
+
+def _prediction(counts: np.ndarray) -> np.ndarray:
+    return np.argmax(counts, axis=1).astype(np.int64)  # numpy argmax returns the first maximum
+
+
+# -- the readable statement ------------------------------------------------------------------------
+def _as_delay(delay, shape: tuple[int, int]) -> np.ndarray:
+    return np.broadcast_to(np.asarray(delay, np.int64), shape)
+
+
+def _delivered(history: list[np.ndarray], t: int, weight: np.ndarray, delay: np.ndarray, zero: np.ndarray) -> np.ndarray:
+    """sum_i w[j, i] * s_i[t - 1 - delay[j, i]] for every post neuron j (spikes before t = 0 are 0)."""
+    total = zero.copy()
+    for d in np.unique(delay):
+        src = t - 1 - int(d)
+        if src < 0:
+            continue
+        w = np.where(delay == d, weight, 0)
+        total = total + history[src] @ w.T
+    return total
+
+
+def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", record: str = "outputs") -> EmulationResult:
+    """Batched run of the chip's rules written out plainly (slow; the statement the kernel must match).
+
+    ``arithmetic="float"``: the same pipeline in float64 with no truncation, wrap or clip (the
+    network's fields may then hold float weights, thresholds and decays).
+    """
+    x = check_inputs(inputs, network.input_width)
+    as_float = arithmetic == "float"
+    dt = np.float64 if as_float else np.int64
+    batch, steps, _ = x.shape
+    layers = network.layers
+    hist: list[list[np.ndarray]] = [[x[:, t].astype(dt) for t in range(steps)]]
+    rec_s: dict[int, list] = {0: hist[0]}
+    rec_u: dict[int, list] = {}
+    rec_v: dict[int, list] = {}
+    overflow = {"q_wrap": 0, "u_wrap": 0, "v_clip": 0}
+    state = []
+    for i, layer in enumerate(layers[1:], start=1):
+        z = np.zeros((batch, layer.n), dt)
+        state.append({"u": z.copy(), "v": z.copy(), "ref": np.zeros((batch, layer.n), np.int64)})
+        hist.append([])
+        rec_s[i], rec_u[i], rec_v[i] = hist[i], [], []
+    for t in range(steps):
+        for i, layer in enumerate(layers[1:], start=1):
+            st = state[i - 1]
+            zero = np.zeros((batch, layer.n), dt)
+            scale = 2.0 ** (6 + layer.wgt_exp) if as_float else np.int64(1) << (6 + layer.wgt_exp)
+            w = np.asarray(layer.weight, dt) * scale
+            q = _delivered(hist[i - 1], t, w, _as_delay(layer.delay, w.shape), zero)
+            if layer.weight_rec is not None:
+                scale_r = 2.0 ** (6 + layer.wgt_exp_rec) if as_float else np.int64(1) << (6 + layer.wgt_exp_rec)
+                w_r = np.asarray(layer.weight_rec, dt) * scale_r
+                q = q + _delivered(hist[i], t, w_r, _as_delay(layer.delay_rec, w_r.shape), zero)
+            bias = np.zeros(layer.n, dt) if layer.bias is None else np.asarray(layer.bias, dt) * (
+                2.0 ** layer.bias_exp if as_float else np.int64(1) << layer.bias_exp)
+            if as_float:
+                u = st["u"] * ((4096 - layer.i_decay) / 4096) + q
+                v = st["v"] * ((4096 - layer.v_decay) / 4096) + u + bias
+            else:
+                qw = wrap(q, Q_BITS)
+                overflow["q_wrap"] += int(np.count_nonzero(qw != q))
+                u_raw = decay(st["u"], layer.i_decay) + qw
+                u = wrap(u_raw, U_BITS)
+                overflow["u_wrap"] += int(np.count_nonzero(u != u_raw))
+                v_raw = decay(st["v"], layer.v_decay) + u + bias
+                v = np.clip(v_raw, layer.vmin, layer.vmax)
+                overflow["v_clip"] += int(np.count_nonzero(v != v_raw))
+            refractory = st["ref"] > 0
+            v = np.where(refractory, 0, v)
+            ref = np.where(refractory, st["ref"] - 1, st["ref"])
+            threshold = layer.v_th_mant * (64.0 if as_float else 64)
+            s = v > threshold
+            v = np.where(s, 0, v)
+            ref = np.where(s, layer.ref_delay - 1, ref)
+            st["u"], st["v"], st["ref"] = u, v, ref
+            hist[i].append(s.astype(dt))
+            rec_u[i].append(u)
+            rec_v[i].append(v)
+    return _result(network, hist, rec_u, rec_v, overflow, record, batch, steps)
+
+
+def _result(network, hist, rec_u, rec_v, overflow, record, batch, steps) -> EmulationResult:
+    def stack(seq, n, dtype):
+        return np.stack(seq, axis=1).astype(dtype) if seq else np.zeros((batch, 0, n), dtype)
+
+    last = len(network.layers) - 1
+    out = stack(hist[last], network.n_outputs, np.uint8)
+    counts = out.sum(axis=1, dtype=np.int64)
+    res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts), overflow=overflow)
+    if record == "all":
+        for i, layer in enumerate(network.layers):
+            res.spikes[i] = stack(hist[i], layer.n, np.uint8)
+            if i:
+                kind = np.float64 if rec_u[i] and rec_u[i][0].dtype.kind == "f" else np.int64
+                res.current[i] = stack(rec_u[i], layer.n, kind)
+                res.voltage[i] = stack(rec_v[i], layer.n, kind)
+    return res
+
+
+# -- the fast kernel --------------------------------------------------------------------------------
+@dataclass
+class _Program:
+    """A LoihiNetwork flattened into arrays the numba kernel reads (layers 1..L in order)."""
+
+    n: np.ndarray            # (L+1,) neurons per layer, layer 0 = inputs
+    noff: np.ndarray         # (L+1,) offset of each layer in the flat neuron arrays
+    wt: list                 # per layer: feed-forward weights transposed (n_pre, n) int64, chip units
+    dt_: list                # per layer: per-synapse delays transposed (n_pre, n) int64
+    wr: list                 # recurrent (n, n) transposed, or a (0, 0) array
+    dr: list
+    params: np.ndarray       # (L+1, 6) int64: i_decay, v_decay, vth, ref_delay, vmin, vmax
+    bias: np.ndarray         # (N,) int64 chip units
+    ring: int                # ring buffer length (max total delay + 1)
+
+
+def _program(network: LoihiNetwork) -> _Program:
+    layers = network.layers
+    n = np.array([lay.n for lay in layers], np.int64)
+    noff = np.concatenate([[0], np.cumsum(n)[:-1]]).astype(np.int64)
+    wt, dts, wr, dr = [np.zeros((0, 0), np.int64)], [np.zeros((0, 0), np.int64)], [np.zeros((0, 0), np.int64)], [np.zeros((0, 0), np.int64)]
+    params = np.zeros((len(layers), 6), np.int64)
+    bias = np.zeros(int(n.sum()), np.int64)
+    max_delay = 0
+    for i, lay in enumerate(layers[1:], start=1):
+        w = np.asarray(lay.weight, np.int64) << (6 + lay.wgt_exp) if lay.wgt_exp >= -6 else None
+        if w is None:
+            raise SnnccError("wgtExp below -6 gives fractional chip weights", field=f"/layer/{i}/neuron/wgtExp")
+        d = _as_delay(lay.delay, w.shape)
+        wt.append(np.ascontiguousarray(w.T))
+        dts.append(np.ascontiguousarray(d.T))
+        max_delay = max(max_delay, int(d.max(initial=0)))
+        if lay.weight_rec is not None:
+            r = np.asarray(lay.weight_rec, np.int64) << (6 + lay.wgt_exp_rec)
+            drr = _as_delay(lay.delay_rec, r.shape)
+            wr.append(np.ascontiguousarray(r.T))
+            dr.append(np.ascontiguousarray(drr.T))
+            max_delay = max(max_delay, int(drr.max(initial=0)))
+        else:
+            wr.append(np.zeros((0, 0), np.int64))
+            dr.append(np.zeros((0, 0), np.int64))
+        params[i] = (lay.i_decay, lay.v_decay, int(lay.v_th_mant) * 64, lay.ref_delay, lay.vmin, lay.vmax)
+        if lay.bias is not None:
+            bias[noff[i]:noff[i] + lay.n] = np.asarray(lay.bias, np.int64) << lay.bias_exp
+    return _Program(n, noff, wt, dts, wr, dr, params, bias, max_delay + 2)
+
+
+def emulate(
+    network: LoihiNetwork,
+    inputs,
+    *,
+    record: str = "outputs",
+    mode: str = "batch",
+    gap: int = 100,
+) -> EmulationResult:
+    """Run ``network`` bit-exactly on 0/1 ``inputs`` (T, C) or (B, T, C).
+
+    mode "batch": every sample starts from zero state. mode "stream": the paper's protocol, one
+    continuous run with ``gap`` blank steps after each sample; each sample's outputs are the
+    steps of its own window. record "all" keeps every layer's spikes, u and v.
+    """
+    if record not in RECORD_CHOICES:
+        raise SnnccError(f"record must be one of {RECORD_CHOICES}", field="record")
+    if mode not in MODES:
+        raise SnnccError(f"mode must be one of {MODES}", field="mode")
+    x = check_inputs(inputs, network.input_width)
+    from snncc.targets.loihi._kernel import run_program
+
+    if mode == "batch":
+        return run_program(_program(network), network, x, record)
+    if gap < 0:
+        raise SnnccError("gap must be >= 0 steps", field="gap")
+    batch, steps, width = x.shape
+    period = steps + gap
+    stream = np.zeros((1, batch * period, width), np.uint8)
+    for b in range(batch):
+        stream[0, b * period:b * period + steps] = x[b]
+    whole = run_program(_program(network), network, stream, record)
+    windows = [slice(b * period, b * period + steps) for b in range(batch)]
+
+    def cut(a: np.ndarray) -> np.ndarray:
+        return np.stack([a[0, w] for w in windows], axis=0)
+
+    out = cut(whole.output_spikes)
+    counts = out.sum(axis=1, dtype=np.int64)
+    res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts), overflow=whole.overflow)
+    for name in ("spikes", "voltage", "current"):
+        getattr(res, name).update({i: cut(a) for i, a in getattr(whole, name).items()})
+    return res

@@ -1,0 +1,54 @@
+"""Shared fixtures: small seeded models and files in the formats users bring."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from snncc.frontends.checkpoint import save_checkpoint
+from snncc.models import SNNConfig, SpikingClassifier
+
+TH1_PARAMS = ("scale 5\ntime_bin_size 5\nnb_input_copies 2\ntau_mem 0.06\ntau_ratio 10\n"
+              "fwd_weight_scale 1\nweight_scale_factor 0.01\nreg_spikes 0.004\nreg_neurons 1e-6\n")
+
+
+def run_cli(args: list[str], capsys) -> tuple[int, str, str]:
+    """Run ``snncc args``; return (exit status, stdout, stderr)."""
+    from snncc.cli.main import run
+
+    code = run([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.fixture
+def small_rsnn_checkpoint(tmp_path):
+    torch.manual_seed(0)
+    model = SpikingClassifier(SNNConfig(n_hidden=32, n_outputs=28))
+    model.reset_parameters(fwd_weight_scale=3.0, weight_scale_factor=0.2)
+    path = tmp_path / "rsnn.pt"
+    save_checkpoint(model, path, {"dt": 0.005, "note": "test model"})
+    return path
+
+
+@pytest.fixture
+def th1_params(tmp_path):
+    p = tmp_path / "parameters_th1.txt"
+    p.write_text(TH1_PARAMS)
+    return p
+
+
+@pytest.fixture
+def authors_weights(tmp_path):
+    """A weight list shaped like the authors' th1 RSNN but smaller hidden layer."""
+    g = torch.Generator().manual_seed(1)
+    ws = [torch.randn(48, 40, generator=g) * 0.4, torch.randn(40, 28, generator=g) * 0.4,
+          torch.randn(40, 40, generator=g) * 0.05]
+    path = tmp_path / "weights_th1.pt"
+    torch.save(ws, path)
+    return path
+
+
+def spikes(shape, p=0.1, seed=0) -> np.ndarray:
+    return (np.random.default_rng(seed).random(shape) < p).astype(np.uint8)
