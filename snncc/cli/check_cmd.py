@@ -1,16 +1,101 @@
-"""``snncc check``: Measure what a target loses against the float model."""
+"""``snncc check``: measure what a target loses against the float model, on a data set.
+
+Dispatches to ``get_target(target).check(graph, inputs, labels, options) -> record`` (a record
+with ``as_dict()`` and ``render_text(console)``), so every target brings its own check.
+"""
 
 from __future__ import annotations
 
-from typing import List
+from pathlib import Path
+from typing import Optional
 
+import numpy as np
 import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from snncc.cli.app import app
-from snncc.cli.pending import not_built
+from snncc.cli.output import console, err_console, print_json
+from snncc.errors import SnnccError
+from snncc.frontends import LoadOptions, load_model
+from snncc.targets import get_target
 
 
-@app.command("check", context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
-def check_command(args: List[str] = typer.Argument(None, help="Arguments (not built yet).")) -> None:
-    """Measure what a target loses against the float model."""
-    not_built("check", "the quantization-loss check")
+def load_check_data(path: Path, graph, limit: int | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
+    """(inputs, labels, meta) from a Braille data set file or a plain .npz with inputs and labels.
+
+    Inputs with ``base_inputs`` channels are tiled ``input_copies`` times (the authors' x.tile((k,))).
+    """
+    meta: dict = {}
+    try:
+        from snncc.data.dataset import load_dataset
+    except ImportError:
+        load_dataset = None
+    if not path.is_file():
+        raise SnnccError("file does not exist", file=str(path), field="--data")
+    inputs = labels = None
+    if load_dataset is not None:
+        try:
+            inputs, labels, meta = load_dataset(path)
+        except SnnccError:
+            inputs = None
+    if inputs is None:
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                if "inputs" not in z or "labels" not in z:
+                    raise SnnccError("a check data set needs arrays 'inputs' (N, T, C) and 'labels' (N,)",
+                                     file=str(path), field="inputs" if "inputs" not in z else "labels")
+                inputs, labels = z["inputs"], z["labels"]
+        except SnnccError:
+            raise
+        except Exception as ex:  # not an npz / corrupt
+            raise SnnccError(f"not a readable .npz data set ({type(ex).__name__})", file=str(path), field="--data") from None
+    inputs, labels = np.asarray(inputs), np.asarray(labels)
+    if inputs.ndim != 3:
+        raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
+    if labels.ndim != 1 or labels.shape[0] != inputs.shape[0] or labels.dtype.kind not in "iu":
+        raise SnnccError(f"labels must be N = {inputs.shape[0]} integers", file=str(path), field="labels")
+    if limit is not None:
+        inputs, labels = inputs[:limit], labels[:limit]
+    k = int(graph.metadata.get("input_copies", 1) or 1)
+    base = graph.metadata.get("base_inputs")
+    if k > 1 and base is not None and inputs.shape[2] == int(base):
+        inputs = np.tile(inputs, (1, 1, k))
+    return inputs, labels, meta
+
+
+@app.command("check")
+def check_command(
+    model: Path = typer.Argument(..., help="Model file (as for snncc compile)."),
+    target: str = typer.Option("loihi", "--target", "-t", help="Target whose losses to measure."),
+    data: Path = typer.Option(..., "--data", help="Data set: a Braille .npz (snncc data) or any .npz with inputs (N,T,C) and labels (N,)."),
+    params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file for a SpyTorch weight list."),
+    dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
+    reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR)."),
+    timing: str = typer.Option("exact", "--timing", help="Loihi: 'exact' or 'paper' (the authors' export order)."),
+    scale: str = typer.Option("auto", "--scale", help="Loihi weight scale rule: global, per-layer or auto."),
+    allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: deploy a subtract-reset model with reset to zero."),
+    stream: bool = typer.Option(False, "--stream", help="Loihi: the paper's protocol, one stream with 100 blank steps between samples."),
+    limit: Optional[int] = typer.Option(None, "--limit", help="Use only the first N samples."),
+    json_out: bool = typer.Option(False, "--json", help="Print the record as JSON."),
+) -> None:
+    """Compare the float model as trained with the target, on data: accuracy, spike agreement, loss causes."""
+    graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
+    tgt = get_target(target)
+    if not hasattr(tgt, "check"):
+        raise SnnccError(f"target {target!r} has no check in this snncc", field="--target")
+    if limit is not None and limit < 1:
+        raise SnnccError("must be >= 1", field="--limit")
+    inputs, labels, meta = load_check_data(data, graph, limit)
+    options = {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change, "source": str(model),
+               "data": str(data), "mode": "stream" if stream else "batch",
+               "synthetic": bool(isinstance(meta, dict) and meta.get("synthetic"))}
+    with Progress(TextColumn("checking"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=err_console, disable=json_out, transient=True) as bar:
+        task = bar.add_task("check", total=len(labels))
+        record = tgt.check(graph, inputs, labels, dict(options, progress=lambda n: bar.advance(task, n)))
+    if json_out:
+        print_json(record.as_dict() if hasattr(record, "as_dict") else record)
+    elif hasattr(record, "render_text"):
+        record.render_text(console)
+    else:
+        console.print(record)

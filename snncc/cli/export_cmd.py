@@ -1,16 +1,44 @@
-"""``snncc export``: Export a model to another format (NIR)."""
+"""``snncc export``: write a model as a NIR graph for other frameworks (snnTorch, Norse, Lava, ...)."""
 
 from __future__ import annotations
 
-from typing import List
+from pathlib import Path
+from typing import Optional
 
 import typer
 
 from snncc.cli.app import app
-from snncc.cli.pending import not_built
+from snncc.cli.render import print_import_notes
+from snncc.cli.output import console, print_json
+from snncc.errors import SnnccError
+from snncc.frontends import LoadOptions, load_model
+
+FORMATS = ("nir",)
 
 
-@app.command("export", context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
-def export_command(args: List[str] = typer.Argument(None, help="Arguments (not built yet).")) -> None:
-    """Export a model to another format (NIR)."""
-    not_built("export", "NIR export")
+@app.command("export")
+def export_command(
+    model: Path = typer.Argument(..., help="Model file: snncc checkpoint (.pt), SpyTorch weight list (.pt, needs --params), NIR (.nir) or snncc IR (.snnir)."),
+    to: str = typer.Option("nir", "--to", help="Format to write (nir)."),
+    output: Path = typer.Option(..., "--output", "-o", help="File to write (written atomically)."),
+    params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file for a SpyTorch weight list."),
+    dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for input formats that do not store one."),
+    reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for input formats that do not store one (NIR): zero | subtract | zero-delayed (snnTorch's late zero reset)."),
+    nir_dt: Optional[float] = typer.Option(None, "--nir-dt", help="Step the NIR time constants are written for (default: the model's dt; snnTorch's importer has assumed 1e-4 s)."),
+    json_out: bool = typer.Option(False, "--json", help="Print the export report as JSON."),
+) -> None:
+    """Export a spiking model to NIR. The dt convention is stored in the file's metadata and printed,
+    with everything NIR cannot express (refractory periods, reset by subtraction, readout); snncc
+    itself restores the identical IR from the exported file."""
+    if to not in FORMATS:
+        raise SnnccError(f"unknown export format {to!r}; choose one of {', '.join(FORMATS)}", field="--to")
+    from snncc.exporters.nir import export_nir
+    
+    graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
+    report = export_nir(graph, output, step=nir_dt)
+    print_import_notes(graph)
+    if json_out:
+        print_json({"format": to, **report.__dict__})
+        return
+    for line in report.lines():
+        console.print(line, markup=False)

@@ -9,7 +9,7 @@ import typer
 
 from snncc.cli.app import app
 from snncc.cli.output import print_json
-from snncc.cli.render import print_graph_summary
+from snncc.cli.render import print_graph_summary, print_import_notes
 from snncc.frontends import LoadOptions, load_model
 from snncc.ir.summary import graph_summary
 
@@ -25,6 +25,7 @@ def inspect_command(
     """Load a model, validate its IR and print it: nodes, sizes, time constants, delays, reset."""
     graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
     summary = graph_summary(graph)
+    print_import_notes(graph)
     if json_out:
         print_json(summary)
     else:

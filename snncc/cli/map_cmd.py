@@ -1,16 +1,61 @@
-"""``snncc map``: Print the core map of a Loihi bundle."""
+"""``snncc map``: place a Loihi bundle (or a model, lowered first) on cores and report the core map."""
 
 from __future__ import annotations
 
-from typing import List
+from pathlib import Path
+from typing import Optional
 
 import typer
 
 from snncc.cli.app import app
-from snncc.cli.pending import not_built
+from snncc.cli.output import console, print_json
+from snncc.errors import SnnccError
+
+MODEL_SUFFIXES = (".pt", ".pth", ".ckpt", ".snnir", ".nir")
 
 
-@app.command("map", context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
-def map_command(args: List[str] = typer.Argument(None, help="Arguments (not built yet).")) -> None:
-    """Print the core map of a Loihi bundle."""
-    not_built("map", "Loihi core mapping")
+def load_network(source: Path, timing: str = "exact", scale: str = "auto"):
+    """A LoihiNetwork from a bundle, or from a model file lowered with the Loihi target."""
+    import h5py
+
+    if not source.is_file():
+        raise SnnccError("file does not exist", file=str(source))
+    if h5py.is_hdf5(str(source)):
+        from snncc.targets.loihi.bundle import read_bundle
+
+        return read_bundle(source)
+    if source.suffix.lower() not in MODEL_SUFFIXES:
+        raise SnnccError(f"expected a Loihi bundle (HDF5) or a model file ({', '.join(MODEL_SUFFIXES)})",
+                         file=str(source))
+    from snncc.frontends import load_model
+    from snncc.targets import get_target
+
+    graph = load_model(source)
+    artefact = get_target("loihi").lower(graph, {"timing": timing, "scale": scale, "source": str(source)})
+    return artefact.network
+
+
+@app.command("map")
+def map_command(
+    source: Path = typer.Argument(..., help="Loihi bundle (HDF5) or a model file (.pt/.pth/.ckpt/.snnir/.nir), lowered with the Loihi target first."),
+    json_out: bool = typer.Option(False, "--json", help="Print the core map as JSON."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw utilisation per core as a PNG (written atomically)."),
+    timing: str = typer.Option("exact", "--timing", help="For a model file: Loihi timing 'exact' or 'paper' (the authors' export)."),
+    scale: str = typer.Option("auto", "--scale", help="For a model file: Loihi weight scale rule (auto | global | per-layer)."),
+) -> None:
+    """Place every population on Loihi 1 cores under all per-core limits; print the core map."""
+    from snncc.targets.loihi.partition import map_network
+
+    network = load_network(source, timing, scale)
+    try:
+        cmap = map_network(network)
+    except SnnccError as err:
+        raise err.with_file(str(source))
+    if plot is not None:
+        cmap.plot(plot)
+    if json_out:
+        print_json({"source": str(source), **cmap.to_dict()})
+        return
+    cmap.render_text(console)
+    if plot is not None:
+        console.print(f"wrote {plot}")

@@ -6,7 +6,9 @@ from typing import Any
 
 from rich.table import Table
 
-from snncc.cli.output import console
+from snncc.ir.graph import Graph
+
+from snncc.cli.output import console, err_console
 
 
 def _fmt(v: Any) -> str:
@@ -32,3 +34,10 @@ def print_graph_summary(summary: dict[str, Any], title: str | None = None) -> No
     keep = {k: v for k, v in meta.items() if k in ("model_kind", "update_order", "input_copies", "source_format", "source_file", "source_sha256")}
     if keep:
         console.print("  ".join(f"{k}: {v}" for k, v in keep.items()))
+
+
+def print_import_notes(graph: Graph) -> None:
+    """What a frontend assumed (dt inferred, reset chosen, ...): one ``snncc: note:`` line each, on stderr."""
+    source = graph.metadata.get("source_file", "")
+    for note in graph.metadata.get("import_notes") or []:
+        err_console.print(f"snncc: note: {source + ': ' if source else ''}{note}", markup=False, soft_wrap=True)

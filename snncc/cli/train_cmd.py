@@ -1,16 +1,93 @@
-"""``snncc train``: Train the paper's models on Braille data."""
+"""``snncc train``: train the paper's models (RSNN, FFSNN, LSTM, eLSTM) on Braille data."""
 
 from __future__ import annotations
 
-from typing import List
+from enum import Enum
+from pathlib import Path
+from typing import List, Optional
 
+import torch
 import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from snncc.cli.app import app
-from snncc.cli.pending import not_built
+from snncc.cli.output import console, err_console, print_json
+from snncc.errors import SnnccError
+from snncc.training.pipeline import TrainRequest, TrainResult, finetune, train
+from snncc.training.presets import parse_overrides
 
 
-@app.command("train", context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
-def train_command(args: List[str] = typer.Argument(None, help="Arguments (not built yet).")) -> None:
-    """Train the paper's models on Braille data."""
-    not_built("train", "training")
+class ModelKind(str, Enum):
+    rsnn = "rsnn"
+    ffsnn = "ffsnn"
+    lstm = "lstm"
+    elstm = "elstm"
+
+
+class Order(str, Enum):
+    spytorch = "spytorch"
+    loihi = "loihi"
+
+
+def _progress(quiet: bool) -> Progress:
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                    TimeRemainingColumn(), console=err_console, disable=quiet, transient=False)
+
+
+def render_result(result: TrainResult) -> None:
+    h = result.history
+    console.print(f"[bold]{result.kind}[/bold]: {result.parameters:,} trainable parameters; "
+                  f"{result.data['samples']} samples of {result.data['encoding']} ({result.data['steps']} steps x "
+                  f"{result.data['channels']} channels){' -- SYNTHETIC data' if result.data['synthetic'] else ''}")
+    s = result.split
+    console.print(f"split (seed {s['seed']}): train {s['train']}, val {s['val']}, test {s['test']}")
+    console.print(f"epochs run: {h['epochs_run']}; best epoch {h['best_epoch']}: test accuracy "
+                  f"{100 * h['test_accuracy']:.2f} %" + (f", validation {100 * h['val_accuracy']:.2f} %"
+                                                         if h['val_accuracy'] is not None else ""))
+    console.print(f"note: {h['note']}")
+    if result.quantization:
+        q = result.quantization
+        console.print(f"quantization-aware fine-tuning ({q['epochs']} epochs): float {100 * q['before']['float_test_accuracy']:.2f} %"
+                      f" -> Loihi-quantized {100 * q['before']['quantized_test_accuracy']:.2f} % before "
+                      f"(loss {q['loss_before_points']:.2f} points), {100 * q['after']['quantized_test_accuracy']:.2f} % "
+                      f"after (loss {q['loss_after_points']:.2f} points vs the original float model)")
+        console.print(f"note: {q['note']}")
+    console.print(f"wrote {result.output}")
+
+
+@app.command("train")
+def train_command(
+    model: ModelKind = typer.Argument(..., help="rsnn | ffsnn | lstm (frames) | elstm (events)."),
+    data: Path = typer.Option(..., "--data", help="Encoded data set (.npz from snncc data encode) or a directory of published-format pickles (encoded on the fly)."),
+    output: Path = typer.Option(..., "--output", "-o", help="Checkpoint to write (snncc format; snncc compile takes it directly)."),
+    threshold: int = typer.Option(1, "--threshold", help="Sigma-delta threshold of the events (1, 2, 5, 10): selects the paper's preset."),
+    epochs: int = typer.Option(300, "--epochs", help="Training epochs (paper: 300)."),
+    subset: Optional[int] = typer.Option(None, "--subset", help="Train and test on a seeded stratified subset of N samples (smoke runs)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the initialisation, the split and the data order."),
+    order: Order = typer.Option(Order.spytorch, "--order", help="SNN update order: spytorch (the authors') or loihi (one-step delays, cheapest on chip)."),
+    val_fraction: float = typer.Option(0.0, "--val-fraction", help="Hold out this share of all samples (from training) to select the epoch, instead of the test set as the authors did."),
+    qat_from: Optional[Path] = typer.Option(None, "--qat-from", help="Quantization-aware fine-tuning of this trained rsnn/ffsnn checkpoint (same split)."),
+    qat_epochs: int = typer.Option(3, "--qat-epochs", help="Epochs of quantization-aware fine-tuning."),
+    overrides: Optional[List[str]] = typer.Option(None, "--set", help="Override a preset value, KEY=VALUE (e.g. tau_mem=0.05); repeatable."),
+    params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file instead of the preset."),
+    batch_size: int = typer.Option(128, "--batch-size", help="Batch size (paper: 128)."),
+    threads: int = typer.Option(1, "--threads", help="Torch CPU threads (the per-step loop gains little from more; 1 avoids contention)."),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress bars."),
+    json_out: bool = typer.Option(False, "--json", help="Print the training record as JSON."),
+) -> None:
+    """Train one of the paper's models with its per-threshold preset and write a checkpoint."""
+    if threads < 1:
+        raise SnnccError("must be >= 1", field="--threads")
+    if batch_size < 1:
+        raise SnnccError("must be >= 1", field="--batch-size")
+    torch.set_num_threads(threads)
+    req = TrainRequest(kind=model.value, data=str(data), output=str(output), threshold=threshold, epochs=epochs,
+                       subset=subset, seed=seed, order=order.value, val_fraction=val_fraction, batch_size=batch_size,
+                       overrides=parse_overrides(overrides), params_file=str(params) if params else None,
+                       qat_from=str(qat_from) if qat_from else None, qat_epochs=qat_epochs)
+    progress = _progress(quiet or json_out)  # started by the trainer once the data are loaded and checked
+    result = finetune(req, progress) if req.qat_from else train(req, progress)
+    if json_out:
+        print_json(result)
+    else:
+        render_result(result)

@@ -16,20 +16,23 @@ stand-in from the recording's physics (spec: braille.md, "Synthetic generator"):
   with ``g_i = exp((y_i - max y) / contact_length)``: taxels further from the plate are pressed
   less.  Pressures of all dots add and saturate like a capacitor plate, ``P (1 - exp(-p / P))``.
 * **Motion.** The finger rests for ``t_start`` s, slides 15.5 mm at 20 mm/s, then rests until the
-  end of the 54 frames (1.35 s) at 40 Hz. The start position along the slide is Gaussian
-  (``start_sigma`` mm), the lateral position too (``lateral_sigma``), and the contact force varies
-  from repetition to repetition (log-normal, ``force_sigma``).
-* **Sensor.** Per taxel and repetition a small rest offset and a linear drift; white noise per
-  frame; 8-bit quantisation of the capacitance counts: ``raw = clip(round(255 - signal), 0, 255)``
-  (255 at rest, 0 at full load, as the device reports before the software inversion).
+  end of the 54 frames (1.35 s) at 40 Hz. Per repetition: Gaussian start position along the slide
+  (``start_sigma`` mm) and across it (``lateral_sigma``), Gaussian start time of the slide
+  (``onset_sigma`` s), log-normal contact force (``force_sigma``); ``slip_sigma`` (fabric
+  stick-slip) exists but is off: it destroyed the time-collapsed accuracy during calibration.
+* **Sensor.** A fixed rest offset per taxel (``offset_max``) with a small per-repetition jitter, a
+  linear drift, a slow AR(1) contact fluctuation (``wobble_sigma``, ``wobble_rho``), white noise
+  per frame, and 8-bit quantisation of the capacitance counts:
+  ``raw = clip(round(255 - signal), 0, 255)`` (255 at rest, 0 at full load, as the device reports
+  before the software inversion).
 
-Calibration: the free constants (amplitude, widths, pitches, jitter and noise levels) were tuned
-by hand-guided search so that the paper's own analyses, run by ``snncc data analyse`` on the default
-set (27 letters x 200 repetitions, seed 0), give the paper's numbers: linear SVM one-vs-rest with
-5-fold CV 86.7 % on raw frames and 72.3 % time-collapsed, and 87.6 / 38.0 / 10.5 / 3.4 mean events
-per taxel and sample at thresholds 1 / 2 / 5 / 10. The measured values are in
-``docs/braille_synthetic.md``. Anything else (e.g. the inter-spike-interval statistics or SVMs on
-binned events) is *not* calibrated and only loosely resembles the real recordings.
+Calibration: the constants were tuned by a hand-guided search so that the paper's own analyses,
+run by ``snncc data analyse`` on the default set (27 letters x 200 repetitions, seed 0), give the
+paper's numbers. Measured: linear SVM one-vs-rest, 5-fold CV, 87.5 % on raw frames (paper 86.7)
+and 71.4 % time-collapsed (72.3); mean events per taxel and sample 94.7 / 37.3 / 9.5 / 3.8 at
+thresholds 1 / 2 / 5 / 10 (87.6 / 38.0 / 10.5 / 3.4). See ``docs/braille_synthetic.md``. Anything
+else (binning losses, inter-spike intervals, SVMs on binned events) is *not* calibrated and
+differs from the real recordings.
 """
 
 from __future__ import annotations
@@ -70,14 +73,19 @@ class SynthParams:
     dot_sigma: float = 0.6  # mm, Gaussian width of a dot's indentation
     rf_sigma: float = 1.6  # mm, Gaussian receptive field of a taxel through the fabric
     contact_length: float = 3.0  # mm, pressure falls as exp((y - 4.4) / contact_length)
-    amplitude: float = 40.0  # counts for one dot centred on the most exposed taxel
-    saturation: float = 120.0  # counts, saturation of the capacitance
-    start_sigma: float = 1.0  # mm, Gaussian jitter of the start position along the slide
-    lateral_sigma: float = 0.3  # mm, Gaussian jitter across the finger
-    force_sigma: float = 0.15  # log-normal contact force variation per repetition
-    offset_max: float = 2.0  # counts, rest offset per taxel and repetition, U(0, offset_max)
-    drift_sigma: float = 1.0  # counts/s, linear drift per taxel and repetition
-    noise_sigma: float = 0.5  # counts, white sensor noise per frame
+    amplitude: float = 130.0  # counts for one dot centred on the most exposed taxel
+    saturation: float = 60.0  # counts, saturation of the capacitance
+    start_sigma: float = 1.5  # mm, Gaussian jitter of the start position along the slide
+    onset_sigma: float = 0.1  # s, jitter of the slide's start time within the recording
+    slip_sigma: float = 0.0  # log-normal factor on the skin's travel over the letter (stick-slip of the fabric)
+    lateral_sigma: float = 0.2  # mm, Gaussian jitter across the finger
+    force_sigma: float = 0.07  # log-normal contact force variation per repetition
+    offset_max: float = 5.0  # counts, rest offset of each taxel (a sensor property), U(0, offset_max)
+    offset_jitter: float = 0.5  # counts, its variation from repetition to repetition (Gaussian)
+    drift_sigma: float = 0.5  # counts/s, linear drift per taxel and repetition
+    noise_sigma: float = 0.6  # counts, white sensor noise per frame
+    wobble_sigma: float = 1.5  # counts, slow (AR(1)) fluctuation of the contact: fabric creep, vibration
+    wobble_rho: float = 0.5  # AR(1) coefficient per frame of that fluctuation
 
 
 DEFAULT_PARAMS = SynthParams()
@@ -92,9 +100,9 @@ def dot_positions(letter: str, p: SynthParams) -> np.ndarray:
     return np.array(out, dtype=np.float64).reshape(-1, 2)
 
 
-def slide_offset(t: np.ndarray, p: SynthParams) -> np.ndarray:
-    """Finger displacement (mm) at times ``t``: rest, 20 mm/s for 15.5 mm, rest."""
-    return SPEED_MM_S * np.clip(t - p.t_start, 0.0, SLIDE_MM / SPEED_MM_S)
+def slide_offset(t: np.ndarray, t_start: float | np.ndarray) -> np.ndarray:
+    """Finger displacement (mm) at times ``t``: rest until ``t_start``, 20 mm/s for 15.5 mm, rest."""
+    return SPEED_MM_S * np.clip(t - t_start, 0.0, SLIDE_MM / SPEED_MM_S)
 
 
 def generate(
@@ -114,31 +122,39 @@ def generate(
     p = params
     rng = np.random.default_rng(seed)
     t = np.arange(p.n_frames) / p.frame_rate_hz  # (T,)
-    s = slide_offset(t, p)  # (T,)
     tx, ty, tz = TAXELS[:, 0], TAXELS[:, 1], TAXELS[:, 2]
     gain = np.exp((ty - ty.max()) / p.contact_length)  # (12,)
     two_var = 2.0 * (p.dot_sigma**2 + p.rf_sigma**2)
     frames = np.empty((N_CLASSES * repetitions, p.n_frames, 12), dtype=np.uint8)
+    taxel_offset = rng.uniform(0.0, p.offset_max, size=12)
     labels = np.repeat(np.arange(N_CLASSES, dtype=np.int64), repetitions)
     for label, letter in enumerate(CLASSES):
         dots = dot_positions(letter, p)  # (D, 2)
         r = repetitions
         dx0 = rng.normal(0.0, p.start_sigma, size=r)
+        onset = p.t_start + rng.normal(0.0, p.onset_sigma, size=(r, 1))
+        slip = np.exp(rng.normal(0.0, p.slip_sigma, size=(r, 1)))
+        s = slip * slide_offset(t[None, :], onset)  # (r, T)
         dz0 = rng.normal(0.0, p.lateral_sigma, size=r)
         force = np.exp(rng.normal(0.0, p.force_sigma, size=r))
-        offset = rng.uniform(0.0, p.offset_max, size=(r, 1, 12))
+        offset = taxel_offset + rng.normal(0.0, p.offset_jitter, size=(r, 1, 12))
         drift = rng.normal(0.0, p.drift_sigma, size=(r, 1, 12)) * t[None, :, None]
         noise = rng.normal(0.0, p.noise_sigma, size=(r, p.n_frames, 12))
+        innov = rng.normal(0.0, p.wobble_sigma * np.sqrt(1.0 - p.wobble_rho**2), size=(r, p.n_frames, 12))
+        wobble = np.empty_like(innov)
+        wobble[:, 0] = rng.normal(0.0, p.wobble_sigma, size=(r, 12))
+        for n in range(1, p.n_frames):
+            wobble[:, n] = p.wobble_rho * wobble[:, n - 1] + innov[:, n]
         pressure = np.zeros((r, p.n_frames, 12))
         for xd, zd in dots:
             # dot position in the finger frame: (r, T)
-            xdt = xd + dx0[:, None] - s[None, :]
+            xdt = xd + dx0[:, None] - s
             zdt = zd + dz0
             d2 = (tx[None, None, :] - xdt[:, :, None]) ** 2 + (tz[None, None, :] - zdt[:, None, None]) ** 2
             pressure += np.exp(-d2 / two_var)
         pressure *= p.amplitude * gain[None, None, :] * force[:, None, None]
         load = p.saturation * (1.0 - np.exp(-pressure / p.saturation))
-        signal = offset + drift + load + noise
+        signal = offset + drift + load + noise + wobble
         raw = np.clip(np.rint(255.0 - signal), 0, 255).astype(np.uint8)
         frames[label * r:(label + 1) * r] = raw
         if progress is not None:

@@ -27,21 +27,29 @@ dt: ``--dt`` if given; else the ``snncc`` record of a graph snncc exported; else
 the graph's metadata; else inferred from the snnTorch convention r = tau_mem/dt (dt = tau_mem/r,
 which must agree for every neuron and lie below every time constant) -- said in the graph's
 ``import_notes``; otherwise refused with a line asking for ``--dt``.
-Reset: ``--reset zero|subtract``; default ``zero`` (NIR's own equation v <- v_reset = 0).
+Norse's own LIF step updates the voltage from the PREVIOUS step's current and adds input spikes
+to the current without the dt/tau_syn factor; snncc does not reproduce that order (a Norse export,
+r = w_in = 1, needs ``--dt`` and is integrated as NIR's equations above).
+Reset: ``--reset zero|subtract|zero-delayed``; default ``zero`` (NIR's own equation v <- v_reset = 0,
+applied in the step of the spike, as the NIR paper's ``braille_noDelay_*`` graphs were trained:
+snnTorch with reset_delay=False). snnTorch's
+Synaptic/RSynaptic by default reset one step LATE: mem[t] = (beta*mem[t-1] + syn[t])*(1 - s[t-1]),
+i.e. V is also held at 0 in the step after a spike -- exactly the IR's zero reset with refractory
+2, which ``zero-delayed`` selects. snnTorch's late subtraction (mem[t] = beta*mem[t-1] + syn[t] -
+thr*s[t-1]) has no exact IR form; ``subtract`` subtracts in the step of the spike.
 Delays: a NIR ``Delay`` node becomes an IR edge delay of round(delay/dt) steps (non-integer or
 per-neuron differing delays are refused). Every other edge is delay 0 (snnTorch and Norse
 evaluate a feed-forward chain within one step), except that a cycle with no Delay node on it gets
 delay 1 on the edge leaving its last neuron population before the loop closes -- snnTorch's
 RSynaptic/RLeaky and Norse's recurrent cells feed back the PREVIOUS step's spikes.
 Sub-graphs (nested NIRGraph nodes, edges addressed as ``sub`` or ``sub.node``) are flattened;
-node names become dotted paths.
+node names become dotted paths (snnTorch's RSynaptic sub-graph "lif1" gives "lif1.lif", "lif1.w_rec").
 """
 
 from __future__ import annotations
 
 import json
 import math
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -58,8 +66,8 @@ GAIN_SNAP = 1e-9             # |gain - 1| below this is float noise of an r = ta
 NO_LEAK_TAU = 1e30           # IF/I: 1 - dt/1e30 == 1.0 exactly in float64
 SUPPORTED = ("Input", "Output", "Affine", "Linear", "Scale", "Delay", "Flatten", "LIF", "CubaLIF",
              "LI", "CubaLI", "I", "IF", "Threshold", "NIRGraph")
-NEURONS = ("LIF", "CubaLIF", "LI", "CubaLI", "I", "IF", "Threshold")
 PASS_THROUGH = ("Delay", "Flatten", "SubInput", "SubOutput")
+RESET_CHOICES = RESETS + ("zero-delayed",)   # zero-delayed: snnTorch's default late zero reset
 
 
 @dataclass
@@ -75,11 +83,22 @@ def _kind(node: Any) -> str:
     return type(node).__name__
 
 
+def _join(prefix: str, name: str) -> str:
+    """Dotted path of ``name`` inside the sub-graph ``prefix`` ("lif1."); keys that already carry the
+    sub-graph's name (snnTorch/NIR-paper helpers write "lif1.lif" inside "lif1") are not doubled."""
+    last = prefix[:-1].rsplit(".", 1)[-1] if prefix else ""
+    if last and name.startswith(last + "."):
+        return prefix[: -(len(last) + 1)] + name
+    return prefix + name
+
+
 def _flatten(graph: Any, prefix: str, flat: _Flat, top: bool) -> None:
     import nir
 
     for name, node in graph.nodes.items():
-        path = prefix + str(name)
+        path = _join(prefix, str(name))
+        if path in flat.nodes or path in flat.kinds:
+            raise SnnccError("two NIR nodes flatten to the same name", field=f"node '{path}'")
         if "/" in path:
             raise SnnccError("NIR node names must not contain '/'", field=f"node '{path}'")
         if isinstance(node, nir.NIRGraph):
@@ -104,14 +123,16 @@ def _endpoint(graph: Any, prefix: str, name: str, role: str) -> str:
             want = nir.Output if role == "source" else nir.Input
             ends = [k for k, n in node.nodes.items() if isinstance(n, want)]
             if len(ends) != 1:
-                raise SnnccError(f"an edge {'leaves' if role == 'source' else 'enters'} sub-graph '{prefix + name}', "
+                raise SnnccError(f"an edge {'leaves' if role == 'source' else 'enters'} sub-graph '{_join(prefix, name)}', "
                                  f"which has {len(ends)} {want.__name__} nodes (need exactly 1)",
-                                 field=f"node '{prefix + name}'")
-            return _endpoint(node, prefix + name + ".", ends[0], role)
-        return prefix + name
+                                 field=f"node '{_join(prefix, name)}'")
+            return _endpoint(node, _join(prefix, name) + ".", ends[0], role)
+        return _join(prefix, name)
     head, _, rest = name.partition(".")
     if rest and head in graph.nodes and isinstance(graph.nodes[head], nir.NIRGraph):
-        return _endpoint(graph.nodes[head], prefix + head + ".", rest, role)
+        sub = graph.nodes[head]
+        inner = name if name in sub.nodes else rest   # "lif1.lif" may be the key inside "lif1" itself
+        return _endpoint(sub, _join(prefix, head) + ".", inner, role)
     raise SnnccError(f"edge {role} '{name}' is not a node of the graph", field=f"edges of '{prefix or '<top>'}'")
 
 
@@ -192,7 +213,7 @@ class _Neuron:
     port: str
 
 
-def _neuron(name: str, kind: str, node: Any, dt: float, reset: str) -> _Neuron:
+def _neuron(name: str, kind: str, node: Any, dt: float, reset: str, check_step: bool = True) -> _Neuron:
     """An IR LIF for a NIR neuron node, and the gain to fold into its incoming weights."""
     spiking = kind in ("CubaLIF", "LIF", "IF", "Threshold")
     if kind == "Threshold":
@@ -228,7 +249,7 @@ def _neuron(name: str, kind: str, node: Any, dt: float, reset: str) -> _Neuron:
     for label, tau in (("tau_syn", tau_syn), ("tau_mem", tau_mem)):
         if np.any(tau <= 0):
             raise SnnccError("time constants must be positive", field=f"node '{name}'.{label}")
-        if np.any(dt > tau):
+        if check_step and np.any(dt > tau):
             raise SnnccError(f"dt = {dt:g} s exceeds a time constant ({float(np.min(tau)):g} s): forward Euler "
                              "would give a negative decay; use a smaller --dt", field=f"node '{name}'.{label}")
     gain = np.where(np.abs(gain - 1.0) <= GAIN_SNAP, 1.0, gain)
@@ -237,8 +258,10 @@ def _neuron(name: str, kind: str, node: Any, dt: float, reset: str) -> _Neuron:
     bias = None
     if np.any(v_leak != 0):
         bias = v_leak * dt / tau_mem
-    lif = LIF(n=n, tau_syn=tau_syn, tau_mem=tau_mem, threshold=threshold, reset=reset if spiking else "zero",
-              refractory=1, discretisation="euler", bias=bias, bias_placement="voltage")
+    delayed = spiking and reset == "zero-delayed"
+    lif = LIF(n=n, tau_syn=tau_syn, tau_mem=tau_mem, threshold=threshold,
+              reset=reset if spiking and not delayed else "zero", refractory=2 if delayed else 1,
+              discretisation="euler", bias=bias, bias_placement="voltage")
     return _Neuron(lif, gain, "spikes" if spiking else "voltage")
 
 
@@ -257,8 +280,8 @@ def _delay_steps(name: str, node: Any, dt: float) -> int:
 class _Builder:
     """Turns a flattened NIR graph into IR nodes and delayed edges."""
 
-    def __init__(self, flat: _Flat, dt: float, reset: str):
-        self.flat, self.dt, self.reset = flat, dt, reset
+    def __init__(self, flat: _Flat, dt: float, reset: str, check_step: bool = True):
+        self.flat, self.dt, self.reset, self.check_step = flat, dt, reset, check_step
         self.ops: dict[str, Any] = {}
         self.ports: dict[str, str] = {}
         self.gains: dict[str, np.ndarray] = {}
@@ -271,6 +294,9 @@ class _Builder:
             if kind not in SUPPORTED and kind not in PASS_THROUGH:
                 raise SnnccError(f"NIR node type {kind} is not supported by snncc (flat networks of "
                                  f"{', '.join(k for k in SUPPORTED if k != 'NIRGraph')} only)", field=f"node '{name}'")
+            if kind in ("Input", "Output") and (getattr(node, "input_type" if kind == "Input" else "output_type", None) or {}).get(
+                    "input" if kind == "Input" else "output") is None:
+                raise SnnccError("the node has no shape", field=f"node '{name}'")
             if kind == "Input":
                 width = int(np.prod(np.asarray(node.input_type["input"]).reshape(-1)))
                 self.ops[name] = Input(width=width, signal="spikes")
@@ -283,9 +309,7 @@ class _Builder:
                     raise SnnccError(f"weight must be 2-D (out, in), got shape {w.shape}", field=f"node '{name}'.weight")
                 bias = None
                 if kind == "Affine" and node.bias is not None:
-                    bias = np.asarray(node.bias, dtype=np.float64).reshape(-1)
-                    if np.all(bias == 0):
-                        bias = None if np.ndim(node.bias) == 0 else bias
+                    bias = np.broadcast_to(np.asarray(node.bias, dtype=np.float64), (w.shape[0],)).copy()
                 self.ops[name] = Dense(weight=w, bias=bias)
             elif kind == "Scale":
                 self.ops[name] = Dense(weight=np.diag(_arr(node, "scale", name)))
@@ -294,7 +318,7 @@ class _Builder:
             elif kind in ("Flatten", "SubInput", "SubOutput"):
                 self.through[name] = 0
             else:
-                neuron = _neuron(name, kind, node, self.dt, self.reset)
+                neuron = _neuron(name, kind, node, self.dt, self.reset, self.check_step)
                 self.ops[name], self.ports[name], self.gains[name] = neuron.lif, neuron.port, neuron.gain
 
     def contract(self) -> None:
@@ -408,6 +432,19 @@ class _Builder:
         return placed
 
 
+def _topological(b: _Builder) -> list[str]:
+    """Node order: inputs first, then along the zero-delay edges (NIR's order breaks ties)."""
+    import networkx as nx
+
+    index = {name: i for i, name in enumerate(b.ops)}
+    zero = nx.DiGraph()
+    zero.add_nodes_from(b.ops)
+    zero.add_edges_from(e for e, d in b.edges.items() if d == 0)
+    if not nx.is_directed_acyclic_graph(zero):
+        return list(b.ops)  # validate() names the algebraic loop
+    return list(nx.lexicographical_topological_sort(zero, key=lambda n: (not isinstance(b.ops[n], Input), index[n])))
+
+
 def _readout(g: Graph) -> str | None:
     """Insert a spike-count (or membrane-max) Readout before the single Output fed by a population."""
     outs = g.of_kind(Output)
@@ -420,8 +457,10 @@ def _readout(g: Graph) -> str | None:
     src = preds[0]
     port, delay = g.port(src, out), g.delay(src, out)
     mode = "spike_count" if port == "spikes" else "membrane_max"
-    g.nx.remove_edge(src, out)
-    g.add("readout", Readout(width=g.node(out).size, mode=mode))
+    out_op = g.node(out)
+    g.nx.remove_node(out)  # re-added after the readout to keep the node order causal
+    g.add("readout", Readout(width=out_op.size, mode=mode))
+    g.add(out, out_op)
     g.connect(src, "readout", delay=delay, port=port)
     g.connect("readout", out)
     return mode
@@ -433,8 +472,8 @@ def graph_from_nir(nir_graph: Any, dt: float | None = None, reset: str | None = 
 
     if not isinstance(nir_graph, nir.NIRGraph):
         raise SnnccError(f"expected a NIR graph, got a single {type(nir_graph).__name__} node", field="node")
-    if reset is not None and reset not in RESETS:
-        raise SnnccError(f"reset must be one of {RESETS}, got {reset!r}", field="--reset")
+    if reset is not None and reset not in RESET_CHOICES:
+        raise SnnccError(f"reset must be one of {', '.join(RESET_CHOICES)}, got {reset!r}", field="--reset")
     record = _record(nir_graph)
     flat = _Flat()
     _flatten(nir_graph, "", flat, top=True)
@@ -456,23 +495,28 @@ def graph_from_nir(nir_graph: Any, dt: float | None = None, reset: str | None = 
     reset_mode = reset or "zero"
     if record is None:
         if reset is None:
-            notes.append("reset: NIR cannot say whether a reset subtracts; using 'zero' (NIR's v <- v_reset); "
-                         "pass --reset subtract for a subtract-reset model")
+            notes.append("reset: NIR cannot say whether a reset subtracts; using 'zero' in the step of the spike "
+                         "(NIR's v <- v_reset); pass --reset subtract for a subtract-reset model, or --reset "
+                         "zero-delayed for snnTorch's default late zero reset")
+        elif reset == "zero-delayed":
+            notes.append("reset: snnTorch's late zero reset = reset to zero plus V held at 0 for the next step "
+                         "(refractory 2)")
         notes.append("discretisation: forward Euler, current then voltage (snnTorch's order), recorded as 'euler'")
 
-    b = _Builder(flat, step, reset_mode)
+    b = _Builder(flat, step, reset_mode, check_step=record is None)
     b.nodes()
     b.contract()
     b.fold_scales()
     b.fold_gains()
-    b.move_delays_before_dense()
+    if record is None:
+        b.move_delays_before_dense()
     placed = b.recurrent_delays()
     if placed and record is None:
         notes.append("recurrent edges take the previous step's output (delay 1, as snnTorch/Norse): " + ", ".join(placed))
 
-    g = Graph(step, name=Path(source).stem or "nir", metadata={})
-    for name, op in b.ops.items():
-        g.add(name, op)
+    g = Graph(step, name=Path(source).stem if source != "<nir>" else "nir", metadata={})
+    for name in _topological(b):
+        g.add(name, b.ops[name])
     for (u, v), d in b.edges.items():
         port = b.ports.get(u, "spikes") if isinstance(b.ops[u], LIF) else "spikes"
         g.connect(u, v, delay=d, port=port)
@@ -506,10 +550,11 @@ def load(path: Path, options: Any) -> Graph:
 
     try:
         nir_graph = nir.read(str(path), type_check=False)
-    except (OSError, ValueError, KeyError, AssertionError, TypeError) as ex:
+    except Exception as ex:  # the nir/h5py readers raise assorted types on damaged files
         detail = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
         raise SnnccError(f"not a readable NIR graph ({detail})", file=str(path), field="format") from None
-    g = graph_from_nir(nir_graph, dt=options.dt, reset=options.reset, source=str(path))
-    for note in g.metadata.get("import_notes", []):
-        print(f"snncc: note: {path.name}: {note}", file=sys.stderr)
-    return g
+    try:
+        return graph_from_nir(nir_graph, dt=options.dt, reset=options.reset, source=str(path))
+    except (ValueError, TypeError, AttributeError, KeyError, IndexError) as ex:  # malformed node fields
+        detail = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
+        raise SnnccError(f"malformed NIR graph ({type(ex).__name__}: {detail})", file=str(path), field="graph") from None

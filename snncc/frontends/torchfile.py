@@ -6,6 +6,7 @@ SnnccError naming the file and what it is not.
 
 from __future__ import annotations
 
+import warnings
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -43,7 +44,9 @@ def load_torch_file(path: str | Path) -> Any:
     if path.stat().st_size == 0:
         raise SnnccError("file is empty", file=str(path), field="contents")
     try:
-        return torch.load(path, map_location="cpu", weights_only=True)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # torch's note on pickle protocols
+            return torch.load(path, map_location="cpu", weights_only=True)
     except Exception as ex:  # torch raises many types for bad bytes; all become one line
         msg = str(ex)
         if "GLOBAL" in msg or "Unsupported global" in msg or "Unsupported class" in msg:

@@ -195,7 +195,7 @@ class _Runner:
                     if op.reset == "zero":
                         v_after = torch.where(fired, torch.zeros_like(v_new), v_new)
                     else:
-                        v_after = v_new - s * theta
+                        v_after = torch.where(fired, v_new - theta, v_new)  # no 0*inf for integrators
                     if op.refractory > 1:
                         ref = torch.where(fired, torch.full_like(ref, op.refractory - 1), ref)
                     st["I"], st["V"], st["ref"] = i_new, v_after, ref

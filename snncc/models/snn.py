@@ -80,8 +80,9 @@ def lif_sequence(
     ref = torch.zeros(batch, n, dtype=torch.int32, device=drive.device)
     spikes: list[torch.Tensor] = []
     volts: list[torch.Tensor] = []
+    drive_steps = drive.unbind(1)  # one view per step; its backward stacks once (drive[:, t] refilled a full zero tensor per step)
     for t in range(steps):
-        x = drive[:, t]
+        x = drive_steps[t]
         if rec_weight is not None and t - rec_delay >= 0:
             x = x + spikes[t - rec_delay] @ rec_weight
         i_syn = alpha * i_syn + x

@@ -1,0 +1,1 @@
+"""Training of the paper's models: presets, loss, split, trainer and quantization-aware fine-tuning."""

@@ -1,15 +1,186 @@
-"""Jetson target (ONNX, TensorRT recipe, runner): built in its own issue."""
+"""Jetson target: ONNX artefacts (whole-sequence and streaming step), a TensorRT recipe and a runner.
 
+``lower(graph, options)`` builds torch modules with the IR's exact semantics, exports them with
+the legacy ONNX exporter at the opset of the board's JetPack, validates them in ONNX Runtime
+against the IR reference (failing loudly) and returns a ``JetsonArtefact`` whose ``write(dir)``
+creates the directory atomically:
+
+    model.onnx  step.onnx  manifest.json  build_engine.sh  run.py
+
+Options: ``jetpack`` ("4.6" -> opset 13, default), ``time_steps`` (T of the unrolled sequence
+model; default recording_length_s / dt from the graph's metadata), ``source`` (model path).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snncc.atomic import atomic_dir
 from snncc.errors import SnnccError
+from snncc.frontends.params import RECORDING_LENGTH_S
+from snncc.ir.graph import Graph
+from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
+from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
+from snncc.targets.jetson.manifest import build_manifest, manifest_bytes
+from snncc.targets.jetson.plan import GraphPlan, plan_graph
+from snncc.targets.jetson.recipe import build_engine_script
+from snncc.targets.jetson.validate import single_thread, validate_export
+
+EXECUTABLE = ("build_engine.sh", "run.py")
+MAX_UNROLLED_STEPS = 5000
 
 
-class _Pending:
+def runner_source() -> bytes:
+    """run.py: the runner module's own text (standalone: numpy + onnxruntime / tensorrt)."""
+    return (Path(__file__).with_name("runner.py")).read_bytes()
+
+
+def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> int:
+    """T for the export: --time-steps, else recording_length_s / dt (LSTMs: the Braille 1.35 s)."""
+    g = plan.graph
+    given = options.get("time_steps")
+    if given is not None:
+        steps = int(given)
+        if steps < 1 or steps != given:
+            raise SnnccError(f"time steps must be a whole number >= 1, got {given}", field="--time-steps")
+    else:
+        length = g.metadata.get("recording_length_s")
+        if length is None and plan.has_lif:
+            raise SnnccError("the unrolled SNN needs a number of time steps: pass --time-steps "
+                             "(the graph's metadata has no recording_length_s)", field="--time-steps")
+        steps = int(round(float(length if length is not None else RECORDING_LENGTH_S) / g.dt))
+        if steps < 1:
+            raise SnnccError(f"recording_length_s / dt gives {steps} time steps; pass --time-steps",
+                             field="--time-steps")
+    if plan.has_lif and steps > MAX_UNROLLED_STEPS:
+        raise SnnccError(f"{steps} steps is too long to unroll (max {MAX_UNROLLED_STEPS}); the step model "
+                         "runs any length", field="--time-steps")
+    return steps
+
+
+@dataclass
+class JetsonArtefact:
+    """The artefact's files (bytes, in write order) and its manifest."""
+
+    files: dict[str, bytes]
+    manifest: dict
+    notes: list[str] = field(default_factory=list)
+
+    def write(self, path: str | os.PathLike) -> None:
+        dest = Path(path)
+        if dest.exists() and not dest.is_dir():
+            raise SnnccError("the Jetson artefact is a directory, and a file of that name exists", file=str(dest),
+                             field="--output")
+        with atomic_dir(dest) as tmp:
+            for name, data in self.files.items():
+                (tmp / name).write_bytes(data)
+                if name in EXECUTABLE:
+                    os.chmod(tmp / name, 0o755)
+
+    def summary(self) -> dict[str, Any]:
+        m = self.manifest
+        v = m["validation"]
+        return {
+            "model": m["model"],
+            "files": {n: {"bytes": len(d), "sha256": hashlib.sha256(d).hexdigest()} for n, d in self.files.items()},
+            "jetpack": m["jetpack"], "opset": m["opset"], "tensorrt": m["tensorrt"],
+            "time_steps": m["time_steps"], "time_axis": m["time_axis"], "dt": m["dt"],
+            "input": m["input"],
+            "variants": [{k: var[k] for k in ("name", "file", "inputs", "outputs")} for var in m["variants"]],
+            "validation": {
+                "reference": v["reference"],
+                "sequence": {k: x for k, x in v["sequence"].items() if k != "operators"},
+                "step": {k: x for k, x in v["step"].items() if k != "operators"},
+                "dynamic_axes_checked": v["dynamic_axes_checked"],
+                "fp16": v["fp16"],
+            },
+            "notes": self.notes,
+        }
+
+    def render_text(self, console) -> None:
+        from rich.table import Table
+
+        m, v = self.manifest, self.manifest["validation"]
+        console.print(f"[bold]Jetson artefact[/bold]  {m['model']['kind']} '{m['model']['name']}'   JetPack {m['jetpack']} "
+                      f"-> ONNX opset {m['opset']} (TensorRT {m['tensorrt']})")
+        table = Table(show_header=True)
+        for col in ("file", "bytes", "interface"):
+            table.add_column(col)
+        for var in m["variants"]:
+            sig = ", ".join(f"{t['name']}{tuple(t['shape'])}" for t in var["inputs"][:2])
+            if len(var["inputs"]) > 2:
+                sig += f", +{len(var['inputs']) - 2} state"
+            outs = ", ".join(f"{t['name']}{tuple(t['shape'])}" for t in var["outputs"][:2])
+            table.add_row(var["file"], f"{len(self.files[var['file']]):,}", f"{sig} -> {outs}")
+        for name in ("manifest.json", "build_engine.sh", "run.py"):
+            table.add_row(name, f"{len(self.files[name]):,}", "")
+        console.print(table)
+        inp = m["input"]
+        console.print(f"input: {inp['channels']} channels x {m['time_steps']} steps (dt {m['dt']} s); "
+                      f"{inp['note']}")
+        seq, step, fp16 = v["sequence"], v["step"], v["fp16"]
+        if "spike_agreement" in seq:
+            console.print(f"validated against the IR reference ({v['samples']} seeded samples): output spike agreement "
+                          f"model.onnx {seq['spike_agreement']:.4%}, step.onnx {step['spike_agreement']:.4%}; "
+                          f"predictions {seq['prediction_agreement']:.0%} equal")
+        else:
+            console.print(f"validated against the IR reference ({v['samples']} seeded samples): max |delta| score "
+                          f"{seq['max_abs_delta_score']:.2g} (model.onnx), {step['max_abs_delta_score']:.2g} (step.onnx); "
+                          f"predictions {seq['prediction_agreement']:.0%} equal")
+        flips = f"{fp16['spike_flips']} spike flips, " if "spike_flips" in fp16 else ""
+        console.print(f"fp16 emulation: {flips}max |delta| score {fp16['max_abs_delta_score']:.3g} "
+                      f"(range {fp16['score_range']:.3g}), {fp16['predictions_changed']} predictions changed")
+        for note in self.notes:
+            console.print(f"note: {note}")
+
+
+class JetsonTarget:
     name = "jetson"
-    description = "NVIDIA Jetson (not built yet)"
+    description = "NVIDIA Jetson: ONNX (sequence + streaming step) + TensorRT recipe, validated in ONNX Runtime"
     output_kind = "directory"
 
-    def lower(self, graph, options):
-        raise SnnccError("the Jetson target is not built in this version of snncc yet", field="--target jetson")
+    def lower(self, graph: Graph, options: dict[str, Any]) -> JetsonArtefact:
+        options = dict(options or {})
+        plan = plan_graph(graph.copy())
+        steps = resolve_steps(plan, options)
+        jetpack = str(options.get("jetpack") or "4.6")
+        opset = opset_for_jetpack(jetpack)
+        with single_thread():
+            sequence = export_sequence(plan, steps, opset)
+            step = export_step(plan, opset)
+        record = validate_export(plan, steps, sequence, step, seed=int(options.get("seed", 0)))
+        manifest = build_manifest(plan, steps, opset, jetpack, record.as_dict(), options.get("source"))
+        files = {
+            "model.onnx": sequence.data,
+            "step.onnx": step.data,
+            "manifest.json": manifest_bytes(manifest),
+            "build_engine.sh": build_engine_script(manifest).encode("utf-8"),
+            "run.py": runner_source(),
+        }
+        notes = ["validated in ONNX Runtime on this machine; TensorRT engines are built and run on the board"]
+        if plan.has_lif:
+            notes.append(f"model.onnx is unrolled for T = {steps}; step.onnx runs any length")
+        return JetsonArtefact(files, manifest, notes)
+
+    def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, options: dict[str, Any]) -> JetsonCheckRecord:
+        """IR reference vs the ONNX Runtime artefact on a data set (see ``check.check_artefact``)."""
+        options = dict(options or {})
+        progress = options.pop("progress", None)
+        x = np.asarray(inputs)
+        if x.ndim == 2:
+            x = x[None]
+        options.setdefault("time_steps", int(x.shape[1]))
+        artefact = self.lower(graph, options)
+        with single_thread():
+            return check_artefact(plan_graph(graph.copy()), artefact, x, labels, progress)
 
 
-target = _Pending()
+target = JetsonTarget()
+
+__all__ = ["target", "JetsonTarget", "JetsonArtefact", "JetsonCheckRecord"]

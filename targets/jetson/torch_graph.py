@@ -8,8 +8,8 @@ Per LIF population and step (the reference simulator's equations, in its order):
 An edge with delay d delivers its source's output of step t - d (zeros before t = 0).
 
 * ``UnrolledModel``   — graphs with LIF populations: the whole sample, T fixed, unrolled in Python
-  (so the export has no loop operator); parts fed only by the input through Dense maps are computed
-  for all steps at once.  forward(x (B, T, C)) -> (score (B, n), output sequence (B, T, n)).
+  (so the export has no loop operator); Dense maps outside cycles run once over all steps, only
+  cycles and LIF populations are stepped.  forward(x (B, T, C)) -> (score (B, n), outputs (B, T, n)).
 * ``WholeSequenceModel`` — graphs without LIF (LSTM classifiers): each node over the whole
   sequence (``nn.LSTM`` -> ONNX ``LSTM``), dynamic batch and time. forward(x) -> score (B, n).
 * ``StepModel`` — one time step of any graph with its state explicit: LIF (I, V, refractory
@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import networkx as nx
 import numpy as np
 import torch
 from torch import nn
@@ -35,7 +36,7 @@ def _t(a, dtype=torch.float32) -> torch.Tensor:
 
 
 class NodeParams(nn.Module):
-    """The graph's parameters as buffers (float32; ``.half()`` casts them for fp16 emulation)."""
+    """The graph's parameters as float32 buffers (``fp16_step_model`` rounds them to float16 values)."""
 
     def __init__(self, plan: GraphPlan):
         super().__init__()
@@ -68,22 +69,32 @@ class NodeParams(nn.Module):
         return getattr(self, f"{self.key[name]}_{what}", None)
 
 
-def dense(params: NodeParams, name: str, x: torch.Tensor) -> torch.Tensor:
+def _same(x: torch.Tensor) -> torch.Tensor:
+    return x
+
+
+def round_fp16(x: torch.Tensor) -> torch.Tensor:
+    """Round a float32 tensor to the nearest float16 value (kept in float32)."""
+    return x.half().float()
+
+
+def dense(params: NodeParams, name: str, x: torch.Tensor, q=_same) -> torch.Tensor:
     """y = x @ W^T (+ b)."""
-    y = x @ params.get(name, "w")
+    y = q(x @ params.get(name, "w"))
     b = params.get(name, "b")
-    return y if b is None else y + b
+    return y if b is None else q(y + b)
 
 
-def lif_step(params: NodeParams, name: str, op: LIF, i_syn, v, ref, drive):
-    """One step of a LIF population; returns (I, V after reset, ref, spikes)."""
-    i_syn = params.get(name, "alpha") * i_syn + drive
+def lif_step(params: NodeParams, name: str, op: LIF, i_syn, v, ref, drive, q=_same):
+    """One step of a LIF population; returns (I, V after reset, ref, spikes).
+    ``q`` rounds every arithmetic result (identity, or ``round_fp16`` for fp16 emulation)."""
+    i_syn = q(q(params.get(name, "alpha") * i_syn) + drive)
     bias = params.get(name, "bias")
     if bias is not None and op.bias_placement == "current":
-        i_syn = i_syn + bias
-    v = params.get(name, "beta") * v + i_syn
+        i_syn = q(i_syn + bias)
+    v = q(q(params.get(name, "beta") * v) + i_syn)
     if bias is not None and op.bias_placement == "voltage":
-        v = v + bias
+        v = q(v + bias)
     if op.refractory > 1:
         held = ref > 0
         v = torch.where(held, torch.zeros((), dtype=v.dtype), v)
@@ -94,21 +105,21 @@ def lif_step(params: NodeParams, name: str, op: LIF, i_syn, v, ref, drive):
     if op.reset == "zero":
         v_after = torch.where(fired, torch.zeros((), dtype=v.dtype), v)
     else:
-        v_after = torch.where(fired, v - theta, v)
+        v_after = torch.where(fired, q(v - theta), v)
     if op.refractory > 1:
         ref = torch.where(fired, torch.full((), float(op.refractory - 1), dtype=ref.dtype), ref)
     return i_syn, v_after, ref, spikes
 
 
-def lstm_cell(params: NodeParams, name: str, hidden: int, h, c, x):
+def lstm_cell(params: NodeParams, name: str, hidden: int, h, c, x, q=_same):
     """PyTorch's LSTM cell, gate order i, f, g, o."""
-    gates = x @ params.get(name, "wih") + h @ params.get(name, "whh") + params.get(name, "b")
-    i = torch.sigmoid(gates[:, :hidden])
-    f = torch.sigmoid(gates[:, hidden:2 * hidden])
-    gg = torch.tanh(gates[:, 2 * hidden:3 * hidden])
-    o = torch.sigmoid(gates[:, 3 * hidden:])
-    c = f * c + i * gg
-    return o * torch.tanh(c), c
+    gates = q(q(q(x @ params.get(name, "wih")) + q(h @ params.get(name, "whh"))) + params.get(name, "b"))
+    i = q(torch.sigmoid(gates[..., :hidden]))
+    f = q(torch.sigmoid(gates[..., hidden:2 * hidden]))
+    gg = q(torch.tanh(gates[..., 2 * hidden:3 * hidden]))
+    o = q(torch.sigmoid(gates[..., 3 * hidden:]))
+    c = q(q(f * c) + q(i * gg))
+    return q(o * q(torch.tanh(c))), c
 
 
 def tile_copies(x: torch.Tensor, k: int) -> torch.Tensor:
@@ -132,99 +143,142 @@ def score_of(mode: str | None, seq: torch.Tensor) -> torch.Tensor:
     return seq.sum(dim=1)
 
 
-def _static_nodes(plan: GraphPlan) -> list[str]:
-    """Nodes whose output depends only on the input through Dense maps (in evaluation order)."""
+def components(plan: GraphPlan) -> list[list[str]]:
+    """Strongly connected components of the graph (all edges), in dependency order; the nodes of
+    each in the zero-delay evaluation order. A component with a cycle must be stepped as a whole;
+    anything else can be computed for all steps at once (Dense, pass-through) or looped alone (LIF)."""
     g = plan.graph
-    static: list[str] = []
-    for name in plan.order:
-        op = g.node(name)
-        if isinstance(op, Input) or (isinstance(op, Dense) and all(p in static for p in g.predecessors(name))):
-            static.append(name)
-    return static
+    rank = {n: i for i, n in enumerate(plan.order)}
+    cond = nx.condensation(g.nx)
+    members = {c: sorted(cond.nodes[c]["members"], key=rank.__getitem__) for c in cond.nodes}
+    order = nx.lexicographical_topological_sort(cond, key=lambda c: rank[members[c][0]])
+    return [members[c] for c in order]
 
 
 class UnrolledModel(nn.Module):
-    """The whole sample, T fixed, every step written out (see module docstring)."""
+    """The whole sample, T fixed (see module docstring).
+
+    The graph is evaluated component by component: Dense maps outside cycles as one MatMul over
+    all steps, a LIF population outside cycles as a loop of element-wise steps, and each cycle
+    (e.g. a recurrent population and its recurrent Dense) as a loop over its nodes, every step
+    written out (no loop operator in the export).
+    """
 
     def __init__(self, plan: GraphPlan, steps: int):
         super().__init__()
         self.plan, self.steps = plan, int(steps)
         self.params_ = NodeParams(plan)
-        self.static = _static_nodes(plan)
+        self.components = components(plan)
+        g = plan.graph
+        self.ports = {n: sorted({g.port(n, s) for s in g.successors(n)} | {"spikes"}) for n in g}
+
+    def _drive(self, full, name: str, exclude=()) -> torch.Tensor | None:
+        """Sum over predecessors (outside ``exclude``) of their delayed full sequences."""
+        g, total = self.plan.graph, None
+        for src in g.predecessors(name):
+            if src in exclude:
+                continue
+            v = shift_time(full[(src, g.port(src, name))], g.delay(src, name))
+            total = v if total is None else total + v
+        return total
 
     def forward(self, x: torch.Tensor):
         plan, g, p = self.plan, self.plan.graph, self.params_
-        x = tile_copies(x, plan.input_copies)
-        batch = x.shape[0]
-        full: dict[str, torch.Tensor] = {}
-        for name in self.static:
-            if name == plan.input_name:
-                full[name] = x
-            else:
-                (src,) = g.predecessors(name)
-                full[name] = dense(p, name, shift_time(full[src], g.delay(src, name)))
-        dynamic = [n for n in plan.order if n not in self.static]
-        static_drive = {}
-        for name in dynamic:
-            preds = [q for q in g.predecessors(name) if q in self.static]
-            if preds:
-                total = None
-                for q in preds:
-                    v = shift_time(full[q], g.delay(q, name))
-                    total = v if total is None else total + v
-                static_drive[name] = total
-        hist: dict[tuple[str, str], list[torch.Tensor]] = {}
-        state: dict[str, list[torch.Tensor]] = {}
-        for name in dynamic:
+        full: dict[tuple[str, str], torch.Tensor] = {}
+        for comp in self.components:
+            name = comp[0]
             op = g.node(name)
+            if len(comp) == 1 and not g.nx.has_edge(name, name) and not isinstance(op, (LIF, LSTM)):
+                if isinstance(op, Input):
+                    full[(name, "spikes")] = tile_copies(x, plan.input_copies)
+                elif isinstance(op, Dense):
+                    full[(name, "spikes")] = dense(p, name, self._drive(full, name))
+                else:  # Readout, Output: pass through
+                    full[(name, "spikes")] = self._drive(full, name)
+            else:
+                full.update(self._loop(comp, full, x.shape[0], x))
+        seq = full[(plan.output_name, "spikes")]
+        return score_of(plan.score_mode, seq), seq
+
+    def _loop(self, comp: list[str], full, batch, x) -> dict:
+        """Step a component through time; returns its nodes' full sequences. Every per-step tensor
+        is (B, 1, n), so a step's input is a Slice of a sequence and the outputs Concat back
+        without Unsqueeze nodes."""
+        g, p = self.plan.graph, self.params_
+        inside = set(comp)
+        external = {n: self._drive(full, n, exclude=inside) for n in comp}
+        hist: dict[tuple[str, str], list[torch.Tensor]] = {(n, port): [] for n in comp for port in self.ports[n]}
+        state: dict[str, list] = {}
+        for n in comp:
+            op = g.node(n)
             if isinstance(op, LIF):
-                z = x.new_zeros((batch, op.n))
-                state[name] = [z, x.new_zeros((batch, op.n)), x.new_zeros((batch, op.n))]
+                state[n] = [x.new_zeros((batch, 1, op.n)), x.new_zeros((batch, 1, op.n)),
+                            x.new_zeros((batch, 1, op.n)), None]
             elif isinstance(op, LSTM):
-                state[name] = [x.new_zeros((batch, op.hidden_size)), x.new_zeros((batch, op.hidden_size))]
-            hist[(name, "spikes")] = []
-            hist[(name, "voltage")] = []
-
-        def in_width(op) -> int:
-            if isinstance(op, Dense):
-                return op.in_size
-            if isinstance(op, LSTM):
-                return op.input_size
-            return op.size
-
+                state[n] = [x.new_zeros((batch, 1, op.hidden_size)), x.new_zeros((batch, 1, op.hidden_size))]
         for t in range(self.steps):
-            for name in dynamic:
-                op = g.node(name)
-                total = static_drive[name][:, t] if name in static_drive else None
-                for q in g.predecessors(name):
-                    if q in self.static:
+            for n in comp:
+                op = g.node(n)
+                total = external[n][:, t:t + 1] if external[n] is not None else None
+                for src in g.predecessors(n):
+                    if src not in inside:
                         continue
-                    d = g.delay(q, name)
+                    d = g.delay(src, n)
                     if t - d < 0:
                         continue
-                    v = hist[(q, g.port(q, name))][t - d]
+                    v = hist[(src, g.port(src, n))][t - d]
                     total = v if total is None else total + v
                 if total is None:
-                    total = x.new_zeros((batch, in_width(op)))
+                    total = x.new_zeros((batch, 1, _in_width(op)))
                 if isinstance(op, Dense):
-                    out = dense(p, name, total)
-                    hist[(name, "spikes")].append(out)
+                    hist[(n, "spikes")].append(dense(p, n, total))
                 elif isinstance(op, LIF):
-                    i_syn, v, ref = state[name]
-                    i_syn, v, ref, s = lif_step(p, name, op, i_syn, v, ref, total)
-                    state[name] = [i_syn, v, ref]
-                    hist[(name, "spikes")].append(s)
-                    hist[(name, "voltage")].append(v)
+                    i_syn, v, ref, fired_before = state[n]
+                    i_syn, v, ref, s, fired = lif_step_unrolled(p, n, op, i_syn, v, ref, fired_before, total)
+                    state[n] = [i_syn, v, ref, fired]
+                    hist[(n, "spikes")].append(s)
+                    if "voltage" in self.ports[n]:
+                        hist[(n, "voltage")].append(v)
                 elif isinstance(op, LSTM):
-                    h, c = state[name]
-                    h, c = lstm_cell(p, name, op.hidden_size, h, c, total)
-                    state[name] = [h, c]
-                    hist[(name, "spikes")].append(h)
+                    h, c = state[n]
+                    h, c = lstm_cell(p, n, op.hidden_size, h, c, total)
+                    state[n] = [h, c]
+                    hist[(n, "spikes")].append(h)
                 else:
-                    hist[(name, "spikes")].append(total)
-        out_name = plan.output_name
-        seq = full[out_name] if out_name in full else torch.stack(hist[(out_name, "spikes")], dim=1)
-        return score_of(plan.score_mode, seq), seq
+                    hist[(n, "spikes")].append(total)
+        return {key: torch.cat(seq, dim=1) for key, seq in hist.items()}
+
+
+def _in_width(op) -> int:
+    if isinstance(op, Dense):
+        return op.in_size
+    if isinstance(op, LSTM):
+        return op.input_size
+    return op.size
+
+
+def lif_step_unrolled(params: NodeParams, name: str, op: LIF, i_syn, v, ref, fired_before, drive):
+    """``lif_step`` with a cheaper refractory period of 2 (the SpyTorch order): the neuron is held
+    exactly in the step after a spike, so the previous step's spike mask replaces the counter."""
+    if op.refractory != 2:
+        i_syn, v, ref, spikes = lif_step(params, name, op, i_syn, v, ref, drive)
+        return i_syn, v, ref, spikes, None
+    i_syn = params.get(name, "alpha") * i_syn + drive
+    bias = params.get(name, "bias")
+    if bias is not None and op.bias_placement == "current":
+        i_syn = i_syn + bias
+    v = params.get(name, "beta") * v + i_syn
+    if bias is not None and op.bias_placement == "voltage":
+        v = v + bias
+    if fired_before is not None:
+        v = torch.where(fired_before, torch.zeros((), dtype=v.dtype), v)
+    theta = params.get(name, "theta")
+    fired = v > theta
+    if op.reset == "zero":
+        v_after = torch.where(fired, torch.zeros((), dtype=v.dtype), v)
+    else:
+        v_after = torch.where(fired, v - theta, v)
+    return i_syn, v_after, ref, fired.to(v.dtype), fired
 
 
 class WholeSequenceModel(nn.Module):
@@ -307,13 +361,14 @@ class StepModel(nn.Module):
         self.plan = plan
         self.params_ = NodeParams(plan)
         self.slots = state_slots(plan)
+        self.q = _same
 
     def initial_state(self, batch: int, dtype=torch.float32) -> list[torch.Tensor]:
         """Distinct zero tensors (never one object reused: the exporters merge those)."""
         return [torch.zeros((batch, *s.shape), dtype=dtype) for s in self.slots]
 
     def forward(self, x_t: torch.Tensor, *states: torch.Tensor):
-        plan, g, p = self.plan, self.plan.graph, self.params_
+        plan, g, p, q = self.plan, self.plan.graph, self.params_, self.q
         st = {(s.node, s.what): v for s, v in zip(self.slots, states)}
         cur: dict[tuple[str, str], torch.Tensor] = {}
         nxt: dict[tuple[str, str], torch.Tensor] = {}
@@ -323,23 +378,23 @@ class StepModel(nn.Module):
                 cur[(name, "spikes")] = tile_copies(x_t, plan.input_copies)
                 continue
             total = None
-            for q in g.predecessors(name):
-                d, port = g.delay(q, name), g.port(q, name)
-                v = cur[(q, port)] if d == 0 else st[(q, f"hist:{port}")][:, d - 1]
-                total = v if total is None else total + v
+            for src in g.predecessors(name):
+                d, port = g.delay(src, name), g.port(src, name)
+                v = cur[(src, port)] if d == 0 else st[(src, f"hist:{port}")][:, d - 1]
+                total = v if total is None else q(total + v)
             if isinstance(op, Dense):
-                cur[(name, "spikes")] = dense(p, name, total)
+                cur[(name, "spikes")] = dense(p, name, total, q)
             elif isinstance(op, LIF):
                 ref = st.get((name, "ref"))
                 if ref is None:
                     ref = st[(name, "V")]  # unused when refractory == 1
-                i_syn, v, ref, s = lif_step(p, name, op, st[(name, "I")], st[(name, "V")], ref, total)
+                i_syn, v, ref, s = lif_step(p, name, op, st[(name, "I")], st[(name, "V")], ref, total, q)
                 nxt[(name, "I")], nxt[(name, "V")] = i_syn, v
                 if op.refractory > 1:
                     nxt[(name, "ref")] = ref
                 cur[(name, "spikes")], cur[(name, "voltage")] = s, v
             elif isinstance(op, LSTM):
-                h, c = lstm_cell(p, name, op.hidden_size, st[(name, "h")], st[(name, "c")], total)
+                h, c = lstm_cell(p, name, op.hidden_size, st[(name, "h")], st[(name, "c")], total, q)
                 nxt[(name, "h")], nxt[(name, "c")] = h, c
                 cur[(name, "spikes")] = h
             else:
@@ -350,6 +405,17 @@ class StepModel(nn.Module):
             nxt[(node, f"hist:{port}")] = newest if depth == 1 else torch.cat([newest, old[:, : depth - 1]], dim=1)
         y = cur[(plan.output_name, "spikes")]
         return (y, *[nxt[(s.node, s.what)] for s in self.slots])
+
+
+def fp16_step_model(plan: GraphPlan) -> StepModel:
+    """The step model with float16 weights and every arithmetic result rounded to float16
+    (float32 accumulation inside a matrix product, as TensorRT's fp16 kernels do)."""
+    model = StepModel(plan)
+    with torch.no_grad():
+        for buf in model.params_.buffers():
+            buf.copy_(round_fp16(buf))
+    model.q = round_fp16
+    return model
 
 
 def run_steps(model: StepModel, x: torch.Tensor) -> torch.Tensor:

@@ -1,15 +1,234 @@
-"""Loihi 1 target (quantization, netx bundle, bit-exact emulator): built in its own issue."""
+"""Loihi 1 target: timing lowering, quantization, a netx-layout HDF5 bundle, a bit-exact emulator.
+
+``target.lower(graph, options)`` returns a ``LoihiArtefact`` that has already been checked
+against the IR reference (``validation.py``); ``target.check(...)`` measures the accuracy lost
+on a data set (``check.py``). Options: timing ("exact" | "paper"), scale ("auto" | "global" |
+"per-layer"), allow_reset_change (bool), source (model path).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
 from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.passes.quantize import samples_steps
+from snncc.passes.timing import lower_timing
+from snncc.targets.loihi.bundle import netx_compat, write_bundle
+from snncc.targets.loihi.lowering import build_network, chain, lif_params_check
+from snncc.targets.loihi.network import LoihiNetwork
+from snncc.targets.loihi.partition import map_network
+from snncc.targets.loihi.resources import LOIHI1
+
+DEFAULT_STEPS = 100        # tSample when the model states no recording length
+VALIDATION_BATCH = 4
+CALIBRATION_BATCH = 8
+CALIBRATION_RATE = 0.05
 
 
-class _Pending:
+@dataclass
+class LoihiArtefact:
+    network: LoihiNetwork
+    quantization: dict[str, Any]
+    timing: dict[str, Any]
+    validation: dict[str, Any]
+    notes: list[str] = field(default_factory=list)
+
+    def write(self, path: str | Path) -> None:
+        write_bundle(self.network, path, extra={"quantization": self.quantization, "timing": self.timing,
+                                                "validation": self.validation})
+
+    def summary(self) -> dict[str, Any]:
+        net = self.network
+        q = self.quantization
+        return {
+            "format": "HDF5 bundle, lava-dl netx layout (+ snncc groups at /snncc)",
+            "t_sample": net.t_sample,
+            "layers": [
+                {"index": i, "name": lay.name, "type": lay.kind, "neurons": lay.n,
+                 **({} if i == 0 else {"vThMant": lay.v_th_mant, "iDecay": lay.i_decay, "vDecay": lay.v_decay,
+                                       "refDelay": lay.ref_delay, "wgtExp": lay.wgt_exp,
+                                       **({"wgtExpRec": lay.wgt_exp_rec} if lay.weight_rec is not None else {}),
+                                       "delay": _delay_text(lay.delay),
+                                       **({"delay_rec": _delay_text(lay.delay_rec)} if lay.weight_rec is not None else {})})}
+                for i, lay in enumerate(net.layers)
+            ],
+            "scale_rule": q["rule"], "scale_reason": q["reason"], "w_scale": q["w_scale"],
+            "weights_clipped": q["clipped_total"],
+            "timing": self.timing["mode"], "timing_changes": self.timing["changes"],
+            "validation": self.validation,
+            "netx_compat": netx_compat(net),
+            "core_map": net.core_map,
+            "notes": self.notes,
+        }
+
+    def render_text(self, console) -> None:
+        s = self.summary()
+        console.print(f"[bold]Loihi bundle[/bold]: tSample {s['t_sample']}, timing '{s['timing']}', "
+                      f"scale rule '{s['scale_rule']}'" + (f", w_scale {s['w_scale']}" if s["w_scale"] else ""))
+        console.print(f"  scale: {s['scale_reason']}")
+        for lay in s["layers"]:
+            if lay["index"] == 0:
+                console.print(f"  layer 0  input      {lay['neurons']} axons")
+                continue
+            rec = f" wgtExpRec {lay['wgtExpRec']} delay_rec {lay['delay_rec']}" if "wgtExpRec" in lay else ""
+            console.print(f"  layer {lay['index']}  {lay['type']:<9}  {lay['neurons']} neurons  vThMant {lay['vThMant']} "
+                          f"iDecay {lay['iDecay']} vDecay {lay['vDecay']} refDelay {lay['refDelay']} "
+                          f"wgtExp {lay['wgtExp']} delay {lay['delay']}{rec}")
+        if s["weights_clipped"]:
+            console.print(f"  [yellow]{s['weights_clipped']} weight(s) rounded beyond the 8-bit range and were clipped "
+                          "(e.g. +256 -> 254)[/yellow]")
+        for change in s["timing_changes"]:
+            console.print(f"  [yellow]timing: {change}[/yellow]")
+        v = s["validation"]
+        console.print(f"  checked on {v['inputs']}: timing exact {v['timing_exact']}, quantized registers exact "
+                      f"{v['quantized_params_exact']}, emulator kernel exact {v['kernel_exact']}")
+        console.print("  spike agreement, emulator vs float model as trained: "
+                      + ", ".join(f"{k} {100 * a:.2f}%" for k, a in v["emulator_vs_trained"].items())
+                      + f"; predictions {100 * v['prediction_agreement']:.1f}% (quantization-only loss; "
+                      "`snncc check` measures accuracy on data)")
+        if any(v["overflow"].values()):
+            console.print(f"  [yellow]overflow on the check inputs: {v['overflow']}[/yellow]")
+        for note in s["netx_compat"]:
+            console.print(f"  [yellow]netx compatibility: {note}[/yellow]")
+        if s["netx_compat"]:
+            console.print("  [yellow]lava-dl netx ignores the fields above, so Lava would run this bundle differently "
+                          "than the chip semantics snncc emulates.[/yellow]")
+        if s["core_map"] is not None:
+            console.print(f"  core map: {_core_text(s['core_map'])}")
+        for note in s["notes"]:
+            console.print(f"  note: {note}")
+
+
+def _delay_text(delay) -> Any:
+    import numpy as np
+
+    d = np.asarray(delay)
+    return int(d) if d.ndim == 0 else f"per-synapse {int(d.min())}..{int(d.max())}"
+
+
+def _core_text(core_map: dict) -> str:
+    for key in ("total_cores", "cores", "n_cores"):
+        if key in core_map:
+            value = core_map[key]
+            return f"{len(value) if isinstance(value, list) else value} cores"
+    return "recorded in /snncc/core_map"
+
+
+@dataclass
+class LoweredModel:
+    """Everything lowering produced, for checks: the graphs at each stage and the network."""
+
+    trained: Graph           # the model as given (its own update order)
+    order: Graph             # the IR in the order Loihi runs (timing change, reset change)
+    quantized: Graph         # ``order`` with quantized parameters read back in float
+    layers: list
+    network: LoihiNetwork
+    quant_record: Any
+    timing_record: Any
+
+
+def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
+    """Timing, quantization and register values (no validation)."""
+    from snncc.targets.loihi import scaling
+    from snncc.targets.loihi.validation import ir_spikes, loihi_spikes, pad, random_spikes
+
+    timing_mode = options.get("timing", "exact")
+    rule = options.get("scale", "auto")
+    layers = chain(graph)
+    deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
+    order, trec = lower_timing(deployed, timing_mode)
+    if timing_mode == "exact":
+        order = deployed   # exact timing leaves the graph as it is: share it (saves a reference run)
+    trec.changes = reset_changes + trec.changes
+    steps = options.get("t_sample")
+    if steps is not None:
+        t_rule = "the input length"
+    else:
+        try:
+            steps, t_rule = samples_steps(graph)
+        except SnnccError:
+            steps, t_rule = DEFAULT_STEPS, (f"{DEFAULT_STEPS} steps: the model states no recording length "
+                                            "(graph.metadata['recording_length_s'])")
+    steps = int(steps)
+
+    names = [c.lif for c in layers]
+    calib = random_spikes(CALIBRATION_BATCH, steps, graph.node(layers[0].pre).width, CALIBRATION_RATE, seed=1)
+    reference: dict[str, Any] = {}
+
+    def measure(gq: Graph, rq) -> float:
+        """Mean over layers of the fraction of spike entries that differ from the float model."""
+        from snncc.targets.loihi.emulator import emulate
+
+        if "spikes" not in reference:
+            reference["spikes"] = ir_spikes(order, calib, names)
+        net = build_network(order, layers, rq, trec, steps + trec.output_shift, {})
+        emu = loihi_spikes(emulate(net, pad(calib, trec.output_shift), record="all"), layers, trec.shifts, steps)
+        return float(sum((emu[n] != reference["spikes"][n]).mean() for n in names) / len(names))
+
+    quantized, qrec = scaling.choose(order, rule, measure, f"{CALIBRATION_BATCH} seeded random spike trains "
+                                     f"(p={CALIBRATION_RATE}, seed 1), {steps} steps")
+    meta = {
+        "source_sha256": graph.metadata.get("source_sha256", ""),
+        "source_file": graph.metadata.get("source_file", options.get("source", "")),
+        "model_name": graph.name,
+        "layer_names": [layers[0].pre] + names,
+        "dt": graph.dt,
+        "input_copies": graph.metadata.get("input_copies", 1),
+        "base_inputs": graph.metadata.get("base_inputs", graph.node(layers[0].pre).width),
+        "classes": graph.metadata.get("classes"),
+        "update_order": graph.metadata.get("update_order"),
+        "timing": timing_mode,
+        "output_shift": trec.output_shift,
+        "population_shifts": trec.shifts,
+        "steps": steps,
+        "t_sample_rule": t_rule,
+    }
+    network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
+    return LoweredModel(graph, order, quantized, layers, network, qrec, trec)
+
+
+def attach_core_map(network: LoihiNetwork) -> None:
+    """Place the network on cores and record the map (refuse maps that would change the network)."""
+    core_map = map_network(network)
+    if core_map.transforms:
+        layer = core_map.transforms[0].get("layer")
+        raise SnnccError(
+            f"fan-in exceeds the {LOIHI1.input_axons_per_core} input axons of a core; mapping it needs relay neurons that change "
+            "the network's timing (see `snncc map` for the relay plan), and compiling a relayed bundle is not supported yet",
+            field=f"layer '{layer}'")
+    network.core_map = core_map.to_dict()
+
+
+class LoihiTarget:
     name = "loihi"
-    description = "Intel Loihi 1 (not built yet)"
+    description = "Intel Loihi 1: HDF5 bundle (netx layout) checked by a bit-exact emulator"
     output_kind = "file"
 
-    def lower(self, graph, options):
-        raise SnnccError("the Loihi target is not built in this version of snncc yet", field="--target loihi")
+    def lower(self, graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
+        from snncc.targets.loihi.validation import validate_lowering
+
+        lowered = lower_model(graph, options)
+        notes: list[str] = []
+        attach_core_map(lowered.network)
+        record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
+                                   lowered.timing_record.shifts, lowered.timing_record.output_shift,
+                                   batch=VALIDATION_BATCH)
+        notes.append(f"tSample {lowered.network.t_sample}: {lowered.network.metadata['t_sample_rule']}")
+        if lowered.timing_record.output_shift:
+            notes.append(f"outputs appear {lowered.timing_record.output_shift} step(s) later than in the IR; tSample "
+                         "includes them")
+        return LoihiArtefact(network=lowered.network, quantization=lowered.quant_record.as_dict(),
+                             timing=lowered.timing_record.as_dict(), validation=record.as_dict(), notes=notes)
+
+    def check(self, graph: Graph, inputs, labels, options: dict[str, Any]):
+        from snncc.targets.loihi.check import check_model
+
+        return check_model(graph, inputs, labels, options)
 
 
-target = _Pending()
+target = LoihiTarget()
+
+__all__ = ["target", "LoihiTarget", "LoihiArtefact", "LoihiNetwork", "lower_model"]

@@ -17,14 +17,14 @@ U_HALF, U_MASK = 1 << 23, (1 << 24) - 1
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _scatter(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform):
     """Add pre neuron k's weights (row k of a transposed block starting at ``base``) into the ring."""
     row = base + k * n_post
     if uniform >= 0:
         slot = (t + 1 + uniform) % ring
-        for j in range(n_post):
-            buf[slot, post_off + j] += wflat[row + j]
+        dst = buf[slot, post_off:post_off + n_post]
+        dst += wflat[row:row + n_post]
     else:
         for j in range(n_post):
             slot = (t + 1 + dflat[row + j]) % ring
@@ -33,125 +33,170 @@ def _scatter(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform):
 
 @njit(cache=True, parallel=True)
 def _run(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
-         out_spikes, all_s, all_u, all_v, ovf):
-    batch, steps, width = x.shape
+         out_spikes, all_s, all_u, all_v, ovf, wraps):
+    for b in prange(x.shape[0]):
+        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
+                out_spikes, all_s, all_u, all_v, ovf, wraps)
+
+
+@njit(cache=True)
+def _run_serial(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
+                out_spikes, all_s, all_u, all_v, ovf, wraps):
+    for b in range(x.shape[0]):
+        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
+                out_spikes, all_s, all_u, all_v, ovf, wraps)
+
+
+@njit(cache=True, inline="always")
+def _decay(x, keep):
+    """sign(x) * ((|x| * keep) >> 12) without branches: round the product toward zero."""
+    p = x * keep
+    return (p + ((p >> 63) & 4095)) >> 12
+
+
+@njit(cache=True)
+def _update(qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax, counts, qh, qm, uh, um):
+    """One step of one layer's compartments (slices of the flat state); q is read and cleared."""
+    cq = 0
+    cu = 0
+    cv = 0
+    for j in range(u.shape[0]):
+        q = qrow[j]
+        qrow[j] = 0
+        qw = ((q + qh) & qm) - qh
+        cq += np.int64(qw != q)
+        ur = _decay(u[j], i_keep) + qw
+        un = ((ur + uh) & um) - uh
+        cu += np.int64(un != ur)
+        vr = _decay(v[j], v_keep) + un + bias[j]
+        vn = min(max(vr, vmin), vmax)
+        cv += np.int64(vn != vr)
+        r = ref[j]
+        refractory = r > 0
+        vn = 0 if refractory else vn
+        r = r - 1 if refractory else r
+        s = vn > vth
+        vn = 0 if s else vn
+        ref[j] = ref_delay - 1 if s else r
+        u[j] = un
+        v[j] = vn
+        fired[j] = s
+    counts[0] += cq
+    counts[1] += cu
+    counts[2] += cv
+
+
+@njit(cache=True)
+def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
+            out_spikes, all_s, all_u, all_v, ovf, wraps):
+    """One sample from zero state: the chip's rules, step by step, layer by layer."""
+    steps, width = x.shape[1], x.shape[2]
     n_layers = n.shape[0]
     total = noff[n_layers - 1] + n[n_layers - 1]
     last = n_layers - 1
-    for b in prange(batch):
-        buf = np.zeros((ring, total), np.int64)
-        u = np.zeros(total, np.int64)
-        v = np.zeros(total, np.int64)
-        ref = np.zeros(total, np.int64)
-        fired = np.zeros(total, np.uint8)
-        q_wraps = 0
-        u_wraps = 0
-        v_clips = 0
-        for t in range(steps):
-            slot = t % ring
-            # input axons: this step's input spikes reach layer 1 one step (+ delay) later
-            for k in range(width):
-                if x[b, t, k]:
-                    if record_all:
-                        all_s[b, t, k] = 1
-                    _scatter(buf, ring, t, k, n[1], noff[1], wflat, dflat, woff[1], duni[1])
-            for i in range(1, n_layers):
-                i_keep = 4096 - params[i, 0]
-                v_keep = 4096 - params[i, 1]
-                vth = params[i, 2]
-                ref_delay = params[i, 3]
-                vmin = params[i, 4]
-                vmax = params[i, 5]
-                off = noff[i]
-                for j in range(off, off + n[i]):
-                    q = buf[slot, j]
-                    buf[slot, j] = 0
-                    qw = ((q + Q_HALF) & Q_MASK) - Q_HALF
-                    if qw != q:
-                        q_wraps += 1
-                    uu = u[j]
-                    if uu >= 0:
-                        ud = (uu * i_keep) >> 12
-                    else:
-                        ud = -(((-uu) * i_keep) >> 12)
-                    ur = ud + qw
-                    un = ((ur + U_HALF) & U_MASK) - U_HALF
-                    if un != ur:
-                        u_wraps += 1
-                    vv = v[j]
-                    if vv >= 0:
-                        vd = (vv * v_keep) >> 12
-                    else:
-                        vd = -(((-vv) * v_keep) >> 12)
-                    vn = vd + un + bias[j]
-                    if vn > vmax:
-                        vn = vmax
-                        v_clips += 1
-                    elif vn < vmin:
-                        vn = vmin
-                        v_clips += 1
-                    if ref[j] > 0:
-                        vn = 0
-                        ref[j] -= 1
-                    s = 0
-                    if vn > vth:
-                        s = 1
-                        vn = 0
-                        ref[j] = ref_delay - 1
-                    u[j] = un
-                    v[j] = vn
-                    fired[j] = s
-                    if record_all:
-                        all_s[b, t, j] = s
-                        all_u[b, t, j] = un
-                        all_v[b, t, j] = vn
-                    if i == last and s:
-                        out_spikes[b, t, j - off] = 1
-                # deliver this layer's spikes: to itself (recurrent) and to the next layer
-                for k in range(n[i]):
-                    if fired[off + k]:
-                        if roff[i] >= 0:
-                            _scatter(buf, ring, t, k, n[i], off, wflat, dflat, roff[i], druni[i])
-                        if i < last:
-                            _scatter(buf, ring, t, k, n[i + 1], noff[i + 1], wflat, dflat, woff[i + 1], duni[i + 1])
-        ovf[b, 0] = q_wraps
-        ovf[b, 1] = u_wraps
-        ovf[b, 2] = v_clips
+    buf = np.zeros((ring, total), wflat.dtype)
+    u = np.zeros(total, np.int64)
+    v = np.zeros(total, np.int64)
+    ref = np.zeros(total, np.int64)
+    fired = np.zeros(total, np.uint8)
+    counts = np.zeros(3, np.int64)
+    for t in range(steps):
+        slot = t % ring
+        # input axons: this step's input spikes reach layer 1 one step (+ delay) later
+        for k in range(width):
+            if x[b, t, k]:
+                if record_all:
+                    all_s[b, t, k] = 1
+                _scatter(buf, ring, t, k, n[1], noff[1], wflat, dflat, woff[1], duni[1])
+        for i in range(1, n_layers):
+            lo = noff[i]
+            hi = lo + n[i]
+            _update(buf[slot, lo:hi], u[lo:hi], v[lo:hi], ref[lo:hi], fired[lo:hi], bias[lo:hi],
+                    4096 - params[i, 0], 4096 - params[i, 1], params[i, 2], params[i, 3],
+                    params[i, 4], params[i, 5], counts, wraps[0], wraps[1], wraps[2], wraps[3])
+            if record_all:
+                for j in range(lo, hi):
+                    all_s[b, t, j] = fired[j]
+                    all_u[b, t, j] = u[j]
+                    all_v[b, t, j] = v[j]
+            # deliver this layer's spikes: to itself (recurrent) and to the next layer
+            for k in range(n[i]):
+                if fired[lo + k]:
+                    if i == last:
+                        out_spikes[b, t, k] = 1
+                    if roff[i] >= 0:
+                        _scatter(buf, ring, t, k, n[i], lo, wflat, dflat, roff[i], druni[i])
+                    if i < last:
+                        _scatter(buf, ring, t, k, n[i + 1], noff[i + 1], wflat, dflat, woff[i + 1], duni[i + 1])
+    ovf[b, 0] = counts[0]
+    ovf[b, 1] = counts[1]
+    ovf[b, 2] = counts[2]
+
+
+def _fits_int32(prog) -> bool:
+    """True when sum_i |w_chip[j, i]| over all synapses into any neuron stays below 2**31."""
+    total = np.zeros(int(prog.n.sum()), np.int64)
+    for i in range(1, len(prog.n)):
+        lo, hi = int(prog.noff[i]), int(prog.noff[i] + prog.n[i])
+        total[lo:hi] += np.abs(prog.wt[i]).sum(axis=0)
+        if prog.wr[i].size:
+            total[lo:hi] += np.abs(prog.wr[i]).sum(axis=0)
+    return bool(total.max(initial=0) < 2**31)
 
 
 def _uniform(d: np.ndarray) -> int:
     return int(d.flat[0]) if d.size and np.all(d == d.flat[0]) else (-1 if d.size else 0)
 
 
-def run_program(prog, network, x: np.ndarray, record: str):
-    """Flatten ``prog`` for the kernel, run it on (B, T, C) uint8 ``x``, wrap the result."""
+class Flat:
+    """A program flattened once into the kernel's arrays (weights in one int32/int64 vector)."""
+
+    def __init__(self, prog):
+        self.prog = prog
+        layers = len(prog.n)
+        blocks_w, blocks_d = [], []
+        woff = np.full(layers, -1, np.int64)
+        roff = np.full(layers, -1, np.int64)
+        duni = np.zeros(layers, np.int64)
+        druni = np.zeros(layers, np.int64)
+        pos = 0
+        for i in range(1, layers):
+            woff[i] = pos
+            blocks_w.append(prog.wt[i].ravel())
+            blocks_d.append(prog.dt_[i].ravel())
+            duni[i] = _uniform(prog.dt_[i])
+            pos += prog.wt[i].size
+            if prog.wr[i].size:
+                roff[i] = pos
+                blocks_w.append(prog.wr[i].ravel())
+                blocks_d.append(prog.dr[i].ravel())
+                druni[i] = _uniform(prog.dr[i])
+                pos += prog.wr[i].size
+        wflat = np.ascontiguousarray(np.concatenate(blocks_w) if blocks_w else np.zeros(0, np.int64), dtype=np.int64)
+        if _fits_int32(prog):
+            # every q a step can deliver fits 32 bits: accumulate in int32 (twice the SIMD width)
+            wflat = wflat.astype(np.int32)
+        dflat = np.ascontiguousarray(np.concatenate(blocks_d) if blocks_d else np.zeros(0, np.int64), dtype=np.int64)
+        self.wflat, self.dflat, self.woff, self.roff, self.duni, self.druni = wflat, dflat, woff, roff, duni, druni
+
+
+def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
+    """Flatten ``prog`` and run it on (B, T, C) uint8 ``x`` (see ``run_flat``)."""
+    return run_flat(Flat(prog), x, record, wide)
+
+
+def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False):
+    """Run the kernel on (B, T, C) uint8 ``x`` and wrap the result."""
     from snncc.targets.loihi.emulator import EmulationResult, _prediction
 
+    prog = flat.prog
     layers = len(prog.n)
-    blocks_w, blocks_d = [], []
-    woff = np.full(layers, -1, np.int64)
-    roff = np.full(layers, -1, np.int64)
-    duni = np.zeros(layers, np.int64)
-    druni = np.zeros(layers, np.int64)
-    pos = 0
-    for i in range(1, layers):
-        woff[i] = pos
-        blocks_w.append(prog.wt[i].ravel())
-        blocks_d.append(prog.dt_[i].ravel())
-        duni[i] = _uniform(prog.dt_[i])
-        pos += prog.wt[i].size
-        if prog.wr[i].size:
-            roff[i] = pos
-            blocks_w.append(prog.wr[i].ravel())
-            blocks_d.append(prog.dr[i].ravel())
-            druni[i] = _uniform(prog.dr[i])
-            pos += prog.wr[i].size
-    wflat = np.ascontiguousarray(np.concatenate(blocks_w) if blocks_w else np.zeros(0, np.int64), dtype=np.int64)
-    dflat = np.ascontiguousarray(np.concatenate(blocks_d) if blocks_d else np.zeros(0, np.int64), dtype=np.int64)
     batch, steps, _ = x.shape
     total = int(prog.n.sum())
     n_out = int(prog.n[-1])
     record_all = record == "all"
+    if wide and record == "all":
+        raise SnnccError("a wide (overflow-free) run records outputs only", field="record")
     if record_all and (np.any(prog.params[1:, 4] < INT32_MIN) or np.any(prog.params[1:, 5] > INT32_MAX)):
         raise SnnccError("vmin/vmax beyond 32 bits cannot be recorded", field="vmin")
     out = np.zeros((batch, steps, n_out), np.uint8)
@@ -160,8 +205,17 @@ def run_program(prog, network, x: np.ndarray, record: str):
     all_u = np.zeros(shape_all, np.int32)
     all_v = np.zeros(shape_all, np.int32)
     ovf = np.zeros((batch, 3), np.int64)
-    _run(np.ascontiguousarray(x), prog.n, prog.noff, wflat, dflat, woff, roff, duni, druni,
-         prog.params, prog.bias, int(prog.ring), record_all, out, all_s, all_u, all_v, ovf)
+    if wide:  # no wrap, no clip: what the network computes without overflow (for the loss split)
+        big = 1 << 61
+        wraps = np.array([big, (big << 1) - 1, big, (big << 1) - 1], np.int64)
+        params = prog.params.copy()
+        params[1:, 4], params[1:, 5] = -big, big
+    else:
+        wraps = np.array([Q_HALF, Q_MASK, U_HALF, U_MASK], np.int64)
+        params = prog.params
+    runner = _run if batch > 1 else _run_serial
+    runner(np.ascontiguousarray(x), prog.n, prog.noff, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni, flat.druni,
+         params, prog.bias, int(prog.ring), record_all, out, all_s, all_u, all_v, ovf, wraps)
     counts = out.sum(axis=1, dtype=np.int64)
     res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts),
                           overflow={"q_wrap": int(ovf[:, 0].sum()), "u_wrap": int(ovf[:, 1].sum()),

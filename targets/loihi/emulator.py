@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
+from snncc.targets.loihi.network import LoihiNetwork
 
 Q_BITS, U_BITS = 21, 23          # magnitude bits; plus a sign bit each
 RECORD_CHOICES = ("outputs", "all")
@@ -82,15 +82,24 @@ def _as_delay(delay, shape: tuple[int, int]) -> np.ndarray:
     return np.broadcast_to(np.asarray(delay, np.int64), shape)
 
 
-def _delivered(history: list[np.ndarray], t: int, weight: np.ndarray, delay: np.ndarray, zero: np.ndarray) -> np.ndarray:
+def _by_delay(weight: np.ndarray, delay) -> list[tuple[int, np.ndarray]]:
+    """Split a projection into (delay d, weights that have delay d) pairs, as float64 (w.T).
+
+    Sums of integer chip weights over 0/1 spikes stay far below 2**53, so a float64 matrix
+    product (BLAS) gives the exact integer q; it is converted back to int64 below.
+    """
+    d = _as_delay(delay, weight.shape)
+    return [(int(v), np.where(d == v, weight, 0).astype(np.float64).T.copy()) for v in np.unique(d)]
+
+
+def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndarray]], zero: np.ndarray) -> np.ndarray:
     """sum_i w[j, i] * s_i[t - 1 - delay[j, i]] for every post neuron j (spikes before t = 0 are 0)."""
     total = zero.copy()
-    for d in np.unique(delay):
-        src = t - 1 - int(d)
-        if src < 0:
-            continue
-        w = np.where(delay == d, weight, 0)
-        total = total + history[src] @ w.T
+    for d, w_t in parts:
+        src = t - 1 - d
+        if src >= 0:
+            part = history[src].astype(np.float64) @ w_t
+            total = total + (part if zero.dtype.kind == "f" else np.rint(part).astype(np.int64))
     return total
 
 
@@ -116,17 +125,19 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
         state.append({"u": z.copy(), "v": z.copy(), "ref": np.zeros((batch, layer.n), np.int64)})
         hist.append([])
         rec_s[i], rec_u[i], rec_v[i] = hist[i], [], []
+    def chip(weight, exp):  # w_chip = w * 2**(6 + wgtExp)
+        return np.asarray(weight, dt) * (2.0 ** (6 + exp) if as_float else np.int64(1) << (6 + exp))
+
+    ff = [None] + [_by_delay(chip(lay.weight, lay.wgt_exp), lay.delay) for lay in layers[1:]]
+    rec = [None] + [None if lay.weight_rec is None else _by_delay(chip(lay.weight_rec, lay.wgt_exp_rec), lay.delay_rec)
+                    for lay in layers[1:]]
     for t in range(steps):
         for i, layer in enumerate(layers[1:], start=1):
             st = state[i - 1]
             zero = np.zeros((batch, layer.n), dt)
-            scale = 2.0 ** (6 + layer.wgt_exp) if as_float else np.int64(1) << (6 + layer.wgt_exp)
-            w = np.asarray(layer.weight, dt) * scale
-            q = _delivered(hist[i - 1], t, w, _as_delay(layer.delay, w.shape), zero)
-            if layer.weight_rec is not None:
-                scale_r = 2.0 ** (6 + layer.wgt_exp_rec) if as_float else np.int64(1) << (6 + layer.wgt_exp_rec)
-                w_r = np.asarray(layer.weight_rec, dt) * scale_r
-                q = q + _delivered(hist[i], t, w_r, _as_delay(layer.delay_rec, w_r.shape), zero)
+            q = _delivered(hist[i - 1], t, ff[i], zero)
+            if rec[i] is not None:
+                q = q + _delivered(hist[i], t, rec[i], zero)
             bias = np.zeros(layer.n, dt) if layer.bias is None else np.asarray(layer.bias, dt) * (
                 2.0 ** layer.bias_exp if as_float else np.int64(1) << layer.bias_exp)
             if as_float:
@@ -189,35 +200,85 @@ class _Program:
     ring: int                # ring buffer length (max total delay + 1)
 
 
+def _chip_weights(weight, exp: int, where: str) -> np.ndarray:
+    """w_chip = w * 2**(6 + wgtExp) as int64 (an integer only for wgtExp >= -6)."""
+    if exp < -6:
+        raise SnnccError("wgtExp below -6 gives fractional chip weights", field=where)
+    return np.asarray(weight, np.int64) << (6 + exp)
+
+
 def _program(network: LoihiNetwork) -> _Program:
     layers = network.layers
     n = np.array([lay.n for lay in layers], np.int64)
     noff = np.concatenate([[0], np.cumsum(n)[:-1]]).astype(np.int64)
-    wt, dts, wr, dr = [np.zeros((0, 0), np.int64)], [np.zeros((0, 0), np.int64)], [np.zeros((0, 0), np.int64)], [np.zeros((0, 0), np.int64)]
+    empty = np.zeros((0, 0), np.int64)
+    wt, dts, wr, dr = [empty], [empty], [empty], [empty]
     params = np.zeros((len(layers), 6), np.int64)
     bias = np.zeros(int(n.sum()), np.int64)
     max_delay = 0
     for i, lay in enumerate(layers[1:], start=1):
-        w = np.asarray(lay.weight, np.int64) << (6 + lay.wgt_exp) if lay.wgt_exp >= -6 else None
-        if w is None:
-            raise SnnccError("wgtExp below -6 gives fractional chip weights", field=f"/layer/{i}/neuron/wgtExp")
+        w = _chip_weights(lay.weight, lay.wgt_exp, f"/layer/{i}/neuron/wgtExp")
         d = _as_delay(lay.delay, w.shape)
         wt.append(np.ascontiguousarray(w.T))
         dts.append(np.ascontiguousarray(d.T))
         max_delay = max(max_delay, int(d.max(initial=0)))
         if lay.weight_rec is not None:
-            r = np.asarray(lay.weight_rec, np.int64) << (6 + lay.wgt_exp_rec)
+            r = _chip_weights(lay.weight_rec, lay.wgt_exp_rec, f"/layer/{i}/neuron/wgtExpRec")
             drr = _as_delay(lay.delay_rec, r.shape)
             wr.append(np.ascontiguousarray(r.T))
             dr.append(np.ascontiguousarray(drr.T))
             max_delay = max(max_delay, int(drr.max(initial=0)))
         else:
-            wr.append(np.zeros((0, 0), np.int64))
-            dr.append(np.zeros((0, 0), np.int64))
+            wr.append(empty)
+            dr.append(empty)
         params[i] = (lay.i_decay, lay.v_decay, int(lay.v_th_mant) * 64, lay.ref_delay, lay.vmin, lay.vmax)
         if lay.bias is not None:
             bias[noff[i]:noff[i] + lay.n] = np.asarray(lay.bias, np.int64) << lay.bias_exp
     return _Program(n, noff, wt, dts, wr, dr, params, bias, max_delay + 2)
+
+
+class PreparedNetwork:
+    """A network flattened once for the kernel (as a network is loaded onto the chip once).
+
+    ``run`` takes the arguments of ``emulate``; use it to emulate many inputs without re-flattening.
+    """
+
+    def __init__(self, network: LoihiNetwork):
+        from snncc.targets.loihi._kernel import Flat
+
+        self.network = network
+        self.flat = Flat(_program(network))
+
+    def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int = 100,
+            wide: bool = False) -> EmulationResult:
+        from snncc.targets.loihi._kernel import run_flat
+
+        if record not in RECORD_CHOICES:
+            raise SnnccError(f"record must be one of {RECORD_CHOICES}", field="record")
+        if mode not in MODES:
+            raise SnnccError(f"mode must be one of {MODES}", field="mode")
+        x = check_inputs(inputs, self.network.input_width)
+        if mode == "batch":
+            return run_flat(self.flat, x, record, wide)
+        if gap < 0:
+            raise SnnccError("gap must be >= 0 steps", field="gap")
+        batch, steps, width = x.shape
+        period = steps + gap
+        stream = np.zeros((1, batch * period, width), np.uint8)
+        for b in range(batch):
+            stream[0, b * period:b * period + steps] = x[b]
+        whole = run_flat(self.flat, stream, record, wide)
+        windows = [slice(b * period, b * period + steps) for b in range(batch)]
+
+        def cut(a: np.ndarray) -> np.ndarray:
+            return np.stack([a[0, w] for w in windows], axis=0)
+
+        out = cut(whole.output_spikes)
+        counts = out.sum(axis=1, dtype=np.int64)
+        res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts), overflow=whole.overflow)
+        for name in ("spikes", "voltage", "current"):
+            getattr(res, name).update({i: cut(a) for i, a in getattr(whole, name).items()})
+        return res
 
 
 def emulate(
@@ -227,38 +288,13 @@ def emulate(
     record: str = "outputs",
     mode: str = "batch",
     gap: int = 100,
+    wide: bool = False,
 ) -> EmulationResult:
     """Run ``network`` bit-exactly on 0/1 ``inputs`` (T, C) or (B, T, C).
 
     mode "batch": every sample starts from zero state. mode "stream": the paper's protocol, one
     continuous run with ``gap`` blank steps after each sample; each sample's outputs are the
-    steps of its own window. record "all" keeps every layer's spikes, u and v.
+    steps of its own window. record "all" keeps every layer's spikes, u and v. ``wide=True``
+    (outputs only) removes the q/u wrap and the v clip, to measure what overflow costs.
     """
-    if record not in RECORD_CHOICES:
-        raise SnnccError(f"record must be one of {RECORD_CHOICES}", field="record")
-    if mode not in MODES:
-        raise SnnccError(f"mode must be one of {MODES}", field="mode")
-    x = check_inputs(inputs, network.input_width)
-    from snncc.targets.loihi._kernel import run_program
-
-    if mode == "batch":
-        return run_program(_program(network), network, x, record)
-    if gap < 0:
-        raise SnnccError("gap must be >= 0 steps", field="gap")
-    batch, steps, width = x.shape
-    period = steps + gap
-    stream = np.zeros((1, batch * period, width), np.uint8)
-    for b in range(batch):
-        stream[0, b * period:b * period + steps] = x[b]
-    whole = run_program(_program(network), network, stream, record)
-    windows = [slice(b * period, b * period + steps) for b in range(batch)]
-
-    def cut(a: np.ndarray) -> np.ndarray:
-        return np.stack([a[0, w] for w in windows], axis=0)
-
-    out = cut(whole.output_spikes)
-    counts = out.sum(axis=1, dtype=np.int64)
-    res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts), overflow=whole.overflow)
-    for name in ("spikes", "voltage", "current"):
-        getattr(res, name).update({i: cut(a) for i, a in getattr(whole, name).items()})
-    return res
+    return PreparedNetwork(network).run(inputs, record=record, mode=mode, gap=gap, wide=wide)

@@ -202,3 +202,8 @@ def test_input_width_and_nan_are_refused():
         simulate(g, np.zeros((3, 2)))
     with pytest.raises(SnnccError, match="NaN"):
         simulate(g, np.full((3, 1), np.nan))
+
+
+def test_subtract_reset_integrator_with_infinite_threshold_stays_finite():
+    _, vol, spk = trace(one_neuron(w=0.5, threshold=np.inf, reset="subtract"), [1, 1, 0])
+    assert np.all(np.isfinite(vol)) and spk.sum() == 0

@@ -1,0 +1,243 @@
+#!/usr/bin/env python
+"""The paper's whole pipeline on the SYNTHETIC Braille set, through the snncc command line.
+
+    python examples/braille/run_pipeline.py                # small settings: a few minutes on 2 CPU cores
+    python examples/braille/run_pipeline.py --full         # the paper's settings (300 epochs: days on a CPU)
+
+Steps: generate (snncc data synth) -> encode (events th 1 at 5 ms, frames) -> train RSNN th1, LSTM,
+eLSTM (snncc train) -> quantization-aware fine-tuning of the RSNN -> compile for Loihi and Jetson
+(snncc compile) -> measure what each target loses (snncc check) -> a results table beside the
+paper's numbers (results.md and results.json in the output directory).
+
+A step whose snncc verb or target is not built in this version is reported as *unavailable*;
+nothing is faked. The data are synthetic, so the numbers are not the paper's and are labelled so.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+NOT_BUILT = "not built in this version of snncc yet"
+
+PAPER = {  # real data, the paper's figures (accuracy, %)
+    "rsnn_th1_pytorch": 79.90,
+    "rsnn_th1_loihi": 78.32,
+    "lstm_frames": 96.92,
+    "elstm_events": 82.31,
+}
+
+SMALL = {"repetitions": 40, "rsnn_epochs": 3, "lstm_epochs": 15, "elstm_epochs": 3, "qat_epochs": 1}
+FULL = {"repetitions": 200, "rsnn_epochs": 300, "lstm_epochs": 300, "elstm_epochs": 300, "qat_epochs": 10}
+
+
+@dataclass
+class Step:
+    name: str
+    argv: list[str]
+    status: str = "pending"          # ok | failed | unavailable | skipped
+    seconds: float = 0.0
+    message: str = ""
+    record: dict | None = None
+
+
+@dataclass
+class Pipeline:
+    out: Path
+    settings: dict
+    seed: int
+    steps: list[Step] = field(default_factory=list)
+
+    def snncc(self, name: str, *args: str, needs: tuple[str, ...] = ()) -> Step:
+        """Run one ``snncc`` command (``--json`` output parsed when the verb prints it)."""
+        step = Step(name, ["snncc", *args])
+        self.steps.append(step)
+        blocked = [n for n in needs if self.status(n) != "ok"]
+        if blocked:
+            step.status, step.message = "skipped", f"needs {', '.join(blocked)}"
+            print(f"[skip] {name}: {step.message}", flush=True)
+            return step
+        print(f"[run ] {name}: snncc {' '.join(args)}", flush=True)
+        started = time.perf_counter()
+        proc = subprocess.run([sys.executable, "-m", "snncc.cli.main", *args], capture_output=True, text=True)
+        step.seconds = round(time.perf_counter() - started, 1)
+        err_lines = [l for l in proc.stderr.strip().splitlines() if l.startswith("snncc:")]
+        if proc.returncode == 0:
+            step.status = "ok"
+            try:
+                step.record = json.loads(proc.stdout)
+            except json.JSONDecodeError:
+                step.record = None
+        else:
+            step.message = err_lines[-1] if err_lines else (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
+            step.status = "unavailable" if NOT_BUILT in step.message else "failed"
+        print(f"[{step.status:>4}] {name} ({step.seconds} s){': ' + step.message if step.message else ''}", flush=True)
+        return step
+
+    def python(self, name: str, func, *args, needs: tuple[str, ...] = ()) -> Step:
+        """A step done in this process (no snncc verb for it); an error is a failed step."""
+        step = Step(name, [func.__name__, *map(str, args)])
+        self.steps.append(step)
+        blocked = [n for n in needs if self.status(n) != "ok"]
+        if blocked:
+            step.status, step.message = "skipped", f"needs {', '.join(blocked)}"
+            print(f"[skip] {name}: {step.message}", flush=True)
+            return step
+        started = time.perf_counter()
+        try:
+            func(*args)
+            step.status = "ok"
+        except Exception as ex:  # reported in the table, never hidden
+            step.status, step.message = "failed", f"{type(ex).__name__}: {ex}"
+        step.seconds = round(time.perf_counter() - started, 1)
+        print(f"[{step.status:>4}] {name} ({step.seconds} s){': ' + step.message if step.message else ''}", flush=True)
+        return step
+
+    def status(self, name: str) -> str:
+        return next((s.status for s in self.steps if s.name == name), "missing")
+
+    def record(self, name: str) -> dict | None:
+        return next((s.record for s in self.steps if s.name == name and s.status == "ok"), None)
+
+
+def write_test_split(checkpoint: Path, encoded: Path, dest: Path) -> None:
+    """The test samples of a trained checkpoint's own split, as a data-set file for snncc check."""
+    import torch
+
+    from snncc.data.dataset import load_dataset, save_dataset
+    from snncc.training.pipeline import assigned
+
+    meta_ckpt = torch.load(checkpoint, weights_only=True)["metadata"]
+    test = assigned(meta_ckpt["split_assignment"], "test")
+    inputs, labels, meta = load_dataset(encoded)
+    save_dataset(dest, inputs[test], labels[test], dict(meta, source=f"{meta.get('source')} (test split of {checkpoint.name})"))
+
+
+def pct(x) -> str:
+    return "—" if x is None else f"{x:.2f} %"
+
+
+def percent(x) -> float | None:
+    return None if x is None else round(100 * x, 2)
+
+
+def results(p: Pipeline) -> dict:
+    def train_acc(name):
+        r = p.record(name)
+        return None if r is None else r["history"]["test_accuracy"]
+
+    def check_acc(name, key):
+        r = p.record(name)
+        if r is None:
+            return None
+        return r.get("accuracy", {}).get(key) if key in r.get("accuracy", {}) else r.get(key)
+
+    qat = p.record("train RSNN QAT")
+    rows = [
+        {"model": "RSNN th1, float (PyTorch, authors' order)", "ours_percent": percent(train_acc("train RSNN th1")), "paper_percent": PAPER["rsnn_th1_pytorch"]},
+        {"model": "RSNN th1, Loihi emulated (bit-exact, global scale)", "ours_percent": percent(check_acc("check RSNN Loihi", "emulator")), "paper_percent": PAPER["rsnn_th1_loihi"]},
+        {"model": "RSNN th1, fake-quantized after QAT", "ours_percent": percent(None if qat is None else qat["quantization"]["after"]["quantized_test_accuracy"]), "paper_percent": None},
+        {"model": "RSNN th1 after QAT, Loihi emulated", "ours_percent": percent(check_acc("check RSNN QAT Loihi", "emulator")), "paper_percent": None},
+        {"model": "RSNN th1, Jetson (ONNX Runtime)", "ours_percent": percent(check_acc("check RSNN Jetson", "accuracy_artefact")), "paper_percent": None},
+        {"model": "LSTM on frames", "ours_percent": percent(train_acc("train LSTM")), "paper_percent": PAPER["lstm_frames"]},
+        {"model": "LSTM, Jetson (ONNX Runtime)", "ours_percent": percent(check_acc("check LSTM Jetson", "accuracy_artefact")), "paper_percent": None},
+        {"model": "eLSTM on events th1", "ours_percent": percent(train_acc("train eLSTM")), "paper_percent": PAPER["elstm_events"]},
+    ]
+    return {
+        "data": "SYNTHETIC Braille set (snncc data synth), NOT the paper's recordings: compare trends, not values",
+        "settings": p.settings,
+        "selection": "training accuracies are of the best TEST epoch, as the authors selected (optimistic)",
+        "rows": rows,
+        "steps": [asdict(s) | {"record": None} for s in p.steps],
+    }
+
+
+def markdown(res: dict) -> str:
+    lines = ["# Braille pipeline results (SYNTHETIC data)", "", f"> {res['data']}.", f"> {res['selection']}.", "",
+             f"Settings: {json.dumps(res['settings'])}", "",
+             "| model | this run (synthetic) | paper (real data) |", "|---|---|---|"]
+    for r in res["rows"]:
+        lines.append(f"| {r['model']} | {pct(r['ours_percent'])} | {pct(r['paper_percent'])} |")
+    lines += ["", "| step | status | seconds | message |", "|---|---|---|---|"]
+    for s in res["steps"]:
+        lines.append(f"| {s['name']} | {s['status']} | {s['seconds']} | {s['message'].replace('|', '/')} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--full", action="store_true", help="the paper's settings (200 repetitions, 300 epochs)")
+    ap.add_argument("--out", type=Path, default=Path("braille_run"), help="output directory (default ./braille_run)")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=N",
+                    help=f"override one setting ({', '.join(SMALL)}), e.g. --set rsnn_epochs=5")
+    args = ap.parse_args(argv)
+    settings = dict(FULL if args.full else SMALL)
+    for item in args.set:
+        key, _, value = item.partition("=")
+        if key not in settings or not value.isdigit() or int(value) < 1:
+            ap.error(f"--set {item}: expected KEY=N with KEY one of {', '.join(settings)} and N >= 1")
+        settings[key] = int(value)
+    out = args.out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    p = Pipeline(out, settings, args.seed)
+    data, events, frames = out / "data", out / "events_th1.npz", out / "frames.npz"
+    seed = str(args.seed)
+    s = settings
+
+    p.snncc("generate", "data", "synth", "-o", str(data), "-n", str(s["repetitions"]), "--seed", seed,
+            "--thresholds", "1", "--json")
+    p.snncc("encode events", "data", "encode", str(data), "--threshold", "1", "--bin", "5", "-o", str(events), "--json",
+            needs=("generate",))
+    p.snncc("encode frames", "data", "frames", str(data), "-o", str(frames), "--json", needs=("generate",))
+    common = ["--seed", seed, "--json"]
+    p.snncc("train RSNN th1", "train", "rsnn", "--threshold", "1", "--data", str(events), "--epochs", str(s["rsnn_epochs"]),
+            "-o", str(out / "rsnn_th1.pt"), *common, needs=("encode events",))
+    p.snncc("train RSNN QAT", "train", "rsnn", "--data", str(events), "--qat-from", str(out / "rsnn_th1.pt"),
+            "--qat-epochs", str(s["qat_epochs"]), "-o", str(out / "rsnn_th1_qat.pt"), *common, needs=("train RSNN th1",))
+    p.snncc("train LSTM", "train", "lstm", "--data", str(frames), "--epochs", str(s["lstm_epochs"]),
+            "-o", str(out / "lstm.pt"), *common, needs=("encode frames",))
+    p.snncc("train eLSTM", "train", "elstm", "--threshold", "1", "--data", str(events), "--epochs", str(s["elstm_epochs"]),
+            "-o", str(out / "elstm.pt"), *common, needs=("encode events",))
+
+    p.snncc("compile RSNN Loihi", "compile", str(out / "rsnn_th1.pt"), "--target", "loihi", "--scale", "global",
+            "-o", str(out / "rsnn_th1.net"), "--json", needs=("train RSNN th1",))
+    p.snncc("compile RSNN QAT Loihi", "compile", str(out / "rsnn_th1_qat.pt"), "--target", "loihi", "--scale", "global",
+            "-o", str(out / "rsnn_th1_qat.net"), "--json", needs=("train RSNN QAT",))
+    p.snncc("compile RSNN Jetson", "compile", str(out / "rsnn_th1.pt"), "--target", "jetson",
+            "-o", str(out / "rsnn_th1_jetson"), "--json", needs=("train RSNN th1",))
+    p.snncc("compile LSTM Jetson", "compile", str(out / "lstm.pt"), "--target", "jetson",
+            "-o", str(out / "lstm_jetson"), "--json", needs=("train LSTM",))
+
+    # snncc check on each model's own test split (the samples it was not trained on)
+    for ckpt, encoded, name, needs in ((out / "rsnn_th1.pt", events, "rsnn_test.npz", "train RSNN th1"),
+                                       (out / "lstm.pt", frames, "lstm_test.npz", "train LSTM")):
+        p.python(f"test split {name}", write_test_split, ckpt, encoded, out / name, needs=(needs,))
+    for name, model, target, test, needs in (
+        ("check RSNN Loihi", "rsnn_th1.pt", "loihi", "rsnn_test.npz", "compile RSNN Loihi"),
+        ("check RSNN QAT Loihi", "rsnn_th1_qat.pt", "loihi", "rsnn_test.npz", "compile RSNN QAT Loihi"),
+        ("check RSNN Jetson", "rsnn_th1.pt", "jetson", "rsnn_test.npz", "compile RSNN Jetson"),
+        ("check LSTM Jetson", "lstm.pt", "jetson", "lstm_test.npz", "compile LSTM Jetson"),
+    ):
+        extra = ["--scale", "global"] if target == "loihi" else []
+        p.snncc(name, "check", str(out / model), "--target", target, "--data", str(out / test), *extra, "--json",
+                needs=(needs, f"test split {test}"))
+
+    res = results(p)
+    from snncc.atomic import write_text_atomic
+
+    write_text_atomic(out / "results.json", json.dumps(res, indent=2) + "\n")
+    write_text_atomic(out / "results.md", markdown(res))
+    print()
+    print(markdown(res))
+    print(f"wrote {out / 'results.md'} and {out / 'results.json'}")
+    return 1 if any(st.status == "failed" for st in p.steps) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,221 @@
+"""``snncc train`` as a Python function: data -> split -> model -> training -> checkpoint record.
+
+Also quantization-aware fine-tuning from a trained checkpoint, on the same split it was trained on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from snncc.errors import SnnccError
+from snncc.frontends.checkpoint import is_checkpoint, module_from_checkpoint, save_checkpoint
+from snncc.frontends.params import PaperParams, load_params
+from snncc.frontends.torchfile import load_torch_file
+from snncc.models import SpikingClassifier, count_trainable
+from snncc.training.data import EVENT_KINDS, FRAME_DT_S, TrainingData, load_training_data, subset_indices
+from snncc.training.presets import OptimiserSettings, paper_preset, with_overrides
+from snncc.training.qat import loihi_quantization, quantized_forward
+from snncc.training.split import Split, stratified_split
+from snncc.training.trainer import History, TrainSettings, accuracy, build_model, train_model
+
+KINDS = ("rsnn", "ffsnn", "lstm", "elstm")
+N_SNN_OUTPUTS = 28   # 27 letters + 1 spare class (the authors' network)
+
+
+@dataclass
+class TrainRequest:
+    kind: str
+    data: str
+    output: str
+    threshold: int = 1
+    epochs: int = 300
+    subset: int | None = None
+    seed: int = 0
+    order: str = "spytorch"
+    val_fraction: float = 0.0
+    batch_size: int = 128
+    overrides: dict = field(default_factory=dict)
+    params_file: str | None = None
+    qat_from: str | None = None
+    qat_epochs: int = 3
+
+
+@dataclass
+class TrainResult:
+    kind: str
+    output: str
+    parameters: int
+    hyper_parameters: dict
+    optimiser: dict
+    data: dict
+    split: dict
+    history: dict
+    epochs: list
+    quantization: dict | None = None
+    notes: list = field(default_factory=list)
+
+
+def hyper_parameters(req: TrainRequest) -> PaperParams:
+    base = load_params(req.params_file) if req.params_file else paper_preset(req.threshold)
+    return with_overrides(base, req.overrides) if req.overrides else base
+
+
+SPLIT_CODES = {"train": "r", "test": "t", "val": "v"}   # "-": not used (outside --subset)
+
+
+def split_assignment(split: Split, n: int) -> str:
+    """One character per sample of the data set: r(train) t(est) v(al) or - (unused)."""
+    codes = np.full(n, "-")
+    for part, code in SPLIT_CODES.items():
+        codes[getattr(split, part)] = code
+    return "".join(codes.tolist())
+
+
+def assigned(assignment: str, part: str) -> np.ndarray:
+    """Sample indices of ``part`` ("train", "test", "val") in a checkpoint's ``split_assignment``."""
+    codes = np.frombuffer(assignment.encode("ascii"), dtype="S1").astype(str)
+    return np.flatnonzero(codes == SPLIT_CODES[part])
+
+
+def _prepare(req: TrainRequest, data: TrainingData, stored: str | None = None):
+    """The split (sample indices into the data set) and the (inputs, labels) of each part.
+
+    ``stored``: a checkpoint's ``split_assignment``, reused verbatim (fine-tuning never trains on
+    the samples the model was tested on).
+    """
+    if stored is not None:
+        n = int(data.labels.shape[0])
+        if not isinstance(stored, str) or len(stored) != n or set(stored) - set(SPLIT_CODES.values()) - {"-"}:
+            raise SnnccError(f"the checkpoint's split does not describe this set of {n} samples", file=req.data, field="--data")
+        parts = {k: assigned(stored, k) for k in SPLIT_CODES}
+        split = Split(parts["train"], parts["test"], parts["val"], req.seed, 0.2, req.val_fraction)
+    else:
+        chosen = subset_indices(data.labels.numpy(), req.subset, req.seed)
+        local = stratified_split(data.labels.numpy()[chosen], seed=req.seed, val_fraction=req.val_fraction)
+        split = Split(chosen[local.train], chosen[local.test], chosen[local.val], req.seed,
+                      local.test_fraction, local.val_fraction)
+    pick = lambda idx: (data.inputs[idx], data.labels[idx])  # noqa: E731
+    return split, pick(split.train), pick(split.test), (pick(split.val) if split.val.size else None)
+
+
+def _new_model(req: TrainRequest, hp: PaperParams, data: TrainingData) -> torch.nn.Module:
+    torch.manual_seed(req.seed)
+    channels = int(data.inputs.shape[-1])
+    n_classes = int(data.labels.max()) + 1
+    if req.kind in ("rsnn", "ffsnn"):
+        if n_classes > N_SNN_OUTPUTS:
+            raise SnnccError(f"labels reach {n_classes - 1}; the SNN has {N_SNN_OUTPUTS} outputs", field="labels")
+        model = build_model(req.kind, n_inputs=channels, n_outputs=N_SNN_OUTPUTS, input_copies=hp.nb_input_copies,
+                            tau_mem=hp.tau_mem, tau_syn=hp.tau_syn, dt=hp.dt, scale=hp.scale, order=req.order)
+        model.reset_parameters(hp.fwd_weight_scale, hp.weight_scale_factor)
+        return model
+    dt = hp.dt if req.kind == "elstm" else FRAME_DT_S
+    return build_model(req.kind, n_inputs=channels, n_outputs=max(n_classes, 27), dt=dt)
+
+
+def _settings(req: TrainRequest, hp: PaperParams, epochs: int) -> TrainSettings:
+    opt = OptimiserSettings()
+    spiking = req.kind in ("rsnn", "ffsnn")
+    return TrainSettings(epochs=epochs, batch_size=req.batch_size, lr=opt.lr, betas=opt.betas, seed=req.seed,
+                         reg_spikes=hp.reg_spikes if spiking else 0.0, reg_neurons=hp.reg_neurons if spiking else 0.0)
+
+
+def _metadata(req, hp, data, split, history: History, extra=None) -> dict:
+    facts = data.facts()
+    meta = {
+        "model_kind": req.kind,
+        "trained_by": "snncc train",
+        "data": facts,
+        "synthetic_data": facts["synthetic"],
+        "threshold": req.threshold,
+        "time_bin_size_ms": hp.time_bin_size if req.kind in EVENT_KINDS else FRAME_DT_S * 1000,
+        "dt": hp.dt if req.kind in EVENT_KINDS else FRAME_DT_S,
+        "encoding": facts["encoding"],
+        "preset": hp.as_dict(),
+        "update_order": req.order if req.kind in ("rsnn", "ffsnn") else None,
+        "optimiser": OptimiserSettings(epochs=len(history.epochs), batch_size=req.batch_size).as_dict(),
+        "split_seed": req.seed,
+        "subset": req.subset,
+        "split": split.summary(),
+        "split_assignment": split_assignment(split, int(data.labels.shape[0])),
+        "best_epoch": history.best_epoch,
+        "epoch_selected_on": history.selected_on,
+        "selection_note": history.note,
+        "test_accuracy": history.best_test_accuracy,
+        "val_accuracy": history.best_val_accuracy,
+    }
+    if facts.get("classes"):
+        meta["classes"] = list(facts["classes"]) + (["spare"] if req.kind in ("rsnn", "ffsnn") and len(facts["classes"]) == 27 else [])
+    meta.update(extra or {})
+    return meta
+
+
+def train(req: TrainRequest, progress=None, data: TrainingData | None = None) -> TrainResult:
+    """Train a model from scratch and write its checkpoint (``data``: already loaded, else from req.data)."""
+    if req.kind not in KINDS:
+        raise SnnccError(f"unknown model {req.kind!r} (known: {', '.join(KINDS)})", field="model")
+    if req.epochs < 1:
+        raise SnnccError("must be >= 1", field="--epochs")
+    hp = hyper_parameters(req)
+    if data is None:
+        data = load_training_data(req.data, req.kind, req.threshold, hp.time_bin_size)
+    split, train_set, test_set, val_set = _prepare(req, data)
+    model = _new_model(req, hp, data)
+    settings = _settings(req, hp, req.epochs)
+    history = train_model(model, train_set, test_set, settings, val=val_set, progress=progress)
+    meta = _metadata(req, hp, data, split, history)
+    save_checkpoint(model, req.output, meta)
+    return TrainResult(req.kind, req.output, count_trainable(model), hp.as_dict(), asdict(settings), data.facts(),
+                       split.summary(), history.summary(), [asdict(e) for e in history.epochs],
+                       notes=[history.note] + ([] if not data.facts()["synthetic"] else ["trained on SYNTHETIC data"]))
+
+
+def finetune(req: TrainRequest, progress=None, data: TrainingData | None = None) -> TrainResult:
+    """Quantization-aware fine-tuning of a trained spiking checkpoint, on its own split."""
+    obj = load_torch_file(req.qat_from)
+    if not is_checkpoint(obj):
+        raise SnnccError("not an snncc checkpoint (train one with snncc train)", file=req.qat_from, field="format")
+    model = module_from_checkpoint(obj, source=req.qat_from)
+    if not isinstance(model, SpikingClassifier):
+        raise SnnccError("quantization-aware fine-tuning applies to rsnn/ffsnn checkpoints only",
+                         file=req.qat_from, field="architecture.kind")
+    if model.config.kind != req.kind:
+        raise SnnccError(f"checkpoint holds a {model.config.kind}, not a {req.kind}", file=req.qat_from, field="architecture.kind")
+    if req.qat_epochs < 1:
+        raise SnnccError("must be >= 1", field="--qat-epochs")
+    src = obj.get("metadata", {})
+    preset = src.get("preset")
+    hp = with_overrides(paper_preset(1), preset) if preset else hyper_parameters(req)
+    # the checkpoint's own split: same seed, subset and validation share
+    req.seed = int(src.get("split_seed", req.seed))
+    req.subset = src.get("subset", req.subset)
+    req.threshold = int(src.get("threshold", req.threshold))
+    req.order = model.config.order
+    req.val_fraction = float(src.get("split", {}).get("val_fraction", req.val_fraction))
+    if data is None:
+        data = load_training_data(req.data, req.kind, req.threshold, hp.time_bin_size)
+    split, train_set, test_set, val_set = _prepare(req, data, src.get("split_assignment"))
+    before = {"float_test_accuracy": accuracy(model, *test_set),
+              "quantized_test_accuracy": accuracy(model, *test_set, forward=quantized_forward),
+              "quantization": asdict(loihi_quantization(model))}
+    settings = _settings(req, hp, req.qat_epochs)
+    torch.manual_seed(req.seed)
+    history = train_model(model, train_set, test_set, settings, val=val_set, forward=quantized_forward, progress=progress)
+    after = {"float_test_accuracy": accuracy(model, *test_set),
+             "quantized_test_accuracy": accuracy(model, *test_set, forward=quantized_forward),
+             "quantization": asdict(loihi_quantization(model))}
+    record = {"from": str(req.qat_from), "epochs": req.qat_epochs, "before": before, "after": after,
+              "loss_before_points": 100 * (before["float_test_accuracy"] - before["quantized_test_accuracy"]),
+              "loss_after_points": 100 * (before["float_test_accuracy"] - after["quantized_test_accuracy"]),
+              "note": "accuracies of the fake-quantized model (Loihi weights, threshold and decays in float; the "
+                      "chip's per-step integer truncation of current and voltage is not modelled -- use snncc check "
+                      "for the bit-exact emulator)"}
+    meta = _metadata(req, hp, data, split, history, {"qat": record, "trained_by": "snncc train --qat-from"})
+    save_checkpoint(model, req.output, meta)
+    return TrainResult(req.kind, req.output, count_trainable(model), hp.as_dict(), asdict(settings), data.facts(),
+                       split.summary(), history.summary(), [asdict(e) for e in history.epochs], quantization=record,
+                       notes=[history.note, "epochs selected on the fake-quantized accuracy"])

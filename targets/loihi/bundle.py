@@ -1,0 +1,381 @@
+"""Loihi bundles: HDF5 in the lava-dl netx layout (which SLAYER v1 also wrote), plus snncc's own groups.
+
+    /simulation/Ts = 1, /simulation/tSample = T
+    /layer/0/{type="input", shape=[1, 1, C]}
+    /layer/i/{type="dense"|"dense_rec", shape=[n, 1, 1], weight (out, in), weight_rec (n, n),
+              delay (out, in), bias, neuron/{type="LOIHI", vThMant, iDecay, vDecay, refDelay, wgtExp}}
+    snncc extensions (netx ignores them): /layer/i/delay_rec, neuron/{wgtExpRec, biasExp}
+    /snncc/{version, quantization, timing, validation, metadata (JSON strings), source_sha256,
+            core_map (JSON, when mapped), netx_compat (what netx would run differently)}
+
+The writer is atomic and byte-identical for identical input (no timestamps, fixed order). The
+reader also accepts SLAYER v1 files as the paper's authors wrote them (a ``flatten`` layer after
+the input, type ``recurrent`` with ``recWeight``, float-typed even weights, ``neuron/theta`` =
+vThMant * 2**6 when vThMant is absent, ``tauRho``/``scaleRho`` ignored) and validates everything
+it reads: one SnnccError line naming the file, the HDF5 path and the rule.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from snncc.atomic import atomic_path
+from snncc.errors import SnnccError
+from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
+
+SNNCC_GROUP = "snncc"
+FORMAT_VERSION = 1
+
+
+def _version() -> str:
+    try:
+        from importlib.metadata import version
+
+        return version("snncc")
+    except Exception:  # pragma: no cover - not installed
+        return "unknown"
+
+
+def netx_compat(network: LoihiNetwork) -> list[str]:
+    """Fields this bundle relies on that lava-dl netx ignores (so Lava would run it differently)."""
+    notes = []
+    for i, lay in enumerate(network.layers[1:], start=1):
+        if lay.ref_delay != 1:
+            notes.append(f"/layer/{i}/neuron/refDelay = {lay.ref_delay} (netx's LIF has no refractory period)")
+        if lay.wgt_exp != 0:
+            notes.append(f"/layer/{i}/neuron/wgtExp = {lay.wgt_exp} (netx ignores weight exponents)")
+        if lay.weight_rec is not None and lay.wgt_exp_rec != 0:
+            notes.append(f"/layer/{i}/neuron/wgtExpRec = {lay.wgt_exp_rec} (snncc extension)")
+        if lay.weight_rec is not None and np.any(np.asarray(lay.delay_rec) != 0):
+            notes.append(f"/layer/{i}/delay_rec (snncc extension: recurrent synaptic delay)")
+        if lay.bias is not None and lay.bias_exp != 6:
+            notes.append(f"/layer/{i}/neuron/biasExp = {lay.bias_exp} (netx reads bias with exponent 6)")
+    return notes
+
+
+def _string(group: h5py.Group, name: str, text: str) -> None:
+    data = text.encode("utf-8")
+    group.create_dataset(name, data=np.array([data], dtype=f"S{max(len(data), 1)}"), track_times=False)
+
+
+def _scalar(group: h5py.Group, name: str, value, dtype) -> None:
+    group.create_dataset(name, data=np.asarray(value, dtype=dtype), track_times=False)
+
+
+def _array(group: h5py.Group, name: str, value, dtype) -> None:
+    group.create_dataset(name, data=np.ascontiguousarray(np.asarray(value, dtype=dtype)), track_times=False)
+
+
+def _json(obj: Any) -> str:
+    from snncc.cli.output import to_jsonable
+
+    return json.dumps(to_jsonable(obj), sort_keys=True, separators=(",", ":"))
+
+
+def _delay_array(delay, shape) -> np.ndarray:
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(delay, np.uint8), shape))
+
+
+def write_bundle(network: LoihiNetwork, path: str | Path, extra: dict[str, Any] | None = None) -> None:
+    """Write ``network`` to ``path`` atomically; ``extra`` adds JSON records under /snncc."""
+    check_network(network, str(path))
+    with atomic_path(path) as tmp:
+        with h5py.File(tmp, "w", libver="earliest", track_order=False) as f:
+            sim = f.create_group("simulation")
+            _scalar(sim, "Ts", 1, np.int64)
+            _scalar(sim, "tSample", network.t_sample, np.int64)
+            layers = f.create_group("layer")
+            for i, lay in enumerate(network.layers):
+                g = layers.create_group(str(i))
+                _string(g, "type", lay.kind)
+                if i == 0:
+                    _array(g, "shape", [1, 1, lay.n], np.int64)
+                    continue
+                _array(g, "shape", [lay.n, 1, 1], np.int64)
+                _array(g, "weight", lay.weight, np.int16)
+                if np.any(np.asarray(lay.delay) != 0):
+                    _array(g, "delay", _delay_array(lay.delay, lay.weight.shape), np.uint8)
+                if lay.weight_rec is not None:
+                    _array(g, "weight_rec", lay.weight_rec, np.int16)
+                    if np.any(np.asarray(lay.delay_rec) != 0):
+                        _array(g, "delay_rec", _delay_array(lay.delay_rec, lay.weight_rec.shape), np.uint8)
+                if lay.bias is not None:
+                    _array(g, "bias", lay.bias, np.int32)
+                nrn = g.create_group("neuron")
+                _string(nrn, "type", "LOIHI")
+                for key, value in (("vThMant", lay.v_th_mant), ("iDecay", lay.i_decay), ("vDecay", lay.v_decay),
+                                   ("refDelay", lay.ref_delay), ("wgtExp", lay.wgt_exp)):
+                    _scalar(nrn, key, value, np.int64)
+                if lay.weight_rec is not None:
+                    _scalar(nrn, "wgtExpRec", lay.wgt_exp_rec, np.int64)
+                if lay.bias is not None:
+                    _scalar(nrn, "biasExp", lay.bias_exp, np.int64)
+            s = f.create_group(SNNCC_GROUP)
+            _string(s, "version", _version())
+            _scalar(s, "format", FORMAT_VERSION, np.int64)
+            _string(s, "source_sha256", str(network.metadata.get("source_sha256", "")))
+            _string(s, "metadata", _json(network.metadata))
+            _string(s, "netx_compat", _json(netx_compat(network)))
+            if network.core_map is not None:
+                _string(s, "core_map", _json(network.core_map))
+            for key, value in sorted((extra or {}).items()):
+                _string(s, key, _json(value))
+
+
+# -- reading ---------------------------------------------------------------------------------------
+def _fail(path: str, field: str, rule: str) -> None:
+    raise SnnccError(rule, file=path, field=field)
+
+
+def _text(ds: Any) -> str:
+    value = ds[()] if isinstance(ds, h5py.Dataset) else ds
+    if isinstance(value, np.ndarray):
+        value = value.reshape(-1)[0] if value.size else b""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace").strip("\x00").strip()
+    return str(value).strip()
+
+
+def _get(group: h5py.Group, key: str, path: str, where: str) -> Any:
+    if key not in group:
+        _fail(path, f"{where}/{key}", "missing (required field)")
+    return group[key]
+
+
+def _number(group: h5py.Group, key: str, path: str, where: str, default=None, integer: bool = True):
+    if key not in group:
+        if default is None:
+            _fail(path, f"{where}/{key}", "missing (required field)")
+        return default
+    ds = group[key]
+    if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "biuf":
+        _fail(path, f"{where}/{key}", "must be a numeric dataset")
+    arr = np.asarray(ds[()]).reshape(-1)
+    if arr.size != 1:
+        _fail(path, f"{where}/{key}", f"must hold one value, holds {arr.size}")
+    value = arr[0]
+    if not np.isfinite(value):
+        _fail(path, f"{where}/{key}", "must be finite")
+    if integer:
+        if value != np.round(value):
+            _fail(path, f"{where}/{key}", f"must be an integer, got {value}")
+        return int(value)
+    return float(value)
+
+
+def _weights(group: h5py.Group, key: str, path: str, where: str, shape: tuple[int, int]) -> np.ndarray:
+    ds = _get(group, key, path, where)
+    if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "iuf":
+        _fail(path, f"{where}/{key}", f"must be a numeric array, got {getattr(ds, 'dtype', type(ds).__name__)}")
+    w = np.asarray(ds[()], np.float64)
+    if w.shape != shape:
+        _fail(path, f"{where}/{key}", f"shape {w.shape} does not chain: expected {shape} (out, in)")
+    if not np.all(np.isfinite(w)):
+        _fail(path, f"{where}/{key}", "contains NaN or Inf")
+    if np.any(w != np.round(w)) or np.any(np.round(w) % 2 != 0):
+        _fail(path, f"{where}/{key}", "weights must be even integers (8-bit mantissas, step 2)")
+    if w.size and (w.min() < -256 or w.max() > 254):
+        _fail(path, f"{where}/{key}", f"weights must lie in [-256, 254], found [{w.min():g}, {w.max():g}]")
+    return w.astype(np.int16)
+
+
+def _delays(group: h5py.Group, key: str, path: str, where: str, shape: tuple[int, int]):
+    if key not in group:
+        return 0
+    ds = group[key]
+    if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "iuf":
+        _fail(path, f"{where}/{key}", "must be a numeric array")
+    d = np.asarray(ds[()], np.float64)
+    if d.ndim == 1 and d.shape[0] == shape[0]:
+        d = np.repeat(d[:, None], shape[1], axis=1)
+    elif d.size == 1:
+        d = np.full(shape, float(d.reshape(-1)[0]))
+    if d.shape != shape:
+        _fail(path, f"{where}/{key}", f"shape {d.shape} matches neither the weights {shape} nor the neurons")
+    if not np.all(np.isfinite(d)) or np.any(d != np.round(d)) or d.min(initial=0) < 0 or d.max(initial=0) > 62:
+        _fail(path, f"{where}/{key}", "delays must be integers in 0..62")
+    d = d.astype(np.int64)
+    return int(d.flat[0]) if d.size and np.all(d == d.flat[0]) else d
+
+
+def _shape_width(group: h5py.Group, path: str, where: str) -> int:
+    ds = _get(group, "shape", path, where)
+    if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "iuf":
+        _fail(path, f"{where}/shape", "must be a numeric array")
+    shape = np.asarray(ds[()]).reshape(-1)
+    if shape.size == 0 or np.any(shape < 1) or np.any(shape != np.round(shape)):
+        _fail(path, f"{where}/shape", "must be positive integers")
+    return int(np.prod(shape))
+
+
+def read_bundle(path: str | Path) -> LoihiNetwork:
+    """Read and validate a bundle written by snncc, lava-dl netx or SLAYER v1."""
+    path = str(path)
+    if not Path(path).is_file():
+        _fail(path, "path", "file does not exist")
+    try:
+        f = h5py.File(path, "r")
+    except (OSError, RuntimeError, ValueError):
+        _fail(path, "format", "not an HDF5 file (a Loihi bundle is HDF5)")
+    with f:
+        try:
+            return _read(f, path)
+        except SnnccError:
+            raise
+        except (KeyError, ValueError, TypeError, OSError, RuntimeError, AttributeError, IndexError) as ex:
+            _fail(path, "format", f"unreadable bundle ({type(ex).__name__}: {str(ex).splitlines()[0] if str(ex) else ''})")
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _read(f: h5py.File, path: str) -> LoihiNetwork:
+    if "layer" not in f or not isinstance(f["layer"], h5py.Group):
+        _fail(path, "/layer", "missing group (a Loihi bundle lists its layers under /layer)")
+    if "simulation" not in f or not isinstance(f["simulation"], h5py.Group):
+        _fail(path, "/simulation", "missing group (needs /simulation/tSample)")
+    t_sample = _number(f["simulation"], "tSample", path, "/simulation")
+    if t_sample < 1:
+        _fail(path, "/simulation/tSample", "must be >= 1")
+    group = f["layer"]
+    keys = list(group.keys())
+    if not all(k.isdigit() for k in keys) or sorted(int(k) for k in keys) != list(range(len(keys))):
+        _fail(path, "/layer", f"layers must be numbered 0..n-1, found {sorted(keys)}")
+    if len(keys) < 2:
+        _fail(path, "/layer", "needs an input layer and at least one neuron layer")
+    layers: list[LoihiLayer] = []
+    hdf5_index: list[int] = []     # HDF5 layer index of each network layer (a flatten layer has none)
+    width = None
+    dialect = "snncc" if SNNCC_GROUP in f else "netx"
+    for i in range(len(keys)):
+        where = f"/layer/{i}"
+        g = group[str(i)]
+        if not isinstance(g, h5py.Group):
+            _fail(path, where, "must be a group")
+        kind = _text(_get(g, "type", path, where)).lower()
+        if i == 0:
+            if kind != "input":
+                _fail(path, f"{where}/type", f"layer 0 must be the input, got {kind!r}")
+            width = _shape_width(g, path, where)
+            layers.append(LoihiLayer(name="input", kind="input", n=width))
+            hdf5_index.append(0)
+            continue
+        if kind == "flatten":
+            dialect = "slayer-v1"
+            if "shape" in g and _shape_width(g, path, where) != width:
+                _fail(path, f"{where}/shape", "a flatten layer must keep the width")
+            continue
+        if kind not in ("dense", "dense_rec", "recurrent"):
+            _fail(path, f"{where}/type", f"unsupported layer type {kind!r} (dense, dense_rec, recurrent, flatten)")
+        w = _get(g, "weight", path, where)
+        if not isinstance(w, h5py.Dataset) or w.dtype.kind not in "iuf":
+            _fail(path, f"{where}/weight", f"must be a numeric array, got {getattr(w, 'dtype', type(w).__name__)}")
+        if w.ndim != 2:
+            _fail(path, f"{where}/weight", "must be a 2-D (out, in) array")
+        n = int(w.shape[0])
+        if "shape" in g and _shape_width(g, path, where) != n:
+            _fail(path, f"{where}/shape", f"says {_shape_width(g, path, where)} neurons, weight has {n} rows")
+        lay = LoihiLayer(name=f"layer{i}", kind="dense_rec" if kind != "dense" else "dense", n=n)
+        lay.weight = _weights(g, "weight", path, where, (n, width))
+        lay.delay = _delays(g, "delay", path, where, (n, width))
+        if kind != "dense":
+            rec_key = "weight_rec" if kind == "dense_rec" else "recWeight"
+            if kind == "recurrent":
+                dialect = "slayer-v1"
+            lay.weight_rec = _weights(g, rec_key, path, where, (n, n))
+            lay.delay_rec = _delays(g, "delay_rec", path, where, (n, n))
+        if "neuron" not in g or not isinstance(g["neuron"], h5py.Group):
+            _fail(path, f"{where}/neuron", "missing group")
+        nrn = g["neuron"]
+        nw = f"{where}/neuron"
+        if "vThMant" in nrn:
+            lay.v_th_mant = _number(nrn, "vThMant", path, nw)
+        elif "theta" in nrn:
+            theta = _number(nrn, "theta", path, nw, integer=False)
+            if theta <= 0 or theta % 64:
+                _fail(path, f"{nw}/theta", "SLAYER's theta is the on-chip threshold vThMant * 2**6: a positive multiple of 64")
+            lay.v_th_mant = int(theta) // 64
+        else:
+            _fail(path, f"{nw}/vThMant", "missing (required field)")
+        if not 1 <= lay.v_th_mant <= 2**17 - 1:
+            _fail(path, f"{nw}/vThMant", f"must lie in 1..{2**17 - 1}, got {lay.v_th_mant}")
+        for key, attr in (("iDecay", "i_decay"), ("vDecay", "v_decay")):
+            value = _number(nrn, key, path, nw)
+            if not 0 <= value <= 4096:
+                _fail(path, f"{nw}/{key}", f"decays must lie in 0..4096, got {value}")
+            setattr(lay, attr, value)
+        lay.ref_delay = _number(nrn, "refDelay", path, nw, default=1)
+        if not 1 <= lay.ref_delay <= 63:
+            _fail(path, f"{nw}/refDelay", f"must lie in 1..63, got {lay.ref_delay}")
+        lay.wgt_exp = _number(nrn, "wgtExp", path, nw, default=0)
+        if lay.weight_rec is not None:  # SLAYER's recurrent layers share one exponent
+            lay.wgt_exp_rec = _number(nrn, "wgtExpRec", path, nw, default=lay.wgt_exp)
+        for key, value in (("wgtExp", lay.wgt_exp), ("wgtExpRec", lay.wgt_exp_rec)):
+            if not -6 <= value <= 7:
+                _fail(path, f"{nw}/{key}", f"must lie in -6..7 (integer chip weights), got {value}")
+        if "bias" in g:
+            b = g["bias"]
+            if not isinstance(b, h5py.Dataset) or b.dtype.kind not in "iuf":
+                _fail(path, f"{where}/bias", "must be a numeric array")
+            bias = np.asarray(b[()], np.float64).reshape(-1)
+            if bias.size == 1:
+                bias = np.full(n, bias[0])
+            if bias.shape != (n,) or not np.all(np.isfinite(bias)) or np.any(bias != np.round(bias)):
+                _fail(path, f"{where}/bias", f"must be {n} integer mantissas")
+            if np.any(np.abs(bias) > 2**12 - 1):
+                _fail(path, f"{where}/bias", "bias mantissas must fit 13 bits signed (|b| <= 4095)")
+            lay.bias = bias.astype(np.int64)
+            lay.bias_exp = _number(nrn, "biasExp", path, nw, default=6)
+            if not 0 <= lay.bias_exp <= 7 + 6:
+                _fail(path, f"{nw}/biasExp", "must lie in 0..13")
+        layers.append(lay)
+        hdf5_index.append(i)
+        width = n
+    meta: dict[str, Any] = {"dialect": dialect, "hdf5_layer_index": hdf5_index}
+    core_map = None
+    if SNNCC_GROUP in f:
+        s = f[SNNCC_GROUP]
+        for key in ("metadata", "quantization", "timing", "validation", "netx_compat", "core_map"):
+            if key in s:
+                try:
+                    value = json.loads(_text(s[key]))
+                except json.JSONDecodeError:
+                    _fail(path, f"/snncc/{key}", "must be a JSON string")
+                if key == "core_map":
+                    core_map = value
+                elif key == "metadata":
+                    meta.update(value)
+                else:
+                    meta[key] = value
+        if "source_sha256" in s:
+            meta["source_sha256"] = _text(s["source_sha256"])
+        names = meta.get("layer_names")
+        if isinstance(names, list) and len(names) == len(layers):
+            for lay, name in zip(layers, names):
+                lay.name = str(name)
+    return LoihiNetwork(layers=layers, t_sample=int(t_sample), metadata=meta, core_map=core_map)
+
+
+def check_network(network: LoihiNetwork, where: str = "<network>") -> None:
+    """The same rules the reader enforces, applied before writing (a bad network is never written)."""
+    width = network.layers[0].n
+    for i, lay in enumerate(network.layers[1:], start=1):
+        for key, w, shape in (("weight", lay.weight, (lay.n, width)), ("weight_rec", lay.weight_rec, (lay.n, lay.n))):
+            if w is None:
+                if key == "weight":
+                    raise SnnccError("missing weights", file=where, field=f"/layer/{i}/{key}")
+                continue
+            w = np.asarray(w)
+            if w.shape != shape:
+                raise SnnccError(f"shape {w.shape} does not chain, expected {shape}", file=where, field=f"/layer/{i}/{key}")
+            if w.size and (w.min() < -256 or w.max() > 254 or np.any(w % 2)):
+                raise SnnccError("weights must be even integers in [-256, 254]", file=where, field=f"/layer/{i}/{key}")
+        for key in ("i_decay", "v_decay"):
+            if not 0 <= getattr(lay, key) <= 4096:
+                raise SnnccError("decays must lie in 0..4096", file=where, field=f"/layer/{i}/neuron/{key}")
+        if not 1 <= lay.v_th_mant <= 2**17 - 1:
+            raise SnnccError("vThMant must lie in 1..131071", file=where, field=f"/layer/{i}/neuron/vThMant")
+        width = lay.n

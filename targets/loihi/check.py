@@ -1,0 +1,157 @@
+"""``snncc check --target loihi``: what deploying on Loihi costs, on a data set, and why.
+
+Four runs on the same inputs:
+  (a) the float model as trained (IR reference of the original graph)
+  (b) the IR in the order Loihi runs, float (timing change only, e.g. the paper's export order)
+  (c) the IR with the quantized weights, thresholds and decay constants, float
+  (d) the bit-exact emulator of the bundle (integer, truncating decays, wrap/clip)
+plus (d') the emulator without overflow (wide registers) when any overflow occurred.
+Loss split: timing = acc(a) - acc(b); quantization = acc(b) - acc(c) + acc(c) - acc(d'),
+i.e. parameters plus integer truncation; overflow = acc(d') - acc(d).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.ir.simulate import simulate
+
+CHUNK = 64
+
+
+@dataclass
+class CheckRecord:
+    target: str
+    samples: int
+    steps: int
+    timing: str
+    scale_rule: str
+    scale_reason: str
+    accuracy: dict[str, float]                 # float_trained, ir_loihi_order, ir_quantized, emulator
+    loss_points: dict[str, float]              # timing, quantization (params), truncation, overflow, total
+    spike_agreement: dict[str, dict[str, float]]   # comparison -> layer -> fraction of equal entries
+    prediction_agreement: dict[str, float]
+    overflow: dict[str, int]
+    mode: str = "batch"
+    notes: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    def render_text(self, console) -> None:
+        a, l = self.accuracy, self.loss_points
+        console.print(f"[bold]snncc check: {self.target}[/bold] on {self.samples} samples x {self.steps} steps "
+                      f"(timing '{self.timing}', scale '{self.scale_rule}', {self.mode} mode)")
+        rows = [("(a) float model as trained", "float_trained"), ("(b) IR in Loihi order, float", "ir_loihi_order"),
+                ("(c) IR with quantized parameters, float", "ir_quantized"), ("(d) Loihi emulator (bit-exact)", "emulator")]
+        for label, key in rows:
+            console.print(f"  {label:<42} accuracy {100 * a[key]:6.2f} %")
+        console.print("  loss (points) from: " + ", ".join(f"{k} {v:+.2f}" for k, v in l.items()))
+        for name, per_layer in self.spike_agreement.items():
+            console.print(f"  spike agreement {name}: " + ", ".join(f"{k} {100 * v:.2f}%" for k, v in per_layer.items()))
+        console.print("  prediction agreement: " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in self.prediction_agreement.items()))
+        console.print(f"  overflow events: {self.overflow}")
+        for note in self.notes:
+            console.print(f"  note: {note}")
+
+
+def _ir_run(graph: Graph, x: np.ndarray, names: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    from snncc.targets.loihi.validation import one_thread
+
+    with one_thread():
+        res = simulate(graph, x, record="spikes")
+    return res.prediction.numpy(), {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
+
+
+def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: dict[str, Any],
+                progress: Callable[[int], None] | None = None) -> CheckRecord:
+    """Run (a)-(d) over ``inputs`` (N, T, C) 0/1 with ``labels`` (N,); ``progress(n)`` after each chunk."""
+    from snncc.targets.loihi import lower_model
+    from snncc.targets.loihi.emulator import check_inputs, emulate
+    from snncc.targets.loihi.validation import loihi_spikes, pad
+
+    progress = progress or options.get("progress")
+    lowered = lower_model(graph, dict(options, t_sample=options.get("t_sample") or np.asarray(inputs).shape[1]))
+    net = lowered.network
+    x_all = check_inputs(inputs, net.input_width, source=options.get("data"))
+    labels = np.asarray(labels).reshape(-1)
+    if labels.shape[0] != x_all.shape[0]:
+        raise SnnccError(f"{labels.shape[0]} labels for {x_all.shape[0]} samples", file=options.get("data"), field="labels")
+    n, steps, _ = x_all.shape
+    names = [c.lif for c in lowered.layers]
+    shift = lowered.timing_record.output_shift
+    mode = options.get("mode", "batch")
+    preds = {k: [] for k in ("float_trained", "ir_loihi_order", "ir_quantized", "emulator", "emulator_wide")}
+    agree_sum = {k: {nm: 0.0 for nm in names} for k in
+                 ("emulator_vs_trained", "emulator_vs_quantized_ir", "loihi_order_vs_trained")}
+    overflow = {"q_wrap": 0, "u_wrap": 0, "v_clip": 0}
+    wide_needed = False
+    emu_outputs = []
+    for start in range(0, n, CHUNK):
+        x = x_all[start:start + CHUNK]
+        p_a, s_a = _ir_run(lowered.trained, x, names)
+        if lowered.order is lowered.trained:
+            p_b, s_b = p_a, s_a
+        else:
+            p_b, s_b = _ir_run(lowered.order, x, names)
+        p_c, s_c = _ir_run(lowered.quantized, x, names)
+        if mode == "batch":
+            res = emulate(net, pad(x, shift), record="all")
+        else:
+            res = emulate(net, pad(x, shift), record="all", mode="stream", gap=int(options.get("gap", 100)))
+        s_d = loihi_spikes(res, lowered.layers, lowered.timing_record.shifts, steps)
+        p_d = np.argmax(s_d[names[-1]].sum(axis=1), axis=1)
+        for k, v in res.overflow.items():
+            overflow[k] += v
+        emu_outputs.append((x, mode))
+        w = x.shape[0]
+        for nm in names:
+            agree_sum["emulator_vs_trained"][nm] += float(np.mean(s_d[nm] == s_a[nm])) * w
+            agree_sum["emulator_vs_quantized_ir"][nm] += float(np.mean(s_d[nm] == s_c[nm])) * w
+            agree_sum["loihi_order_vs_trained"][nm] += float(np.mean(s_b[nm] == s_a[nm])) * w
+        for key, p in (("float_trained", p_a), ("ir_loihi_order", p_b), ("ir_quantized", p_c), ("emulator", p_d)):
+            preds[key].append(np.asarray(p))
+        if any(res.overflow.values()):
+            wide_needed = True
+        if progress is not None:
+            progress(w)
+    if wide_needed:
+        for x, m in emu_outputs:
+            kw = {"mode": "stream", "gap": int(options.get("gap", 100))} if m == "stream" else {}
+            r = emulate(net, pad(x, shift), wide=True, **kw)
+            counts = r.output_spikes[:, shift:shift + steps].sum(axis=1)
+            preds["emulator_wide"].append(np.argmax(counts, axis=1))
+    else:
+        preds["emulator_wide"] = preds["emulator"]
+    p = {k: np.concatenate(v) for k, v in preds.items()}
+    acc = {k: float(np.mean(v == labels)) for k, v in p.items()}
+    loss = {
+        "timing": 100 * (acc["float_trained"] - acc["ir_loihi_order"]),
+        "quantization": 100 * (acc["ir_loihi_order"] - acc["ir_quantized"]),
+        "integer_truncation": 100 * (acc["ir_quantized"] - acc["emulator_wide"]),
+        "overflow": 100 * (acc["emulator_wide"] - acc["emulator"]),
+        "total": 100 * (acc["float_trained"] - acc["emulator"]),
+    }
+    notes = []
+    if lowered.timing_record.changes:
+        notes += [f"timing: {c}" for c in lowered.timing_record.changes]
+    if options.get("synthetic"):
+        notes.append("the data set is synthetic: these accuracies are not the paper's")
+    return CheckRecord(
+        target="loihi", samples=n, steps=steps, timing=lowered.timing_record.mode,
+        scale_rule=lowered.quant_record.rule, scale_reason=lowered.quant_record.reason,
+        accuracy={k: acc[k] for k in ("float_trained", "ir_loihi_order", "ir_quantized", "emulator")},
+        loss_points=loss,
+        spike_agreement={k: {nm: v / n for nm, v in d.items()} for k, d in agree_sum.items()},
+        prediction_agreement={
+            "emulator_vs_trained": float(np.mean(p["emulator"] == p["float_trained"])),
+            "emulator_vs_quantized_ir": float(np.mean(p["emulator"] == p["ir_quantized"])),
+            "loihi_order_vs_trained": float(np.mean(p["ir_loihi_order"] == p["float_trained"])),
+        },
+        overflow=overflow, mode=mode, notes=notes,
+    )

@@ -1,0 +1,222 @@
+"""The core map: which neurons sit on which core, and what each core uses of every limit.
+
+One record, three renderings: ``to_dict()`` (JSON, stored in the bundle), ``render_text(console)``
+and ``plot(path)`` (utilisation per core as a PNG). Core ids are global; chip = core // cores
+per chip; tile = (core % cores per chip) // cores per tile (cores placed in id order).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from snncc.targets.loihi.resources import LIMIT_TITLES, LOIHI1, ChipSpec
+
+USAGE_FIELDS = ("neurons", "input_axons", "output_axons", "synapse_bits", "vth_profiles",
+                "compartment_profiles", "voltage_limits")
+SHOWN = ("neurons", "input_axons", "output_axons", "synapse_bits")
+
+
+@dataclass
+class LayerSlice:
+    layer: str
+    index: int          # layer index in the mapped network (0 = input)
+    start: int
+    stop: int           # neurons start..stop-1 of the layer
+
+    @property
+    def size(self) -> int:
+        return self.stop - self.start
+
+
+@dataclass
+class CoreRecord:
+    core: int
+    chip: int
+    layers: list[LayerSlice]
+    neurons: int
+    input_axons: int
+    output_axons: int
+    synapse_bits: int
+    vth_profiles: int
+    compartment_profiles: int
+    voltage_limits: int
+
+    def usage(self) -> dict[str, int]:
+        return {k: int(getattr(self, k)) for k in USAGE_FIELDS}
+
+
+@dataclass
+class CoreMap:
+    chip: ChipSpec
+    cores: list[CoreRecord]
+    lower_bound: int
+    lower_bound_method: str
+    method: str
+    layer_limits: dict[str, str] = field(default_factory=dict)   # layer -> what set its core count
+    transforms: list[dict] = field(default_factory=list)         # fan-in relays inserted (fanin.py)
+    network_layers: list[dict] = field(default_factory=list)     # name, kind, n of the mapped network
+    network: Any = None                                          # the mapped LoihiNetwork (not serialised)
+
+    # -- derived -------------------------------------------------------------------------------
+    @property
+    def n_cores(self) -> int:
+        return len(self.cores)
+
+    @property
+    def n_chips(self) -> int:
+        return 1 + max((c.chip for c in self.cores), default=0) if self.cores else 0
+
+    @property
+    def optimal(self) -> bool:
+        return self.n_cores == self.lower_bound
+
+    def percent(self, core: CoreRecord) -> dict[str, float]:
+        limits = self.chip.limits()
+        return {k: round(100.0 * getattr(core, k) / limits[k], 2) for k in USAGE_FIELDS}
+
+    def totals(self) -> dict[str, int]:
+        return {k: int(sum(getattr(c, k) for c in self.cores)) for k in SHOWN}
+
+    def peak_percent(self) -> dict[str, float]:
+        return {k: max((self.percent(c)[k] for c in self.cores), default=0.0) for k in USAGE_FIELDS}
+
+    @property
+    def binding_constraint(self) -> str:
+        """The resource closest to its limit on the fullest core (what stops a denser packing)."""
+        peak = self.peak_percent()
+        keys = USAGE_FIELDS[:-1]          # a single allowed vmin/vmax setting is always "100 %" used
+        return max(keys, key=lambda k: (peak[k], -keys.index(k)))
+
+    def tile_of(self, core: int) -> int:
+        return (core % self.chip.cores_per_chip) // self.chip.cores_per_tile
+
+    def core_of_neuron(self) -> dict[int, "Any"]:
+        """Layer index -> int array (n,) of the core each neuron sits on."""
+        import numpy as np
+
+        sizes = {d["index"]: d["n"] for d in self.network_layers}
+        out = {i: np.full(n, -1, np.int64) for i, n in sizes.items() if i > 0}
+        for c in self.cores:
+            for s in c.layers:
+                out[s.index][s.start:s.stop] = c.core
+        return out
+
+    # -- JSON ------------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        limits = self.chip.limits()
+        cores = []
+        for c in self.cores:
+            row = {"core": c.core, "chip": c.chip, "core_in_chip": c.core % self.chip.cores_per_chip,
+                   "tile": self.tile_of(c.core)}
+            row.update(c.usage())
+            row["layers"] = [{"layer": s.layer, "index": s.index, "start": s.start, "stop": s.stop}
+                             for s in c.layers]
+            row["percent"] = self.percent(c)
+            cores.append(row)
+        return {
+            "chip": self.chip.name,
+            "limits": limits,
+            "cores": cores,
+            "n_cores": self.n_cores,
+            "n_chips": self.n_chips,
+            "lower_bound": self.lower_bound,
+            "lower_bound_method": self.lower_bound_method,
+            "optimal": self.optimal,
+            "binding_constraint": self.binding_constraint,
+            "peak_percent": self.peak_percent(),
+            "totals": self.totals(),
+            "method": self.method,
+            "layer_limits": dict(self.layer_limits),
+            "transforms": list(self.transforms),
+            "network_layers": list(self.network_layers),
+            "chip_spec": self.chip.to_dict(),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "CoreMap":
+        chip = ChipSpec.from_dict(d["chip_spec"]) if "chip_spec" in d else LOIHI1
+        cores = [CoreRecord(core=int(c["core"]), chip=int(c["chip"]),
+                            layers=[LayerSlice(s["layer"], int(s["index"]), int(s["start"]), int(s["stop"]))
+                                    for s in c["layers"]],
+                            **{k: int(c[k]) for k in USAGE_FIELDS})
+                 for c in d["cores"]]
+        return cls(chip=chip, cores=cores, lower_bound=int(d["lower_bound"]),
+                   lower_bound_method=d.get("lower_bound_method", ""), method=d.get("method", ""),
+                   layer_limits=dict(d.get("layer_limits", {})), transforms=list(d.get("transforms", [])),
+                   network_layers=list(d.get("network_layers", [])))
+
+    # -- text --------------------------------------------------------------------------------------
+    def render_text(self, console, max_rows: int = 64) -> None:
+        from rich.table import Table
+
+        table = Table(title=f"Core map on {self.chip.name} ({self.n_cores} cores, {self.n_chips} chip(s))")
+        for col in ("core", "chip", "layers [neurons]", "neurons", "input axons", "output axons", "synapse bits"):
+            if col.startswith("layers"):
+                table.add_column(col, overflow="fold", min_width=16)
+            else:
+                table.add_column(col, justify="right")
+        shown = self.cores if len(self.cores) <= max_rows else self.cores[: max_rows - 1]
+        for c in shown:
+            pct = self.percent(c)
+            table.add_row(
+                str(c.core), str(c.chip),
+                ", ".join(f"{s.layer}[{s.start}:{s.stop}]" for s in c.layers),
+                *(f"{getattr(c, k):,} ({pct[k]:.1f}%)" for k in SHOWN))
+        if len(shown) < len(self.cores):
+            table.add_row("...", "", f"{len(self.cores) - len(shown):,} more cores (use --json)", "", "", "", "")
+        console.print(table)
+        limits = self.chip.limits()
+        tot = self.totals()
+        console.print("totals: " + ", ".join(f"{LIMIT_TITLES[k].split(' per ')[0]} {tot[k]:,}" for k in SHOWN))
+        console.print("limits per core: " + ", ".join(f"{k} {v:,}" for k, v in limits.items()))
+        verdict = "optimal (equals the lower bound)" if self.optimal else f"{self.n_cores - self.lower_bound} above the lower bound"
+        console.print(f"cores: {self.n_cores} on {self.n_chips} chip(s); lower bound {self.lower_bound} "
+                      f"({self.lower_bound_method}); {verdict}")
+        console.print(f"binding constraint: {LIMIT_TITLES[self.binding_constraint]} "
+                      f"(peak {self.peak_percent()[self.binding_constraint]:.1f}%)")
+        if self.layer_limits:
+            console.print("per layer: " + "; ".join(f"{k}: {v}" for k, v in self.layer_limits.items()))
+        console.print(f"method: {self.method}")
+        for t in self.transforms:
+            console.print(f"fan-in relays for layer '{t['layer']}': {t['copied_exactly']} of {t['fan_in']} "
+                          f"sources copied exactly, {t['through_rate_relays']} through rate relays; "
+                          f"timing: {t['timing']}; accuracy: {t['accuracy']}")
+
+    # -- picture -----------------------------------------------------------------------------------
+    def plot(self, path: str | Path) -> None:
+        """Utilisation (% of each limit) per core as a PNG, written atomically."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        import numpy as np
+
+        from snncc.atomic import atomic_path
+
+        pct = np.array([[self.percent(c)[k] for k in SHOWN] for c in self.cores]).reshape(-1, len(SHOWN))
+        ids = np.arange(len(self.cores))
+        fig, ax = plt.subplots(figsize=(max(6.0, min(18.0, 0.35 * len(ids) + 3)), 4.0), dpi=100)
+        if len(ids) <= 64:
+            width = 0.8 / len(SHOWN)
+            for j, k in enumerate(SHOWN):
+                ax.bar(ids + (j - (len(SHOWN) - 1) / 2) * width, pct[:, j], width, label=k.replace("_", " "))
+            ax.set_xticks(ids)
+        else:
+            for j, k in enumerate(SHOWN):
+                ax.plot(ids, pct[:, j], drawstyle="steps-mid", lw=0.8, label=k.replace("_", " "))
+        ax.axhline(100.0, color="k", lw=1, ls="--")
+        for b in range(1, self.n_chips):
+            ax.axvline(b * self.chip.cores_per_chip - 0.5, color="grey", lw=0.8, ls=":")
+        ax.set_xlabel("core")
+        ax.set_ylabel("% of per-core limit")
+        ax.set_ylim(0, 125)
+        ax.set_title(f"{self.chip.name}: {self.n_cores} cores on {self.n_chips} chip(s) "
+                     f"(lower bound {self.lower_bound}; binding: {self.binding_constraint.replace('_', ' ')})",
+                     fontsize=9)
+        ax.legend(fontsize=8, loc="upper center", ncol=len(SHOWN), frameon=False)
+        fig.tight_layout()
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format="png")
+        plt.close(fig)

@@ -1,0 +1,169 @@
+"""IR graph -> LoihiNetwork: structure checks, timing lowering, quantization, register values.
+
+A graph Loihi 1 can run here is a chain of populations:
+
+    Input(spikes) -> Dense -> LIF [<- Dense <- same LIF] -> Dense -> LIF ... -> Readout(spike_count) -> Output
+
+Each LIF becomes one HDF5 layer (``dense`` or ``dense_rec``); layer 0 is the input axons.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
+from snncc.passes.quantize import QuantizationRecord, quantize_weights
+from snncc.passes.timing import TimingRecord
+from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
+
+
+@dataclass
+class ChainLayer:
+    lif: str
+    ff: str            # the Dense feeding it from the previous population
+    pre: str           # the previous population (Input or LIF)
+    rec: str | None    # the Dense of its recurrent loop
+
+
+def chain(graph: Graph) -> list[ChainLayer]:
+    """The populations of ``graph`` in order, or a one-line error saying what Loihi cannot express."""
+    if graph.of_kind(LSTM):
+        raise SnnccError("an LSTM cannot run on Loihi (a spiking neuromorphic chip); compile it for --target jetson",
+                         field=f"node '{graph.of_kind(LSTM)[0]}'")
+    inputs = graph.of_kind(Input)
+    if len(inputs) != 1:
+        raise SnnccError(f"the Loihi lowering needs exactly one Input, the graph has {len(inputs)}", field="graph")
+    if graph.node(inputs[0]).signal != "spikes":
+        raise SnnccError("Loihi input axons carry spikes; an analog input needs a spike encoder first",
+                         field=f"node '{inputs[0]}'.signal")
+    layers: list[ChainLayer] = []
+    pre = inputs[0]
+    seen = {pre}
+    while True:
+        ff = [s for s in graph.successors(pre) if isinstance(graph.node(s), Dense)
+              and not (isinstance(graph.node(pre), LIF) and pre in graph.successors(s))]
+        others = [s for s in graph.successors(pre) if not isinstance(graph.node(s), Dense)]
+        if not ff:
+            break
+        if len(ff) > 1:
+            raise SnnccError("the Loihi lowering handles chains: a population may feed one next population",
+                             field=f"node '{pre}'")
+        (dense,) = ff
+        posts = graph.successors(dense)
+        if len(posts) != 1 or not isinstance(graph.node(posts[0]), LIF):
+            raise SnnccError("on Loihi a Dense must feed exactly one LIF population", field=f"node '{dense}'")
+        lif = posts[0]
+        if lif in seen:
+            raise SnnccError("only self-recurrence (a LIF -> Dense -> same LIF loop) is supported on Loihi here",
+                             field=f"node '{lif}'")
+        if others and isinstance(graph.node(pre), LIF):
+            raise SnnccError("a hidden population cannot also feed a readout on Loihi here", field=f"node '{pre}'")
+        rec = [d for d in graph.successors(lif) if isinstance(graph.node(d), Dense) and lif in graph.successors(d)]
+        if len(rec) > 1:
+            raise SnnccError("at most one recurrent projection per population", field=f"node '{lif}'")
+        expected = {dense} | set(rec)
+        if set(graph.predecessors(lif)) != expected:
+            raise SnnccError("a LIF population on Loihi receives one feed-forward and at most one recurrent projection",
+                             field=f"node '{lif}'")
+        for r in rec:
+            if graph.port(lif, r) != "spikes":
+                raise SnnccError("Loihi sends spikes, not voltages", field=f"edge {lif}->{r}")
+        layers.append(ChainLayer(lif=lif, ff=dense, pre=pre, rec=rec[0] if rec else None))
+        seen.add(lif)
+        pre = lif
+    if not layers:
+        raise SnnccError("the graph has no LIF population to place on Loihi", field="graph")
+    last = layers[-1].lif
+    readers = graph.successors(last)
+    readouts = [r for r in readers if isinstance(graph.node(r), Readout)]
+    if len(readouts) != 1 or len(readers) != 1 + (1 if layers[-1].rec else 0):
+        raise SnnccError("the last population must feed one Readout", field=f"node '{last}'")
+    ro = graph.node(readouts[0])
+    if ro.mode != "spike_count" or graph.port(last, readouts[0]) != "spikes" or graph.delay(last, readouts[0]) != 0:
+        raise SnnccError("Loihi reads out spikes: the readout must count the last layer's spikes (mode spike_count, "
+                         "no delay)", field=f"node '{readouts[0]}'")
+    outs = [s for s in graph.successors(readouts[0]) if isinstance(graph.node(s), Output)]
+    if len(outs) != 1 or graph.delay(readouts[0], outs[0]) != 0:
+        raise SnnccError("the readout must feed one Output without delay", field=f"node '{readouts[0]}'")
+    for name, op in graph.items():
+        if isinstance(op, LIF) and name not in {c.lif for c in layers}:
+            raise SnnccError("population not on the input-to-readout chain", field=f"node '{name}'")
+    return layers
+
+
+def lif_params_check(graph: Graph, layers: list[ChainLayer], allow_reset_change: bool) -> tuple[Graph, list[str]]:
+    """Refuse subtract reset unless allowed (then lower it as reset to zero and say so)."""
+    g = graph
+    changes: list[str] = []
+    for c in layers:
+        op = graph.node(c.lif)
+        if op.reset == "subtract":
+            if not allow_reset_change:
+                raise SnnccError("Loihi 1 resets the voltage to zero and cannot reset by subtraction; pass "
+                                 "--allow-reset-change to deploy it with reset to zero (snncc check measures the cost)",
+                                 field=f"node '{c.lif}'.reset")
+            if g is graph:
+                g = graph.copy()
+            g.node(c.lif).reset = "zero"
+            changes.append(f"{c.lif}: reset subtract -> zero (Loihi 1 cannot subtract)")
+    return g, changes
+
+
+def build_network(graph: Graph, layers: list[ChainLayer], quant: QuantizationRecord, timing: TimingRecord,
+                  t_sample: int, metadata: dict[str, Any]) -> LoihiNetwork:
+    """Register values of every layer from the quantization and timing records."""
+    proj_q = {p.dense: p for p in quant.projections}
+    layer_q = {lq.lif: lq for lq in quant.layers}
+    extra = {(p.pre, p.dense): p.extra_delay for p in timing.projections}
+    inp = graph.node(layers[0].pre)
+    net_layers = [LoihiLayer(name=layers[0].pre, kind="input", n=inp.width)]
+    for c in layers:
+        op = graph.node(c.lif)
+        pq, lq = proj_q[c.ff], layer_q[c.lif]
+        layer = LoihiLayer(
+            name=c.lif, kind="dense_rec" if c.rec else "dense", n=op.n,
+            weight=quantize_weights(graph.node(c.ff).weight, pq.scale, pq.wgt_exp), wgt_exp=pq.wgt_exp,
+            delay=int(extra[(c.pre, c.ff)]),
+            v_th_mant=lq.v_th_mant, i_decay=lq.i_decay, v_decay=lq.v_decay, ref_delay=timing.ref_delay[c.lif],
+        )
+        if c.rec:
+            rq = proj_q[c.rec]
+            layer.weight_rec = quantize_weights(graph.node(c.rec).weight, rq.scale, rq.wgt_exp)
+            layer.wgt_exp_rec = rq.wgt_exp
+            layer.delay_rec = int(extra[(c.lif, c.rec)])
+        if lq.bias_mant is not None:
+            layer.bias = np.asarray(lq.bias_mant, np.int64)
+            layer.bias_exp = int(lq.bias_exp)
+        net_layers.append(layer)
+    return LoihiNetwork(layers=net_layers, t_sample=int(t_sample), metadata=dict(metadata))
+
+
+def float_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer]) -> LoihiNetwork:
+    """The lowered network with ``graph``'s float parameters in the integer registers' place.
+
+    Chip units are dropped (w_chip = W, threshold = theta, decay = 4096 * (1 - alpha)), so
+    ``emulator.reference_run(..., arithmetic="float")`` runs the lowered timing in exact float.
+    """
+    twin_layers = [network.layers[0]]
+    for c, lay in zip(layers, network.layers[1:]):
+        op = graph.node(c.lif)
+        alpha, beta = op.decays(graph.dt)
+        t = LoihiLayer(
+            name=lay.name, kind=lay.kind, n=lay.n, weight=graph.node(c.ff).weight.astype(np.float64), wgt_exp=-6,
+            delay=lay.delay, v_th_mant=float(op.threshold[0]) / 64.0, i_decay=4096.0 * (1.0 - float(alpha[0])),
+            v_decay=4096.0 * (1.0 - float(beta[0])), ref_delay=lay.ref_delay, vmin=-math.inf, vmax=math.inf,
+        )
+        if c.rec:
+            t.weight_rec = graph.node(c.rec).weight.astype(np.float64)
+            t.wgt_exp_rec = -6
+            t.delay_rec = lay.delay_rec
+        if op.bias is not None:
+            t.bias, t.bias_exp = op.bias.astype(np.float64), 0
+        twin_layers.append(t)
+    return LoihiNetwork(layers=twin_layers, t_sample=network.t_sample, metadata={})

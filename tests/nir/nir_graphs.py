@@ -1,0 +1,163 @@
+"""NIR graphs built the way snnTorch and Norse export them, and independent reference simulations.
+
+snnTorch (export at dt = 1e-4): tau_syn = dt/(1-alpha), tau_mem = dt/(1-beta), r = tau_mem/dt,
+w_in = tau_syn/dt, v_leak = 0; RSynaptic's recurrent nn.Linear (with bias) appears either as a
+sub-graph {input, lif, w_rec, output} or flat (lif -> w_rec -> lif).
+Norse: r = 1, w_in = 1, physical time constants; the time step is not in the file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import nir
+import numpy as np
+
+SNNTORCH_DT = 1e-4
+
+
+@dataclass
+class SnnTorchLayer:
+    """What a snnTorch (R)Synaptic layer holds: per-neuron alpha, beta, threshold."""
+
+    alpha: np.ndarray
+    beta: np.ndarray
+    threshold: np.ndarray
+
+    def to_nir(self, dt: float = SNNTORCH_DT) -> nir.CubaLIF:
+        tau_syn = dt / (1 - self.alpha)
+        tau_mem = dt / (1 - self.beta)
+        return nir.CubaLIF(tau_syn=tau_syn, tau_mem=tau_mem, r=tau_mem / dt, v_leak=np.zeros_like(self.beta),
+                           v_threshold=self.threshold.copy(), w_in=tau_syn / dt)
+
+
+@dataclass
+class BrailleRSNN:
+    """A snnTorch-style recurrent network: x -> fc1 -> RSynaptic(hidden) -> fc2 -> Synaptic(out)."""
+
+    w1: np.ndarray
+    b1: np.ndarray | None
+    w_rec: np.ndarray
+    b_rec: np.ndarray | None
+    w2: np.ndarray
+    b2: np.ndarray | None
+    hidden: SnnTorchLayer
+    out: SnnTorchLayer
+
+    @classmethod
+    def random(cls, rng, n_in=12, n_hidden=38, n_out=7, bias=True, outliers=False, scale=1.0, per_neuron=True,
+               rec_std=0.15):
+        """Random weights; ``per_neuron`` draws alpha, beta, threshold per neuron, else one value per layer
+        (as learned-scalar snnTorch layers export them, and as Loihi's per-layer registers need)."""
+        def layer(n):
+            size = n if per_neuron else 1
+            return SnnTorchLayer(alpha=np.resize(rng.uniform(0.75, 0.95, size), n),
+                                 beta=np.resize(rng.uniform(0.85, 0.97, size), n),
+                                 threshold=np.resize(rng.uniform(0.8, 1.2, size) if per_neuron else np.ones(1), n))
+
+        w_rec = rng.normal(0, rec_std, (n_hidden, n_hidden)) * scale
+        if outliers:  # a few recurrent weights 100x the median magnitude
+            idx = rng.choice(w_rec.size, size=max(2, w_rec.size // 200), replace=False)
+            w_rec.flat[idx] = np.sign(rng.normal(size=idx.size)) * 100 * np.median(np.abs(w_rec))
+        maybe = (lambda n, s: rng.normal(0, s, n)) if bias else (lambda n, s: None)
+        return cls(w1=rng.normal(0, 0.8, (n_hidden, n_in)) * scale, b1=maybe(n_hidden, 0.05), w_rec=w_rec,
+                   b_rec=maybe(n_hidden, 0.02), w2=rng.normal(0, 0.5, (n_out, n_hidden)) * scale,
+                   b2=maybe(n_out, 0.05), hidden=layer(n_hidden), out=layer(n_out))
+
+    def _dense(self, w, b):
+        return nir.Linear(weight=w.copy()) if b is None else nir.Affine(weight=w.copy(), bias=b.copy())
+
+    def to_nir(self, form: str = "subgraph", address: str = "dotted") -> nir.NIRGraph:
+        """``form`` "subgraph" (RSynaptic as a nested graph) or "flat"; ``address`` how edges name the sub-graph:
+        "dotted" ("lif1.input"), "whole" ("lif1"), "keys" (whole, and the sub-graph's keys are "lif1.lif", ...)."""
+        n_in, n_h, n_out = self.w1.shape[1], self.w1.shape[0], self.w2.shape[0]
+        nodes = {"input": nir.Input(np.array([n_in])), "fc1": self._dense(self.w1, self.b1),
+                 "fc2": self._dense(self.w2, self.b2), "lif2": self.out.to_nir(), "output": nir.Output(np.array([n_out]))}
+        if form == "flat":
+            nodes.update(lif1=self.hidden.to_nir(), w_rec=self._dense(self.w_rec, self.b_rec))
+            edges = [("input", "fc1"), ("fc1", "lif1"), ("lif1", "w_rec"), ("w_rec", "lif1"), ("lif1", "fc2"),
+                     ("fc2", "lif2"), ("lif2", "output")]
+        else:
+            # address "keys": the NIR paper's helpers key the sub-graph's own nodes "lif1.lif", ... inside "lif1"
+            k = (lambda name: f"lif1.{name}") if address == "keys" else (lambda name: name)
+            sub = nir.NIRGraph(
+                nodes={k("input"): nir.Input(np.array([n_h])), k("lif"): self.hidden.to_nir(),
+                       k("w_rec"): self._dense(self.w_rec, self.b_rec), k("output"): nir.Output(np.array([n_h]))},
+                edges=[(k("input"), k("lif")), (k("lif"), k("w_rec")), (k("w_rec"), k("lif")), (k("lif"), k("output"))],
+                type_check=False)
+            nodes["lif1"] = sub
+            into, out_of = ("lif1.input", "lif1.output") if address == "dotted" else ("lif1", "lif1")
+            edges = [("input", "fc1"), ("fc1", into), (out_of, "fc2"), ("fc2", "lif2"), ("lif2", "output")]
+        return nir.NIRGraph(nodes=nodes, edges=edges, type_check=False)
+
+    def simulate(self, x: np.ndarray, reset: str = "zero") -> tuple[np.ndarray, np.ndarray]:
+        """snnTorch's step order, written independently of snncc: for each step
+        syn = alpha*syn + input; mem = beta*mem + syn; spk = mem > thr; reset (immediately), or for
+        ``zero-delayed`` snnTorch's default Synaptic rule mem = (beta*mem + syn) * (1 - [mem_prev > thr]);
+        the recurrent input is W_rec @ spk(t-1) + b_rec (RSynaptic). x: (B, T, n_in) -> spikes."""
+        B, T, _ = x.shape
+        n_h, n_out = self.w1.shape[0], self.w2.shape[0]
+
+        def lin(w, b, v):
+            y = v @ w.T
+            return y if b is None else y + b
+
+        syn1, mem1, spk1 = np.zeros((B, n_h)), np.zeros((B, n_h)), np.zeros((B, n_h))
+        syn2, mem2 = np.zeros((B, n_out)), np.zeros((B, n_out))
+        hs, os = np.zeros((B, T, n_h)), np.zeros((B, T, n_out))
+        for t in range(T):
+            syn1 = self.hidden.alpha * syn1 + lin(self.w1, self.b1, x[:, t]) + lin(self.w_rec, self.b_rec, spk1)
+            if reset == "zero-delayed":  # snnTorch's default: reset from the previous step's membrane
+                mem1 = (self.hidden.beta * mem1 + syn1) * (1 - (mem1 > self.hidden.threshold))
+            else:
+                mem1 = self.hidden.beta * mem1 + syn1
+            spk1 = (mem1 > self.hidden.threshold).astype(float)
+            if reset != "zero-delayed":
+                mem1 = mem1 * (1 - spk1) if reset == "zero" else mem1 - spk1 * self.hidden.threshold
+            syn2 = self.out.alpha * syn2 + lin(self.w2, self.b2, spk1)
+            if reset == "zero-delayed":
+                mem2 = (self.out.beta * mem2 + syn2) * (1 - (mem2 > self.out.threshold))
+            else:
+                mem2 = self.out.beta * mem2 + syn2
+            spk2 = (mem2 > self.out.threshold).astype(float)
+            if reset != "zero-delayed":
+                mem2 = mem2 * (1 - spk2) if reset == "zero" else mem2 - spk2 * self.out.threshold
+            hs[:, t], os[:, t] = spk1, spk2
+        return hs, os
+
+
+def sparse_inputs(rng, batch=8, steps=120, channels=12, p=0.1) -> np.ndarray:
+    return (rng.random((batch, steps, channels)) < p).astype(np.float64)
+
+
+def norse_graph(rng, n_in=6, n_hidden=10, tau_syn=5e-3, tau_mem=1e-2) -> nir.NIRGraph:
+    """Norse-style export: physical time constants, r = 1, w_in = 1; no time step in the file."""
+    lif = nir.CubaLIF(tau_syn=np.full(n_hidden, tau_syn), tau_mem=np.full(n_hidden, tau_mem), r=np.ones(n_hidden),
+                      v_leak=np.zeros(n_hidden), v_threshold=np.ones(n_hidden), w_in=np.ones(n_hidden))
+    return nir.NIRGraph(nodes={"input": nir.Input(np.array([n_in])), "fc": nir.Linear(rng.normal(0, 400.0, (n_hidden, n_in))),
+                               "lif": lif, "output": nir.Output(np.array([n_hidden]))},
+                        edges=[("input", "fc"), ("fc", "lif"), ("lif", "output")], type_check=False)
+
+
+def continuous_euler(w: np.ndarray, node: nir.CubaLIF, x: np.ndarray, dt: float) -> np.ndarray:
+    """NIR's CubaLIF ODEs stepped by forward Euler (current, then voltage), reset to v_reset."""
+    B, T, _ = x.shape
+    n = w.shape[0]
+    i, v = np.zeros((B, n)), np.zeros((B, n))
+    out = np.zeros((B, T, n))
+    for t in range(T):
+        i = i + dt / node.tau_syn * (-i + node.w_in * (x[:, t] @ w.T))
+        v = v + dt / node.tau_mem * ((node.v_leak - v) + node.r * i)
+        s = v > node.v_threshold
+        v = np.where(s, node.v_reset, v)
+        out[:, t] = s
+    return out
+
+
+def run_cli(args: list, capsys) -> tuple[int, str, str]:
+    """Run ``snncc args`` in-process; return (exit status, stdout, stderr)."""
+    from snncc.cli.main import run
+
+    code = run([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err

@@ -1,0 +1,108 @@
+"""NIR graphs on Loihi: compile through the CLI, emulate bit-exactly, compare with the float graph.
+
+Synthetic data: random sparse spike trains and random snnTorch-style weights (not Braille
+recordings). Figures measured on these graphs are bounds for regressions, not accuracy claims.
+"""
+
+import nir
+import numpy as np
+import pytest
+
+from nir_graphs import BrailleRSNN, run_cli, sparse_inputs
+from snncc.frontends import LoadOptions, load_model
+from snncc.ir.simulate import simulate
+
+loihi = pytest.importorskip("snncc.targets.loihi")
+if "not built" in getattr(loihi.target, "description", "not built"):
+    pytest.skip("the Loihi target is not built in this tree", allow_module_level=True)
+
+from snncc.targets.loihi.bundle import read_bundle  # noqa: E402
+from snncc.targets.loihi.emulator import emulate, reference_run  # noqa: E402
+from snncc.targets.loihi.validation import pad  # noqa: E402
+
+SAMPLES, STEPS = 200, 100
+
+
+def _braille(tmp_path, outliers=False, bias=False, name="g.nir"):
+    rng = np.random.default_rng(0)
+    model = BrailleRSNN.random(rng, bias=bias, scale=0.3, per_neuron=False, outliers=outliers, rec_std=0.4)
+    src = tmp_path / name
+    nir.write(str(src), model.to_nir())
+    x = sparse_inputs(rng, batch=SAMPLES, steps=STEPS, p=0.05).astype(np.uint8)
+    return model, src, x
+
+
+def _compile(src, out, capsys, *extra):
+    code, stdout, err = run_cli(["compile", src, "--target", "loihi", "-o", out, *extra], capsys)
+    return code, stdout, err
+
+
+def _agreement(src, net_path, x, reset=None):
+    graph = load_model(src, LoadOptions(reset=reset))
+    ref = simulate(graph, x)
+    net = read_bundle(net_path)
+    shift = int(net.metadata.get("output_shift", 0))
+    res = emulate(net, pad(x, shift))
+    return float(np.mean(res.prediction == ref.prediction.numpy())), net, res
+
+
+def test_braille_sized_nir_graph_on_loihi(tmp_path, capsys):
+    """compile g.nir --target loihi; emulate g.net (CLI); argmax of output counts vs the float graph."""
+    model, src, x = _braille(tmp_path)
+    net_path = tmp_path / "g.net"
+    code, _, err = _compile(src, net_path, capsys)
+    assert code == 0, err
+    agree, net, res = _agreement(src, net_path, x)
+    # the CLI emulator on the same (tSample-long) input gives the same bits
+    shift = int(net.metadata.get("output_shift", 0))
+    assert net.t_sample == STEPS + shift
+    np.save(tmp_path / "x.npy", pad(x, shift))
+    code, _, err = run_cli(["emulate", net_path, "--input", tmp_path / "x.npy", "-o", tmp_path / "o.npz"], capsys)
+    assert code == 0, err
+    cli = np.load(tmp_path / "o.npz")
+    np.testing.assert_array_equal(cli["counts"], res.counts)
+    np.testing.assert_array_equal(cli["prediction"], res.prediction)
+    # Euler decays: iDecay = int(4096*dt/tau_syn), vDecay = int(4096*dt/tau_mem) from the NIR values
+    lif = model.hidden.to_nir()
+    assert net.layers[1].i_decay == int(4096 * 1e-4 / float(lif.tau_syn[0]))
+    assert net.layers[1].v_decay == int(4096 * 1e-4 / float(lif.tau_mem[0]))
+    assert net.layers[1].i_decay != int(4096 * (1 - np.exp(-1e-4 / float(lif.tau_syn[0]))))  # not the exp rule
+    # the fast kernel equals the plain statement of the chip's rules, bit for bit
+    plain = reference_run(net, pad(x[:8], int(net.metadata.get("output_shift", 0))))
+    np.testing.assert_array_equal(plain.output_spikes, res.output_spikes[:8])
+    assert agree >= 0.95  # measured 0.995 (global 8-bit scale, no outliers)
+
+
+def test_braille_sized_with_recurrent_outliers(tmp_path, capsys):
+    """A few recurrent weights 100x the median |w|: a single global 8-bit scale loses the small weights.
+
+    Measured (200 samples): global 0.63, per-layer 0.74, auto 0.63 (auto keeps global here); the
+    goal of 0.95 is NOT reached by the current Loihi scaling rules. The bounds guard regressions."""
+    _, src, x = _braille(tmp_path, outliers=True)
+    figures = {}
+    for rule in ("global", "per-layer"):
+        net_path = tmp_path / f"g_{rule}.net"
+        code, _, err = _compile(src, net_path, capsys, "--scale", rule)
+        assert code == 0, err
+        figures[rule], _, _ = _agreement(src, net_path, x)
+    assert figures["global"] >= 0.55 and figures["per-layer"] >= 0.70, figures
+
+
+def test_subtract_reset_refused_for_loihi_unless_allowed(tmp_path, capsys):
+    _, src, x = _braille(tmp_path)
+    out = tmp_path / "s.net"
+    code, _, err = _compile(src, out, capsys, "--reset", "subtract")
+    assert code == 2 and "reset" in err and "--allow-reset-change" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+    code, _, err = _compile(src, out, capsys, "--reset", "subtract", "--allow-reset-change")
+    assert code == 0, err
+    assert read_bundle(out).layers[1].n == 38
+
+
+def test_braille_sized_with_affine_biases_is_refused_for_loihi_with_one_line(tmp_path, capsys):
+    """Current biases (NIR Affine) have no exact Loihi lowering in this version: refused, never approximated."""
+    _, src, x = _braille(tmp_path, bias=True)
+    net_path = tmp_path / "b.net"
+    code, _, err = _compile(src, net_path, capsys)
+    assert code == 2 and "bias" in err and "current" in err and len(err.strip().splitlines()) == 1, err
+    assert not net_path.exists()

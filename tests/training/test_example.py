@@ -1,0 +1,34 @@
+"""The Braille example's bookkeeping: failures are reported, blocked steps skipped, the table labelled."""
+
+import importlib.util
+import sys
+from pathlib import Path
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "braille" / "run_pipeline.py"
+
+
+def _module():
+    spec = importlib.util.spec_from_file_location("run_pipeline", EXAMPLE)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod       # dataclasses look their module up there
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_failed_steps_are_reported_and_dependants_skipped(tmp_path):
+    rp = _module()
+    p = rp.Pipeline(tmp_path, {"rsnn_epochs": 1}, 0)
+    failed = p.snncc("train RSNN th1", "train", "rsnn", "--data", str(tmp_path / "missing.npz"), "-o", str(tmp_path / "m.pt"))
+    assert failed.status == "failed" and "missing.npz" in failed.message
+    skipped = p.snncc("compile RSNN Loihi", "compile", str(tmp_path / "m.pt"), "--target", "loihi", "-o", "x",
+                      needs=("train RSNN th1",))
+    assert skipped.status == "skipped" and "train RSNN th1" in skipped.message
+    p.steps.append(rp.Step("check RSNN Loihi", [], "unavailable", 0.0, f"snncc: error: x: {rp.NOT_BUILT}"))
+    res = rp.results(p)
+    assert "SYNTHETIC" in res["data"] and "TEST epoch" in res["selection"]
+    rows = {r["model"]: r for r in res["rows"]}
+    assert rows["RSNN th1, float (PyTorch, authors' order)"] == {
+        "model": "RSNN th1, float (PyTorch, authors' order)", "ours_percent": None, "paper_percent": 79.90}
+    text = rp.markdown(res)
+    assert "| train RSNN th1 | failed |" in text and "| check RSNN Loihi | unavailable |" in text
+    assert "78.32 %" in text and "96.92 %" in text and "82.31 %" in text

@@ -1,0 +1,123 @@
+"""Parameter counts of the paper's models and the RSNN forward pass in the authors' order."""
+
+import math
+
+import pytest
+import torch
+
+from snncc.models import LSTMClassifier, LSTMConfig, SNNConfig, SpikingClassifier, count_trainable
+from snncc.models.surrogate import spike
+from snncc.training.trainer import build_model
+
+
+def test_parameter_counts_equal_the_papers():
+    assert count_trainable(build_model("rsnn", input_copies=2)) == 236_700
+    assert count_trainable(build_model("lstm")) == 225_975
+    assert count_trainable(build_model("elstm", n_inputs=24)) == 236_919
+    # FFSNN: the same without the 450 x 450 recurrent matrix
+    assert count_trainable(build_model("ffsnn", input_copies=2)) == 48 * 450 + 450 * 28
+
+
+def authors_forward(x, w_in, w_out, v_rec, alpha, beta, scale, detach_reset=True):
+    """The paper's SpyTorch loop, written out step by step (independent of snncc.models)."""
+    batch, steps, _ = x.shape
+    n_h, n_o = w_out.shape
+    h1_from_input = torch.einsum("abc,cd->abd", x, w_in)
+    syn = x.new_zeros(batch, n_h)
+    mem = x.new_zeros(batch, n_h)
+    out = x.new_zeros(batch, n_h)
+    spk_rec = []
+    for t in range(steps):
+        h1 = h1_from_input[:, t] + (out @ v_rec if v_rec is not None else 0.0)
+        mthr = mem - 1.0
+        out = spike(mthr, scale)
+        rst = out.detach() if detach_reset else out
+        new_syn = alpha * syn + h1
+        new_mem = (beta * mem + syn) * (1.0 - rst)
+        spk_rec.append(out)
+        mem, syn = new_mem, new_syn
+    spk_rec = torch.stack(spk_rec, dim=1)
+    h2 = torch.einsum("abc,cd->abd", spk_rec, w_out)
+    flt = x.new_zeros(batch, n_o)
+    mem_o = x.new_zeros(batch, n_o)
+    s_out_rec = []
+    for t in range(steps):
+        mthr_out = mem_o - 1.0
+        s_out = spike(mthr_out, scale)
+        rst_out = s_out.detach() if detach_reset else s_out
+        new_flt = alpha * flt + h2[:, t]
+        new_mem_o = (beta * mem_o + flt) * (1.0 - rst_out)
+        s_out_rec.append(s_out)
+        mem_o, flt = new_mem_o, new_flt
+    return torch.stack(s_out_rec, dim=1), spk_rec
+
+
+def _small_rsnn(recurrent=True, seed=0):
+    torch.manual_seed(seed)
+    m = SpikingClassifier(SNNConfig(n_hidden=40, n_outputs=7, recurrent=recurrent, input_copies=2, order="spytorch"))
+    m.reset_parameters(fwd_weight_scale=4.0, weight_scale_factor=0.5)
+    return m.double()
+
+
+def _inputs(seed=1, batch=3, steps=60):
+    g = torch.Generator().manual_seed(seed)
+    return (torch.rand(batch, steps, 24, generator=g, dtype=torch.float64) < 0.3).double()
+
+
+@pytest.mark.parametrize("recurrent", [True, False])
+def test_forward_equals_authors_loop_spike_for_spike(recurrent):
+    model = _small_rsnn(recurrent)
+    x = _inputs()
+    s_out, s_hid = model(x)
+    ref_out, ref_hid = authors_forward(model.tile_inputs(x), model.w_in, model.w_out, model.v_rec,
+                                       model.alpha, model.beta, model.config.scale)
+    assert s_hid.sum() > 50 and s_out.sum() > 5, "the test needs spiking activity in both layers"
+    assert torch.equal(s_hid, ref_hid)
+    assert torch.equal(s_out, ref_out)
+
+
+def test_gradients_equal_authors_loop_and_the_reset_is_detached():
+    x = _inputs()
+    labels = torch.tensor([0, 3, 5])
+
+    def grads(forward):
+        model = _small_rsnn()
+        out, hid = forward(model)
+        loss = torch.nn.functional.cross_entropy(out.sum(1), labels) + 1e-3 * hid.sum()
+        loss.backward()
+        return [p.grad.clone() for p in (model.w_in, model.w_out, model.v_rec)]
+
+    ours = grads(lambda m: m(x))
+    authors = grads(lambda m: authors_forward(m.tile_inputs(x), m.w_in, m.w_out, m.v_rec, m.alpha, m.beta, m.config.scale))
+    attached = grads(lambda m: authors_forward(m.tile_inputs(x), m.w_in, m.w_out, m.v_rec, m.alpha, m.beta,
+                                               m.config.scale, detach_reset=False))
+    for g_ours, g_auth in zip(ours, authors):
+        assert torch.count_nonzero(g_ours) > 0
+        torch.testing.assert_close(g_ours, g_auth, rtol=1e-10, atol=1e-12)
+    # a reset inside the gradient would change them: the comparison above can fail
+    assert any(not torch.allclose(a, b) for a, b in zip(ours, attached))
+
+
+def test_fast_sigmoid_surrogate_is_non_zero_near_threshold():
+    scale = 5.0
+    mthr = torch.tensor([-0.5, -0.01, 0.0, 0.01, 0.5, 3.0], dtype=torch.float64, requires_grad=True)
+    s = spike(mthr, scale)
+    assert s.tolist() == [0, 0, 0, 1, 1, 1]      # strict: exactly at threshold is no spike
+    s.sum().backward()
+    expected = 1.0 / (scale * mthr.detach().abs() + 1.0) ** 2
+    torch.testing.assert_close(mthr.grad, expected)
+    assert mthr.grad[2] == 1.0 and mthr.grad[1] > 0.9 and mthr.grad[-1] < 0.02
+
+
+def test_membrane_near_threshold_gets_gradient_without_spiking():
+    """A neuron that never spikes but comes close to threshold still passes gradient to its inputs."""
+    torch.manual_seed(0)
+    m = SpikingClassifier(SNNConfig(n_inputs=1, input_copies=1, n_hidden=1, n_outputs=1, recurrent=False)).double()
+    with torch.no_grad():
+        m.w_in.fill_(0.04)     # steady state V = 0.04 / (1 - alpha) / (1 - beta) = 0.88 < 1
+        m.w_out.fill_(1.0)
+    x = torch.ones(1, 40, 1, dtype=torch.float64)
+    out, hid = m(x)
+    assert hid.sum() == 0
+    hid.sum().backward()
+    assert m.w_in.grad.abs().item() > 0
