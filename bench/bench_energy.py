@@ -12,7 +12,6 @@ network does. The paper's own figures (measured on Loihi, 8 cores) are printed b
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tempfile
 from pathlib import Path

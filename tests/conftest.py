@@ -13,6 +13,15 @@ TH1_PARAMS = ("scale 5\ntime_bin_size 5\nnb_input_copies 2\ntau_mem 0.06\ntau_ra
               "fwd_weight_scale 1\nweight_scale_factor 0.01\nreg_spikes 0.004\nreg_neurons 1e-6\n")
 
 
+@pytest.fixture(autouse=True)
+def _one_torch_thread():
+    """Tests run tiny tensors: extra torch threads only contend for the 2 cores."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
 def run_cli(args: list[str], capsys) -> tuple[int, str, str]:
     """Run ``snncc args``; return (exit status, stdout, stderr)."""
     from snncc.cli.main import run

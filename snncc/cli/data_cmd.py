@@ -14,7 +14,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from snncc.cli.app import app
-from snncc.cli.output import console, err_console, print_json, to_jsonable
+from snncc.cli.output import console, err_console, print_json
 from snncc.errors import SnnccError
 
 data_app = typer.Typer(

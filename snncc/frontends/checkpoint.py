@@ -18,6 +18,8 @@ from snncc.errors import SnnccError
 from snncc.models import LSTMClassifier, LSTMConfig, SNNConfig, SpikingClassifier
 
 FORMAT = "snncc-checkpoint"
+# training bookkeeping that stays in the checkpoint and never travels into graphs or artefacts
+TRAINING_ONLY_METADATA = ("split_assignment",)
 VERSION = 1
 KINDS = ("rsnn", "ffsnn", "lstm", "elstm")
 
@@ -70,3 +72,9 @@ def module_from_checkpoint(obj: dict[str, Any], source: str = "<checkpoint>") ->
         detail = first[1].strip() if len(first) > 1 else first[0]
         raise SnnccError(f"weights do not fit the architecture: {detail}", file=source, field="state_dict") from None
     return module
+
+
+def model_metadata(obj: dict[str, Any]) -> dict[str, Any]:
+    """The checkpoint's metadata that describes the model (training bookkeeping left out)."""
+    meta = obj.get("metadata") if isinstance(obj.get("metadata"), dict) else {}
+    return {k: v for k, v in meta.items() if k not in TRAINING_ONLY_METADATA}

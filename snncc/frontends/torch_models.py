@@ -8,7 +8,7 @@ from typing import Any
 import torch
 
 from snncc.errors import SnnccError
-from snncc.frontends.checkpoint import is_checkpoint, module_from_checkpoint
+from snncc.frontends.checkpoint import is_checkpoint, model_metadata, module_from_checkpoint
 from snncc.frontends.module import graph_from_module
 from snncc.frontends.spytorch import is_weight_list, load_weight_list
 from snncc.frontends.torchfile import load_torch_file
@@ -20,8 +20,7 @@ def from_object(obj: Any, path: Path, options) -> Graph:
         return graph_from_module(obj)
     if is_checkpoint(obj):
         module = module_from_checkpoint(obj, source=str(path))
-        meta = obj.get("metadata") if isinstance(obj.get("metadata"), dict) else {}
-        return graph_from_module(module, metadata={**meta, "source_format": "snncc-checkpoint"})
+        return graph_from_module(module, metadata={**model_metadata(obj), "source_format": "snncc-checkpoint"})
     if is_weight_list(obj):
         return load_weight_list(obj, path, options.params)
     if isinstance(obj, dict) and all(isinstance(v, torch.Tensor) for v in obj.values()):

@@ -149,7 +149,6 @@ class _Runner:
             if static_preds and isinstance(op, (LIF, Readout, Output, Dense, LSTM)):
                 static_drive[name] = sum(_shift(full[p], g.delay(p, name)) for p in static_preds)
 
-        rec = {"spikes": {}, "voltage": {}, "current": {}, "hidden": {}}
         want_state = self.record == "all"
         want_spikes = self.record in ("spikes", "all")
 

@@ -6,7 +6,6 @@ Also quantization-aware fine-tuning from a trained checkpoint, on the same split
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -204,7 +203,8 @@ def finetune(req: TrainRequest, progress=None, data: TrainingData | None = None)
               "quantization": asdict(loihi_quantization(model))}
     settings = _settings(req, hp, req.qat_epochs)
     torch.manual_seed(req.seed)
-    history = train_model(model, train_set, test_set, settings, val=val_set, forward=quantized_forward, progress=progress)
+    history = train_model(model, train_set, test_set, settings, val=val_set, forward=quantized_forward, progress=progress,
+                          keep_start=True)
     after = {"float_test_accuracy": accuracy(model, *test_set),
              "quantized_test_accuracy": accuracy(model, *test_set, forward=quantized_forward),
              "quantization": asdict(loihi_quantization(model))}
@@ -213,7 +213,8 @@ def finetune(req: TrainRequest, progress=None, data: TrainingData | None = None)
               "loss_after_points": 100 * (before["float_test_accuracy"] - after["quantized_test_accuracy"]),
               "note": "accuracies of the fake-quantized model (Loihi weights, threshold and decays in float; the "
                       "chip's per-step integer truncation of current and voltage is not modelled -- use snncc check "
-                      "for the bit-exact emulator)"}
+                      "for the bit-exact emulator); best epoch 0 = no fine-tuned epoch beat the starting weights, "
+                      "which were kept"}
     meta = _metadata(req, hp, data, split, history, {"qat": record, "trained_by": "snncc train --qat-from"})
     save_checkpoint(model, req.output, meta)
     return TrainResult(req.kind, req.output, count_trainable(model), hp.as_dict(), asdict(settings), data.facts(),

@@ -133,11 +133,13 @@ def train_model(
     forward: Forward = plain_forward,
     progress=None,
     select: str | None = None,
+    keep_start: bool = False,
 ) -> History:
     """Train ``model`` in place; at the end it holds the selected epoch's weights.
 
     ``select`` is "test" (default without ``val``), "val" (default with it) or "last".
-    ``progress`` is an optional ``rich.progress.Progress``.
+    ``keep_start``: the starting weights compete as epoch 0 (fine-tuning never returns worse
+    weights, on the selection metric, than it was given). ``progress``: a ``rich.progress.Progress``.
     """
     x_train, y_train = train
     if select is None:
@@ -150,16 +152,24 @@ def train_model(
         progress.start()
         task = progress.add_task("training", total=settings.epochs * max(1, -(-n // settings.batch_size)))
     try:
-        _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select)
+        _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select,
+                keep_start)
     finally:
         if progress is not None:
             progress.stop()
     return history
 
 
-def _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select):
+def _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select,
+            keep_start=False):
     n = x_train.shape[0]
     best_metric, best_state = -1.0, None
+    if keep_start and select != "last":
+        test_acc = accuracy(model, test[0], test[1], forward=forward)
+        val_acc = accuracy(model, val[0], val[1], forward=forward) if val is not None and val[0].shape[0] else None
+        best_metric = test_acc if select == "test" else val_acc
+        best_state = copy.deepcopy(model.state_dict())
+        history.best_epoch, history.best_test_accuracy, history.best_val_accuracy = 0, test_acc, val_acc
     for epoch in range(1, settings.epochs + 1):
         started = time.perf_counter()
         model.train()

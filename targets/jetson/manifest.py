@@ -12,7 +12,7 @@ import json
 
 import snncc
 from snncc.ir.nodes import LIF
-from snncc.targets.jetson.export import ExportedModel, input_name, sequence_output_names
+from snncc.targets.jetson.export import input_name, sequence_output_names
 from snncc.targets.jetson.plan import GraphPlan
 from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK
 from snncc.targets.jetson.torch_graph import state_slots

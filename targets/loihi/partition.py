@@ -220,42 +220,6 @@ class NetworkModel:
 
 
 # -- usage of an assignment -------------------------------------------------------------------------
-@dataclass
-class PairTable:
-    """One row per (destination core, source neuron, projection): synapse count and bits.
-
-    Rows are distinct within a projection; ``parts`` keeps them per projection (index into
-    ``model.projections``) so that axons shared by two projections are counted once.
-    """
-
-    parts: list  # [(projection index, dst_core, src global id, count, bits)]
-
-    def _cat(self, j: int) -> np.ndarray:
-        if not self.parts:
-            return np.zeros(0, np.int64)
-        return np.concatenate([q[j] for q in self.parts]).astype(np.int64)
-
-    @property
-    def proj(self) -> np.ndarray:
-        return np.concatenate([np.full(q[1].size, q[0], np.int64) for q in self.parts]) if self.parts else np.zeros(0, np.int64)
-
-    @property
-    def dst_core(self) -> np.ndarray:
-        return self._cat(1)
-
-    @property
-    def src(self) -> np.ndarray:
-        return self._cat(2)
-
-    @property
-    def count(self) -> np.ndarray:
-        return self._cat(3)
-
-    @property
-    def bits(self) -> np.ndarray:
-        return self._cat(4)
-
-
 _TABLES: dict = {}
 
 

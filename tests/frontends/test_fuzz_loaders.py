@@ -1,9 +1,7 @@
 """Fuzzing the loaders: random and mutated files end in SnnccError, never another exception."""
 
-import io
 
 import numpy as np
-import torch
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 

@@ -1,6 +1,5 @@
 """Zoo modules and snncc checkpoints become IR graphs that compute what the module computes."""
 
-import numpy as np
 import pytest
 import torch
 
@@ -45,3 +44,10 @@ def test_paper_parameter_counts():
     assert count_trainable(SpikingClassifier(SNNConfig(input_copies=2))) == 236_700
     assert count_trainable(LSTMClassifier(LSTMConfig(n_inputs=12))) == 225_975
     assert count_trainable(LSTMClassifier(LSTMConfig(n_inputs=24, signal="spikes"))) == 236_919
+
+
+def test_training_bookkeeping_stays_in_the_checkpoint(tmp_path):
+    m = SpikingClassifier(SNNConfig(n_hidden=6, n_outputs=3))
+    save_checkpoint(m, tmp_path / "ck.pt", {"split_assignment": "t" * 5000, "threshold": 1})
+    g = load_model(tmp_path / "ck.pt")
+    assert "split_assignment" not in g.metadata and g.metadata["threshold"] == 1

@@ -9,7 +9,6 @@ import sys
 import numpy as np
 import onnx
 import pytest
-import torch
 
 from snncc.ir.simulate import simulate
 from snncc.targets.jetson import target

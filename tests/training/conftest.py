@@ -1,8 +1,6 @@
 """Shared fixtures of the training tests: tiny seeded toy data sets."""
 
 import numpy as np
-import pytest
-import torch
 
 
 def toy_events(n_per_class: int = 30, n_classes: int = 3, steps: int = 20, seed: int = 0):
@@ -16,10 +14,3 @@ def toy_events(n_per_class: int = 30, n_classes: int = 3, steps: int = 20, seed:
         x[i][:, chans] |= (rng.random((steps, 8)) < 0.5).astype(np.uint8)
     return x, labels.astype(np.int64)
 
-
-@pytest.fixture(autouse=True)
-def _single_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)

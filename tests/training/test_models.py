@@ -1,11 +1,10 @@
 """Parameter counts of the paper's models and the RSNN forward pass in the authors' order."""
 
-import math
 
 import pytest
 import torch
 
-from snncc.models import LSTMClassifier, LSTMConfig, SNNConfig, SpikingClassifier, count_trainable
+from snncc.models import SNNConfig, SpikingClassifier, count_trainable
 from snncc.models.surrogate import spike
 from snncc.training.trainer import build_model
 

@@ -1,6 +1,5 @@
 """Seeded training: reproducible to the bit and better than chance on an easy toy set."""
 
-import numpy as np
 import pytest
 import torch
 
@@ -67,3 +66,18 @@ def test_validation_split_selects_on_validation():
     best = max(history.epochs, key=lambda e: (e.val_accuracy, -e.epoch))
     assert history.best_epoch == best.epoch
     assert accuracy(model, xt[split.val], yt[split.val]) == pytest.approx(best.val_accuracy)
+
+
+def test_fine_tuning_keeps_the_starting_weights_when_no_epoch_beats_them():
+    train, test = _toy_sets("ffsnn")
+    torch.manual_seed(0)
+    model = build_model("ffsnn", n_hidden=16, n_outputs=28, input_copies=1)
+    train_model(model, train, test, TrainSettings(epochs=4, batch_size=16, lr=0.01))
+    start = {k: v.clone() for k, v in model.state_dict().items()}
+    start_acc = accuracy(model, *test)
+    assert start_acc == 1.0
+    # a learning rate this large wrecks the model in one epoch: the starting weights must win
+    history = train_model(model, train, test, TrainSettings(epochs=1, batch_size=8, lr=10.0), keep_start=True)
+    assert history.epochs[0].test_accuracy < start_acc
+    assert history.best_epoch == 0 and history.best_test_accuracy == start_acc
+    assert all(torch.equal(start[k], v) for k, v in model.state_dict().items())

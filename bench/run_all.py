@@ -1,0 +1,69 @@
+"""Run every benchmark, one after another, and gather their JSON into bench/results/all.json.
+
+    python bench/run_all.py [--quick]
+
+Each benchmark measures its ratios side by side within its own run (absolute times drift on
+shared machines); every record carries the machine's load. --quick shrinks the workloads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+RESULTS = HERE / "results"
+
+
+def benches(quick: bool) -> list[tuple[str, list[str], Path | None]]:
+    """(name, argv, JSON file it writes or None when it prints JSON on stdout)."""
+    return [
+        ("compile", ["bench_compile.py", "--out", str(RESULTS / "compile.json")], RESULTS / "compile.json"),
+        ("emulator", ["bench_emulator.py", "--out", str(RESULTS / "emulator.json")]
+         + (["--batch", "256", "--single", "16"] if quick else []), RESULTS / "emulator.json"),
+        ("jetson", ["bench_jetson.py", "--json-out", str(RESULTS / "jetson.json")]
+         + (["--samples", "5", "--repeats", "1"] if quick else []), RESULTS / "jetson.json"),
+        ("mapping", ["bench_mapping.py", "--out", str(RESULTS / "mapping.json")]
+         + (["--neurons", "100000"] if quick else []), RESULTS / "mapping.json"),
+        ("energy", ["bench_energy.py", "--json"] + (["--samples", "8"] if quick else []), None),
+        ("nir_loihi_agreement", ["nir_loihi_agreement.py", "--json"]
+         + (["--samples", "50", "--seeds", "0"] if quick else []), None),
+    ]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="smaller workloads (minutes instead of tens of minutes)")
+    args = ap.parse_args(argv)
+    RESULTS.mkdir(exist_ok=True)
+    gathered: dict[str, object] = {"started": time.strftime("%Y-%m-%dT%H:%M:%S"), "quick": args.quick,
+                                   "cores": os.cpu_count()}
+    failed = []
+    for name, cmd, json_file in benches(args.quick):
+        print(f"== {name}: python bench/{' '.join(cmd)}", flush=True)
+        t0 = time.perf_counter()
+        proc = subprocess.run([sys.executable, str(HERE / cmd[0]), *cmd[1:]], capture_output=True, text=True)
+        if proc.returncode != 0:
+            failed.append(name)
+            gathered[name] = {"error": (proc.stderr.strip().splitlines() or ["failed"])[-1]}
+            print(f"   failed: {gathered[name]['error']}")
+            continue
+        try:
+            record = json.loads(json_file.read_text()) if json_file else json.loads(proc.stdout[proc.stdout.index("{"):])
+        except (ValueError, OSError) as ex:
+            record = {"error": f"no JSON result ({ex})"}
+            failed.append(name)
+        gathered[name] = record
+        print(f"   done in {time.perf_counter() - t0:.0f} s")
+    (RESULTS / "all.json").write_text(json.dumps(gathered, indent=2))
+    print(f"wrote {RESULTS / 'all.json'}" + (f"; failed: {', '.join(failed)}" if failed else ""))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
