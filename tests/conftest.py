@@ -9,8 +9,7 @@ import torch
 from snncc.frontends.checkpoint import save_checkpoint
 from snncc.models import SNNConfig, SpikingClassifier
 
-TH1_PARAMS = ("scale 5\ntime_bin_size 5\nnb_input_copies 2\ntau_mem 0.06\ntau_ratio 10\n"
-              "fwd_weight_scale 1\nweight_scale_factor 0.01\nreg_spikes 0.004\nreg_neurons 1e-6\n")
+from snncc_test_helpers import TH1_PARAMS
 
 
 @pytest.fixture(autouse=True)
@@ -20,15 +19,6 @@ def _one_torch_thread():
     torch.set_num_threads(1)
     yield
     torch.set_num_threads(before)
-
-
-def run_cli(args: list[str], capsys) -> tuple[int, str, str]:
-    """Run ``snncc args``; return (exit status, stdout, stderr)."""
-    from snncc.cli.main import run
-
-    code = run([str(a) for a in args])
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 @pytest.fixture

@@ -29,6 +29,7 @@ from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
 from snncc.ir.validate import validate
+from snncc.records import to_jsonable
 
 RECORD_FORMAT = "snncc-nir"
 RECORD_VERSION = 1
@@ -53,19 +54,6 @@ class ExportReport:
             out += [f"  - {item}" for item in self.not_honoured]
         out.append("snncc restores the identical IR from this file (metadata key 'snncc').")
         return out
-
-
-def _plain(value: Any) -> Any:
-    """JSON-able copy of metadata values (numpy scalars/arrays become Python numbers/lists)."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 def _euler_tau(decay: np.ndarray, tau: np.ndarray, exact: bool, step: float, name: str, label: str) -> np.ndarray:
@@ -179,7 +167,7 @@ def graph_to_nir(graph: Graph, step: float | None = None) -> tuple[Any, ExportRe
 
     record = {
         "format": RECORD_FORMAT, "version": RECORD_VERSION, "dt": dt, "export_dt": h, "name": graph.name,
-        "metadata": _plain(graph.metadata), "order": list(graph), "lifs": lifs, "readout": readout,
+        "metadata": to_jsonable(graph.metadata), "order": list(graph), "lifs": lifs, "readout": readout,
         "edges": [[u, v, d, p] for u, v, d, p in graph.edges()],
     }
     convention = _convention(dt, h)

@@ -72,7 +72,7 @@ def _array(group: h5py.Group, name: str, value, dtype) -> None:
 
 
 def _json(obj: Any) -> str:
-    from snncc.cli.output import to_jsonable
+    from snncc.records import to_jsonable
 
     return json.dumps(to_jsonable(obj), sort_keys=True, separators=(",", ":"))
 

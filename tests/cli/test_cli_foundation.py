@@ -9,7 +9,7 @@ import zipfile
 import pytest
 import torch
 
-from conftest import TH1_PARAMS, run_cli
+from snncc_test_helpers import TH1_PARAMS, run_cli
 from snncc.frontends.checkpoint import save_checkpoint
 from snncc.models import SNNConfig, SpikingClassifier
 

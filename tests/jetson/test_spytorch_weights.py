@@ -10,7 +10,7 @@ import numpy as np
 import torch
 
 from snncc.targets.jetson.runner import ArtefactRunner
-from tests.conftest import TH1_PARAMS, run_cli
+from snncc_test_helpers import TH1_PARAMS, run_cli
 
 STEPS = 40
 

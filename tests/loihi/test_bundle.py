@@ -12,7 +12,7 @@ from snncc.errors import SnnccError
 from snncc.targets.loihi import target
 from snncc.targets.loihi.bundle import read_bundle, write_bundle
 from snncc.targets.loihi.emulator import emulate
-from tests.conftest import run_cli
+from snncc_test_helpers import run_cli
 from tests.loihi.helpers import random_network, small_graph
 
 FIELDS = ("kind", "n", "wgt_exp", "wgt_exp_rec", "v_th_mant", "i_decay", "v_decay", "ref_delay", "bias_exp")

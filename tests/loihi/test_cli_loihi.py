@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from tests.conftest import run_cli
+from snncc_test_helpers import run_cli
 
 
 @pytest.fixture

@@ -12,7 +12,7 @@ from snncc.errors import SnnccError
 from snncc.frontends import LoadOptions, load_model
 from snncc.passes.quantize import decay_register, quantize_graph, quantize_weights, samples_steps, weight_scale
 from snncc.targets.loihi import target
-from tests.conftest import TH1_PARAMS
+from snncc_test_helpers import TH1_PARAMS
 from tests.loihi.helpers import small_graph
 
 

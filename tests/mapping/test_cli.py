@@ -3,7 +3,7 @@ import json
 import numpy as np
 import pytest
 
-from tests.conftest import run_cli
+from snncc_test_helpers import run_cli
 
 from .helpers import chain, paper_rsnn
 
