@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 import torch
 
@@ -47,7 +46,3 @@ def authors_weights(tmp_path):
     path = tmp_path / "weights_th1.pt"
     torch.save(ws, path)
     return path
-
-
-def spikes(shape, p=0.1, seed=0) -> np.ndarray:
-    return (np.random.default_rng(seed).random(shape) < p).astype(np.uint8)

@@ -53,14 +53,19 @@ class Pipeline:
     seed: int
     steps: list[Step] = field(default_factory=list)
 
+    def skipped(self, step: Step, needs: tuple[str, ...]) -> bool:
+        """Mark ``step`` skipped (and say so) when a step it needs did not succeed."""
+        blocked = [n for n in needs if self.status(n) != "ok"]
+        if blocked:
+            step.status, step.message = "skipped", f"needs {', '.join(blocked)}"
+            print(f"[skip] {step.name}: {step.message}", flush=True)
+        return bool(blocked)
+
     def snncc(self, name: str, *args: str, needs: tuple[str, ...] = ()) -> Step:
         """Run one ``snncc`` command (``--json`` output parsed when the verb prints it)."""
         step = Step(name, ["snncc", *args])
         self.steps.append(step)
-        blocked = [n for n in needs if self.status(n) != "ok"]
-        if blocked:
-            step.status, step.message = "skipped", f"needs {', '.join(blocked)}"
-            print(f"[skip] {name}: {step.message}", flush=True)
+        if self.skipped(step, needs):
             return step
         print(f"[run ] {name}: snncc {' '.join(args)}", flush=True)
         started = time.perf_counter()
@@ -83,10 +88,7 @@ class Pipeline:
         """A step done in this process (no snncc verb for it); an error is a failed step."""
         step = Step(name, [func.__name__, *map(str, args)])
         self.steps.append(step)
-        blocked = [n for n in needs if self.status(n) != "ok"]
-        if blocked:
-            step.status, step.message = "skipped", f"needs {', '.join(blocked)}"
-            print(f"[skip] {name}: {step.message}", flush=True)
+        if self.skipped(step, needs):
             return step
         started = time.perf_counter()
         try:
