@@ -154,3 +154,10 @@ def test_debug_shows_the_traceback(tmp_path):
     bad.write_bytes(b"\x00" * 64)
     res = subprocess.run(["snncc", "compile", str(bad), "-o", str(tmp_path / "x"), "--debug"], capture_output=True, text=True)
     assert res.returncode != 0 and "Traceback" in res.stderr
+
+
+def test_inspect_bad_file_is_one_line(tmp_path, capsys):
+    bad = tmp_path / "noise.pt"
+    bad.write_bytes(os.urandom(256))
+    code, out, err = run_cli(["inspect", bad, "--json"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and str(bad) in err and out == ""
