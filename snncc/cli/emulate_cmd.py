@@ -2,7 +2,10 @@
 
 X.npy: 0/1 spikes (bool, uint8 or float) shaped (T, C) or (B, T, C), C = the bundle's input width.
 OUT.npz: output_spikes (B, T, n_out) uint8, counts (B, n_out), prediction (B,), overflow counts;
-with --record all also layer{i}_spikes, layer{i}_voltage, layer{i}_current for every layer i.
+with --record all also layer{i}_spikes, layer{i}_voltage, layer{i}_current for every layer i
+(the model's units only: always-on bias sources are left out).
+When compile shifted the outputs (timing, current biases), an input of the model's length
+tSample - output_shift gets output_shift blank steps appended, so every output step is seen.
 """
 
 from __future__ import annotations
@@ -50,8 +53,13 @@ def emulate_command(
 
     if record not in ("outputs", "all"):
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
+    from snncc.targets.loihi.validation import pad
+
     network = read_bundle(bundle)
     x = check_inputs(load_spike_input(input), network.input_width, source=str(input))
+    shift = int(network.metadata.get("output_shift", 0) or 0)
+    padded = shift if shift and x.shape[1] + shift == network.t_sample else 0
+    x = pad(x, padded)
     parts: list[EmulationResult] = []
     if stream:
         result = emulate(network, x, record=record, mode="stream", gap=gap)
@@ -67,21 +75,24 @@ def emulate_command(
               "overflow_q_wrap": np.int64(result.overflow["q_wrap"]), "overflow_u_wrap": np.int64(result.overflow["u_wrap"]),
               "overflow_v_clip": np.int64(result.overflow["v_clip"])}
     index = network.metadata.get("hdf5_layer_index") or list(range(len(network.layers)))
-    for i, s in result.spikes.items():   # named by HDF5 layer index (a SLAYER flatten layer has no state)
-        arrays[f"layer{index[i]}_spikes"] = s
-    for i, v in result.voltage.items():
-        arrays[f"layer{index[i]}_voltage"] = v
-    for i, c in result.current.items():
-        arrays[f"layer{index[i]}_current"] = c
+    for field_name, records in (("spikes", result.spikes), ("voltage", result.voltage), ("current", result.current)):
+        for i, a in records.items():   # named by HDF5 layer index (a SLAYER flatten layer has no state)
+            arrays[f"layer{index[i]}_{field_name}"] = a[..., :network.layers[i].model_n]
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
     write_bytes_atomic(output, buf.getvalue())
     summary = {"bundle": str(bundle), "output": str(output), "samples": int(x.shape[0]), "steps": int(x.shape[1]),
                "mode": "stream" if stream else "batch", "prediction": result.prediction,
-               "overflow": result.overflow}
+               "overflow": result.overflow, "padded_steps": padded}
     if json_out:
         print_json(summary)
         return
+    if padded:
+        console.print(f"appended {padded} blank step(s) to each sample: on Loihi the outputs appear {padded} step(s) "
+                      "later than in the model (see the bundle's timing record)")
+    elif shift and x.shape[1] < network.t_sample:
+        err_console.print(f"[yellow]warning: the bundle's outputs appear {shift} step(s) late and the input is shorter "
+                          f"than tSample ({network.t_sample}); the last output steps fall outside the run[/yellow]")
     console.print(f"emulated {x.shape[0]} sample(s) x {x.shape[1]} steps ({summary['mode']} mode); overflow "
                   f"{result.overflow}; predictions {result.prediction[:20].tolist()}{' ...' if x.shape[0] > 20 else ''}")
     console.print(f"wrote {output}")

@@ -10,6 +10,9 @@
 
 ``s`` is the layer's scale (the network's w_scale under the paper's global rule). Spikes are
 binary, so each layer may carry its own scale without changing the next layer's input.
+A bias on a population's current (``current_bias.py``) is a weight from an always-on source on
+Loihi: it is quantized as one more column of the population's feed-forward projection (same s
+and e) and counts towards that projection's max|W|.
 ``quantize_graph`` returns a new Graph whose float parameters are the quantized ones read back
 in float units (W_q * 2**e / s, theta = vThMant / s, decays 1 - register/4096) plus a
 ``QuantizationRecord`` saying what was done; the input graph is never modified.
@@ -26,6 +29,7 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense
+from snncc.passes.current_bias import BiasTerm, current_biases, max_abs_bias, restore_biases
 
 WEIGHT_MIN, WEIGHT_MAX = -256, 254
 V_TH_MANT_MAX = 2**17 - 1
@@ -111,6 +115,8 @@ class ProjectionQuant:
     zeroed: int             # non-zero float weights that became 0
     rms_error: float        # RMS of (W_q * 2**e / s - W), float units
     range_used: float       # max|W| * s / 2**e / 256: the fraction of the 8-bit range in use
+    bias_starts: list[int] = field(default_factory=list)   # current biases carried as columns (first IR step)
+    bias_max_error: float | None = None                     # max |b_q * 2**e / s - b| over those columns
 
 
 @dataclass
@@ -151,6 +157,22 @@ def projections(graph: Graph) -> list[tuple[str, str]]:
     return out
 
 
+def bias_carrier(graph: Graph, lif: str) -> str | None:
+    """The Dense that carries ``lif``'s current biases: its first feed-forward (non-self-loop) input."""
+    for pred in graph.predecessors(lif):
+        if isinstance(graph.node(pred), Dense) and lif not in graph.predecessors(pred):
+            return pred
+    return None
+
+
+def projection_max(graph: Graph, dense: str, lif: str) -> float:
+    """max |W| of the projection, including the current-bias columns it carries."""
+    m = float(np.max(np.abs(graph.node(dense).weight))) if graph.node(dense).weight.size else 0.0
+    if bias_carrier(graph, lif) == dense:
+        m = max(m, max_abs_bias(graph, lif))
+    return m
+
+
 def _uniform(arr: np.ndarray, what: str, layer: str) -> float:
     if not np.all(arr == arr[0]):
         raise SnnccError(f"{what} differs between neurons; the Loihi lowering needs one value per layer "
@@ -171,7 +193,7 @@ def layer_scales(graph: Graph, rule: str) -> tuple[dict[str, float], int | None]
     pairs = projections(graph)
     if not pairs:
         raise SnnccError("the graph has no Dense -> LIF projection to quantize", field="graph")
-    maxima = {dense: float(np.max(np.abs(graph.node(dense).weight))) for dense, _ in pairs}
+    maxima = {dense: projection_max(graph, dense, lif) for dense, lif in pairs}
     if all(m == 0 for m in maxima.values()):
         raise SnnccError("all weights are zero: w_scale = 256 / max|W| is undefined", field="weights")
     if rule == "global":
@@ -205,24 +227,32 @@ def quantize_graph(
     for dense, lif in projections(graph):
         w = graph.node(dense).weight
         s = scales[lif]
-        max_abs = float(np.max(np.abs(w)))
+        max_abs = projection_max(graph, dense, lif)
         if exponents and dense in exponents:
             e = int(exponents[dense])
         else:
             e = 0 if rule == "global" else exponent_for(max_abs, s)
         wq = quantize_weights(w, s, e)
         back = wq.astype(np.float64) * (2.0 ** e / s)
-        record.projections.append(ProjectionQuant(
+        pq = ProjectionQuant(
             dense=dense, target=lif, scale=s, wgt_exp=e, max_abs=max_abs,
             clipped=clipped_to_254(w, s, e), zeroed=int(np.count_nonzero((wq == 0) & (w != 0))),
-            rms_error=float(np.sqrt(np.mean((back - w) ** 2))),
+            rms_error=float(np.sqrt(np.mean((back - w) ** 2))) if w.size else 0.0,
             range_used=float(max_abs * s / 2.0 ** e / 256.0),
-        ))
+        )
         g.node(dense).weight = back
-        if graph.node(dense).bias is not None:
-            raise SnnccError("a Dense bias enters the LIF current, which Loihi cannot add exactly "
-                             "(Loihi biases enter the voltage); this version of snncc refuses it rather than "
-                             "approximate it (fold the bias away or place it on the voltage)",
+        if bias_carrier(graph, lif) == dense:
+            terms = current_biases(graph, lif)
+            quantized = [BiasTerm(t.start, quantize_weights(t.vector, s, e) * (2.0 ** e / s), t.origins) for t in terms]
+            pq.bias_starts = [t.start for t in terms]
+            pq.clipped += sum(clipped_to_254(t.vector, s, e) for t in terms)
+            if terms:
+                pq.bias_max_error = float(max(np.max(np.abs(q.vector - t.vector)) for q, t in zip(quantized, terms)))
+            restore_biases(g, lif, quantized)
+        record.projections.append(pq)
+    for dense, lif in projections(graph):
+        if graph.node(dense).bias is not None and bias_carrier(graph, lif) is None:
+            raise SnnccError("a Dense bias needs a feed-forward projection into the population to carry it",
                              field=f"node '{dense}'.bias")
     record.clipped_total = sum(p.clipped for p in record.projections)
     for name, op in graph.items():
@@ -249,11 +279,7 @@ def quantize_graph(
         # decays read back: alpha = 1 - iDecay/4096 expressed through an equivalent tau
         q.tau_syn = np.full(op.n, _tau_for(graph.dt, lq.i_decay))
         q.tau_mem = np.full(op.n, _tau_for(graph.dt, lq.v_decay))
-        if op.bias is not None:
-            if op.bias_placement != "voltage":
-                raise SnnccError("a bias on the LIF current cannot be expressed exactly on Loihi (its biases "
-                                 "enter the voltage); this version of snncc refuses it rather than approximate it",
-                                 field=f"node '{name}'.bias")
+        if op.bias is not None and op.bias_placement == "voltage":
             mant, bexp = bias_registers(op.bias, s)
             back = mant.astype(np.float64) * 2.0 ** bexp / (64.0 * s)
             lq.bias_mant, lq.bias_exp = [int(m) for m in mant], int(bexp)

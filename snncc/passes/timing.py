@@ -9,6 +9,8 @@ extra delay d - 1; the IR refractory period r lowers to refDelay = r.
         Loihi delay of pre -> post = d + s_post - s_pre >= 1 (a difference-constraint system, solved
         by longest paths; infeasible only when a cycle has fewer delay steps than projections).
         tSample grows by the output's shift, so spike counts over the sample are unchanged.
+        A population whose current has a bias from IR step k on needs s_post + k >= 1 too: the
+        always-on source that carries the bias on Loihi delivers one step after it fires.
     timing="paper": the authors' export: every projection delay 1 (no synaptic delay), refDelay 1.
         This changes the update order the model was trained in; ``snncc check`` measures the cost.
 """
@@ -21,6 +23,7 @@ from typing import Any
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense, Input
+from snncc.passes.current_bias import current_biases
 
 TIMINGS = ("exact", "paper")
 MAX_EXTRA_DELAY = 62
@@ -94,10 +97,17 @@ def paper_order(graph: Graph) -> tuple[Graph, list[str]]:
     return g, changes
 
 
+def bias_shift(graph: Graph, lif: str) -> int:
+    """Smallest shift letting an always-on source reach ``lif`` from its first biased step: 1 - k."""
+    starts = [t.start for t in current_biases(graph, lif)]
+    return max(0, 1 - min(starts)) if starts else 0
+
+
 def _solve_shifts(graph: Graph, paths: list[tuple[str, str, str]]) -> dict[str, int]:
-    """Smallest s >= 0 per population with d + s_post - s_pre >= 1 on every projection (s_input = 0)."""
+    """Smallest s >= 0 per population with d + s_post - s_pre >= 1 on every projection (s_input = 0)
+    and s >= ``bias_shift`` for populations with current biases."""
     pops = [n for n, op in graph.items() if isinstance(op, (Input, LIF))]
-    shift = {p: 0 for p in pops}
+    shift = {p: bias_shift(graph, p) if isinstance(graph.node(p), LIF) else 0 for p in pops}
     for _ in range(len(pops) + 1):
         changed = False
         for pre, dense, post in paths:
@@ -140,8 +150,12 @@ def lower_timing(graph: Graph, mode: str = "exact") -> tuple[Graph, TimingRecord
         isinstance(g.node(s), Dense) for s in g.successors(n))]
     record.output_shift = max((shift[o] for o in outs), default=0)
     if record.shifts:
+        biased = [p for p in record.shifts if bias_shift(g, p)]
+        reasons = (["projection(s) with IR delay 0"] if any(p.ir_delay == 0 for p in record.projections) else []) + (
+            [f"current biases of {biased} (carried by always-on sources)"] if biased else [])
+        why = " and ".join(reasons)
         record.changes.append(
-            "projection(s) with IR delay 0 cannot be exact step for step on Loihi (every edge delivers one step "
+            f"{why} cannot be exact step for step on Loihi without a shift (every edge delivers one step "
             f"later): populations delayed by {record.shifts} steps; spike trains are identical but shifted, and "
             f"tSample grows by {record.output_shift} so counts over the sample are unchanged")
     return g, record

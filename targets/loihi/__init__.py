@@ -47,7 +47,7 @@ class LoihiArtefact:
             "format": "HDF5 bundle, lava-dl netx layout (+ snncc groups at /snncc)",
             "t_sample": net.t_sample,
             "layers": [
-                {"index": i, "name": lay.name, "type": lay.kind, "neurons": lay.n,
+                {"index": i, "name": lay.name, "type": lay.kind, "neurons": lay.n, "bias_sources": lay.always_on,
                  **({} if i == 0 else {"vThMant": lay.v_th_mant, "iDecay": lay.i_decay, "vDecay": lay.v_decay,
                                        "refDelay": lay.ref_delay, "wgtExp": lay.wgt_exp,
                                        **({"wgtExpRec": lay.wgt_exp_rec} if lay.weight_rec is not None else {}),
@@ -70,11 +70,15 @@ class LoihiArtefact:
                       f"scale rule '{s['scale_rule']}'" + (f", w_scale {s['w_scale']}" if s["w_scale"] else ""))
         console.print(f"  scale: {s['scale_reason']}")
         for lay in s["layers"]:
+            sources = lay["bias_sources"]
             if lay["index"] == 0:
-                console.print(f"  layer 0  input      {lay['neurons']} axons")
+                console.print(f"  layer 0  input      {lay['neurons'] - sources} axons"
+                              + (f" + {sources} always-on (current biases)" if sources else ""))
                 continue
             rec = f" wgtExpRec {lay['wgtExpRec']} delay_rec {lay['delay_rec']}" if "wgtExpRec" in lay else ""
-            console.print(f"  layer {lay['index']}  {lay['type']:<9}  {lay['neurons']} neurons  vThMant {lay['vThMant']} "
+            extra = f" + {sources} bias sources" if sources else ""
+            console.print(f"  layer {lay['index']}  {lay['type']:<9}  {lay['neurons'] - sources} neurons{extra}  "
+                          f"vThMant {lay['vThMant']} "
                           f"iDecay {lay['iDecay']} vDecay {lay['vDecay']} refDelay {lay['refDelay']} "
                           f"wgtExp {lay['wgtExp']} delay {lay['delay']}{rec}")
         if s["weights_clipped"]:
@@ -133,7 +137,7 @@ class LoweredModel:
 def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     """Timing, quantization and register values (no validation)."""
     from snncc.targets.loihi import scaling
-    from snncc.targets.loihi.validation import ir_spikes, loihi_spikes, pad, random_spikes
+    from snncc.targets.loihi.validation import ir_spikes, lead_steps, loihi_spikes, pad, random_spikes
 
     timing_mode = options.get("timing", "exact")
     rule = options.get("scale", "auto")
@@ -165,7 +169,8 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
         if "spikes" not in reference:
             reference["spikes"] = ir_spikes(order, calib, names)
         net = build_network(order, layers, rq, trec, steps + trec.output_shift, {})
-        emu = loihi_spikes(emulate(net, pad(calib, trec.output_shift), record="all"), layers, trec.shifts, steps)
+        xp = pad(calib, lead_steps(trec.shifts, trec.output_shift))
+        emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
         return float(sum((emu[n] != reference["spikes"][n]).mean() for n in names) / len(names))
 
     quantized, qrec = scaling.choose(order, rule, measure, f"{CALIBRATION_BATCH} seeded random spike trains "

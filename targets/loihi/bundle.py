@@ -4,7 +4,9 @@
     /layer/0/{type="input", shape=[1, 1, C]}
     /layer/i/{type="dense"|"dense_rec", shape=[n, 1, 1], weight (out, in), weight_rec (n, n),
               delay (out, in), bias, neuron/{type="LOIHI", vThMant, iDecay, vDecay, refDelay, wgtExp}}
-    snncc extensions (netx ignores them): /layer/i/delay_rec, neuron/{wgtExpRec, biasExp}
+    snncc extensions (netx ignores them): /layer/i/delay_rec, neuron/{wgtExpRec, biasExp},
+    /layer/i/alwaysOn (the layer's last k units are bias sources: input axons held at 1 every step,
+    or compartments that fire on their own; see bias_sources.py)
     /snncc/{version, quantization, timing, validation, metadata (JSON strings), source_sha256,
             core_map (JSON, when mapped), netx_compat (what netx would run differently)}
 
@@ -44,7 +46,14 @@ def _version() -> str:
 def netx_compat(network: LoihiNetwork) -> list[str]:
     """Fields this bundle relies on that lava-dl netx ignores (so Lava would run it differently)."""
     notes = []
+    k = network.layers[0].always_on
+    if k:
+        notes.append(f"/layer/0/alwaysOn = {k}: the last {k} input axon(s) carry current biases and must spike at "
+                     "every step (snncc's emulator and runner add them; a Lava driver must too)")
     for i, lay in enumerate(network.layers[1:], start=1):
+        if lay.always_on:
+            notes.append(f"/layer/{i}/alwaysOn = {lay.always_on}: the last {lay.always_on} compartment(s) are bias "
+                         "sources for the next layer, timed by refDelay")
         if lay.ref_delay != 1:
             notes.append(f"/layer/{i}/neuron/refDelay = {lay.ref_delay} (netx's LIF has no refractory period)")
         if lay.wgt_exp != 0:
@@ -93,6 +102,8 @@ def write_bundle(network: LoihiNetwork, path: str | Path, extra: dict[str, Any] 
             for i, lay in enumerate(network.layers):
                 g = layers.create_group(str(i))
                 _string(g, "type", lay.kind)
+                if lay.always_on:
+                    _scalar(g, "alwaysOn", lay.always_on, np.int64)
                 if i == 0:
                     _array(g, "shape", [1, 1, lay.n], np.int64)
                     continue
@@ -213,6 +224,13 @@ def _shape_width(group: h5py.Group, path: str, where: str) -> int:
     return int(np.prod(shape))
 
 
+def _always_on(group: h5py.Group, path: str, where: str, n: int) -> int:
+    k = _number(group, "alwaysOn", path, where, default=0)
+    if not 0 <= k < n:
+        _fail(path, f"{where}/alwaysOn", f"must lie in 0..{n - 1} (bias sources at the end of a layer of {n})")
+    return k
+
+
 def read_bundle(path: str | Path) -> LoihiNetwork:
     """Read and validate a bundle written by snncc, lava-dl netx or SLAYER v1."""
     path = str(path)
@@ -260,7 +278,7 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
             if kind != "input":
                 _fail(path, f"{where}/type", f"layer 0 must be the input, got {kind!r}")
             width = _shape_width(g, path, where)
-            layers.append(LoihiLayer(name="input", kind="input", n=width))
+            layers.append(LoihiLayer(name="input", kind="input", n=width, always_on=_always_on(g, path, where, width)))
             hdf5_index.append(0)
             continue
         if kind == "flatten":
@@ -278,7 +296,8 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
         n = int(w.shape[0])
         if "shape" in g and _shape_width(g, path, where) != n:
             _fail(path, f"{where}/shape", f"says {_shape_width(g, path, where)} neurons, weight has {n} rows")
-        lay = LoihiLayer(name=f"layer{i}", kind="dense_rec" if kind != "dense" else "dense", n=n)
+        lay = LoihiLayer(name=f"layer{i}", kind="dense_rec" if kind != "dense" else "dense", n=n,
+                         always_on=_always_on(g, path, where, n))
         lay.weight = _weights(g, "weight", path, where, (n, width))
         lay.delay = _delays(g, "delay", path, where, (n, width))
         if kind != "dense":
@@ -362,6 +381,9 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
 def check_network(network: LoihiNetwork, where: str = "<network>") -> None:
     """The same rules the reader enforces, applied before writing (a bad network is never written)."""
     width = network.layers[0].n
+    for i, lay in enumerate(network.layers):
+        if not 0 <= lay.always_on < lay.n:
+            raise SnnccError("bias sources must be fewer than the layer's units", file=where, field=f"/layer/{i}/alwaysOn")
     for i, lay in enumerate(network.layers[1:], start=1):
         for key, w, shape in (("weight", lay.weight, (lay.n, width)), ("weight_rec", lay.weight_rec, (lay.n, lay.n))):
             if w is None:

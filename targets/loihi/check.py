@@ -73,7 +73,7 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     """Run (a)-(d) over ``inputs`` (N, T, C) 0/1 with ``labels`` (N,); ``progress(n)`` after each chunk."""
     from snncc.targets.loihi import lower_model
     from snncc.targets.loihi.emulator import check_inputs, emulate
-    from snncc.targets.loihi.validation import loihi_spikes, pad
+    from snncc.targets.loihi.validation import lead_steps, loihi_spikes, pad
 
     progress = progress or options.get("progress")
     lowered = lower_model(graph, dict(options, t_sample=options.get("t_sample") or np.asarray(inputs).shape[1]))
@@ -85,6 +85,7 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     n, steps, _ = x_all.shape
     names = [c.lif for c in lowered.layers]
     shift = lowered.timing_record.output_shift
+    lead = lead_steps(lowered.timing_record.shifts, shift)
     mode = options.get("mode", "batch")
     preds = {k: [] for k in ("float_trained", "ir_loihi_order", "ir_quantized", "emulator", "emulator_wide")}
     agree_sum = {k: {nm: 0.0 for nm in names} for k in
@@ -101,10 +102,10 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
             p_b, s_b = _ir_run(lowered.order, x, names)
         p_c, s_c = _ir_run(lowered.quantized, x, names)
         if mode == "batch":
-            res = emulate(net, pad(x, shift), record="all")
+            res = emulate(net, pad(x, lead), record="all")
         else:
-            res = emulate(net, pad(x, shift), record="all", mode="stream", gap=int(options.get("gap", 100)))
-        s_d = loihi_spikes(res, lowered.layers, lowered.timing_record.shifts, steps)
+            res = emulate(net, pad(x, lead), record="all", mode="stream", gap=int(options.get("gap", 100)))
+        s_d = loihi_spikes(res, lowered.network, lowered.layers, lowered.timing_record.shifts, steps)
         p_d = np.argmax(s_d[names[-1]].sum(axis=1), axis=1)
         for k, v in res.overflow.items():
             overflow[k] += v

@@ -109,7 +109,7 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
     ``arithmetic="float"``: the same pipeline in float64 with no truncation, wrap or clip (the
     network's fields may then hold float weights, thresholds and decays).
     """
-    x = check_inputs(inputs, network.input_width)
+    x = network.drive(check_inputs(inputs, network.input_width))
     as_float = arithmetic == "float"
     dt = np.float64 if as_float else np.int64
     batch, steps, _ = x.shape
@@ -259,7 +259,7 @@ class PreparedNetwork:
             raise SnnccError(f"mode must be one of {MODES}", field="mode")
         x = check_inputs(inputs, self.network.input_width)
         if mode == "batch":
-            return run_flat(self.flat, x, record, wide)
+            return run_flat(self.flat, self.network.drive(x), record, wide)
         if gap < 0:
             raise SnnccError("gap must be >= 0 steps", field="gap")
         batch, steps, width = x.shape
@@ -267,7 +267,7 @@ class PreparedNetwork:
         stream = np.zeros((1, batch * period, width), np.uint8)
         for b in range(batch):
             stream[0, b * period:b * period + steps] = x[b]
-        whole = run_flat(self.flat, stream, record, wide)
+        whole = run_flat(self.flat, self.network.drive(stream), record, wide)
         windows = [slice(b * period, b * period + steps) for b in range(batch)]
 
         def cut(a: np.ndarray) -> np.ndarray:
@@ -292,7 +292,8 @@ def emulate(
 ) -> EmulationResult:
     """Run ``network`` bit-exactly on 0/1 ``inputs`` (T, C) or (B, T, C).
 
-    mode "batch": every sample starts from zero state. mode "stream": the paper's protocol, one
+    ``inputs`` carry the model's channels; always-on bias axons (``bias_sources.py``) are added
+    here, held at 1 on every step (gaps included). mode "batch": every sample starts from zero state. mode "stream": the paper's protocol, one
     continuous run with ``gap`` blank steps after each sample; each sample's outputs are the
     steps of its own window. record "all" keeps every layer's spikes, u and v. ``wide=True``
     (outputs only) removes the q/u wrap and the v clip, to measure what overflow costs.

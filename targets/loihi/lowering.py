@@ -18,8 +18,10 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
+from snncc.passes.current_bias import current_biases
 from snncc.passes.quantize import QuantizationRecord, quantize_weights
 from snncc.passes.timing import TimingRecord
+from snncc.targets.loihi import bias_sources
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 
 
@@ -141,6 +143,10 @@ def build_network(graph: Graph, layers: list[ChainLayer], quant: QuantizationRec
             layer.bias = np.asarray(lq.bias_mant, np.int64)
             layer.bias_exp = int(lq.bias_exp)
         net_layers.append(layer)
+    for i, c in enumerate(layers, start=1):
+        pq = proj_q[c.ff]
+        terms = [(t.start, quantize_weights(t.vector, pq.scale, pq.wgt_exp)) for t in current_biases(graph, c.lif)]
+        bias_sources.attach(net_layers[i - 1], net_layers[i], timing.shifts.get(c.lif, 0), terms)
     return LoihiNetwork(layers=net_layers, t_sample=int(t_sample), metadata=dict(metadata))
 
 
@@ -149,21 +155,49 @@ def float_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer]) ->
 
     Chip units are dropped (w_chip = W, threshold = theta, decay = 4096 * (1 - alpha)), so
     ``emulator.reference_run(..., arithmetic="float")`` runs the lowered timing in exact float.
+    The structure is the network's own: every delay, and the always-on bias sources (their
+    columns carry the graph's float current biases; their voltage bias keeps its ratio to the
+    threshold), so a wrong delay or source in the network fails the comparison with the IR.
     """
-    twin_layers = [network.layers[0]]
+    base = network.layers[0]
+    twin_layers = [LoihiLayer(name=base.name, kind="input", n=base.n, always_on=base.always_on)]
     for c, lay in zip(layers, network.layers[1:]):
         op = graph.node(c.lif)
         alpha, beta = op.decays(graph.dt)
+        theta = float(op.threshold[0])
         t = LoihiLayer(
-            name=lay.name, kind=lay.kind, n=lay.n, weight=graph.node(c.ff).weight.astype(np.float64), wgt_exp=-6,
-            delay=lay.delay, v_th_mant=float(op.threshold[0]) / 64.0, i_decay=4096.0 * (1.0 - float(alpha[0])),
-            v_decay=4096.0 * (1.0 - float(beta[0])), ref_delay=lay.ref_delay, vmin=-math.inf, vmax=math.inf,
+            name=lay.name, kind=lay.kind, n=lay.n, weight=_twin_weight(graph, c, lay), wgt_exp=-6, delay=lay.delay,
+            v_th_mant=theta / 64.0, i_decay=4096.0 * (1.0 - float(alpha[0])), v_decay=4096.0 * (1.0 - float(beta[0])),
+            ref_delay=lay.ref_delay, vmin=-math.inf, vmax=math.inf, always_on=lay.always_on,
         )
         if c.rec:
-            t.weight_rec = graph.node(c.rec).weight.astype(np.float64)
+            t.weight_rec = np.zeros((lay.n, lay.n))
+            t.weight_rec[:op.n, :op.n] = graph.node(c.rec).weight
             t.wgt_exp_rec = -6
             t.delay_rec = lay.delay_rec
-        if op.bias is not None:
-            t.bias, t.bias_exp = op.bias.astype(np.float64), 0
+        if (op.bias is not None and op.bias_placement == "voltage") or lay.always_on:
+            t.bias, t.bias_exp = np.zeros(lay.n), 0
+            if op.bias is not None and op.bias_placement == "voltage":
+                t.bias[:op.n] = op.bias
+            if lay.always_on:
+                chip = np.asarray(lay.bias[op.n:], np.float64) * 2.0 ** lay.bias_exp
+                t.bias[op.n:] = chip * theta / (float(lay.v_th_mant) * 64.0)
         twin_layers.append(t)
     return LoihiNetwork(layers=twin_layers, t_sample=network.t_sample, metadata={})
+
+
+def _twin_weight(graph: Graph, c: ChainLayer, lay: LoihiLayer) -> np.ndarray:
+    """Float feed-forward weights shaped like the network's: the model's, then one column per bias source."""
+    w = graph.node(c.ff).weight
+    n = graph.node(c.lif).n
+    terms = current_biases(graph, c.lif)
+    sources = lay.weight.shape[1] - w.shape[1]
+    repeats = sources // len(terms) if terms else 0
+    if sources != repeats * len(terms) or (terms and not repeats):
+        raise SnnccError(f"internal check failed: {sources} bias-source columns for {len(terms)} current-bias terms",
+                         field=f"layer '{lay.name}'")
+    out = np.zeros(lay.weight.shape)
+    out[:n, :w.shape[1]] = w
+    for j, term in enumerate(terms):
+        out[:n, w.shape[1] + j * repeats:w.shape[1] + (j + 1) * repeats] = term.vector[:, None]
+    return out

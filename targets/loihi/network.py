@@ -10,6 +10,8 @@ itself through ``weight_rec`` (n, n). Integer fields follow Loihi's registers:
     ref_delay: steps a neuron stays silent after a spike, including the spike step (1 = none)
     delay / delay_rec: extra synaptic delay in steps (0..62) on top of the one-step delivery;
     a scalar for the whole projection or an int array shaped like the weights
+    always_on: the layer's last ``always_on`` units are bias sources (``bias_sources.py``): input
+    axons the driver holds at 1 every step, or compartments that fire on their own
 """
 
 from __future__ import annotations
@@ -41,6 +43,12 @@ class LoihiLayer:
     ref_delay: int = 1
     vmin: int = -(2**23 - 1)
     vmax: int = 2**23 - 1
+    always_on: int = 0
+
+    @property
+    def model_n(self) -> int:
+        """Units of the model itself (the layer without its always-on bias sources)."""
+        return self.n - self.always_on
 
     @property
     def fan_in(self) -> int:
@@ -59,7 +67,15 @@ class LoihiNetwork:
 
     @property
     def input_width(self) -> int:
-        return self.layers[0].n
+        """Channels of data a user supplies (the always-on bias axons are added by the driver)."""
+        return self.layers[0].model_n
+
+    def drive(self, x: np.ndarray) -> np.ndarray:
+        """(B, T, input_width) data -> (B, T, axons): the always-on bias axons appended as ones."""
+        k = self.layers[0].always_on
+        if not k:
+            return x
+        return np.concatenate([x, np.ones(x.shape[:2] + (k,), x.dtype)], axis=2)
 
     @property
     def n_outputs(self) -> int:

@@ -19,7 +19,8 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.passes.quantize import QuantizationRecord, exponent_for, layer_scales, projections, quantize_graph
+from snncc.passes.quantize import (QuantizationRecord, exponent_for, layer_scales, projection_max, projections,
+                                   quantize_graph)
 
 OUTLIER_RATIO = 20.0
 MIN_RANGE = 1.0 / 8.0
@@ -34,7 +35,7 @@ class Screen:
 
 def screen(graph: Graph) -> Screen:
     flagged: dict[str, str] = {}
-    maxima = {d: float(np.max(np.abs(graph.node(d).weight))) for d, _ in projections(graph)}
+    maxima = {d: projection_max(graph, d, lif) for d, lif in projections(graph)}
     top = max(maxima.values())
     possible = 0 < top <= 256
     for dense, m in maxima.items():
@@ -75,7 +76,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
     best_err = candidates[-1][3]
     for dense in sc.flagged:
         target = next(lif for d, lif in projections(graph) if d == dense)
-        base = exponent_for(float(np.max(np.abs(graph.node(dense).weight))), scales[target])
+        base = exponent_for(projection_max(graph, dense, target), scales[target])
         worse = 0
         for shrink in range(1, 6):
             trial = dict(best_exps)

@@ -52,17 +52,24 @@ def ir_spikes(graph: Graph, x: np.ndarray, names: list[str]) -> dict[str, np.nda
     return {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
 
 
-def loihi_spikes(result: EmulationResult, layers: list[ChainLayer], shifts: dict[str, int], steps: int) -> dict[str, np.ndarray]:
-    """Emulated spikes per population, undoing each population's timing shift, cut to ``steps``."""
+def loihi_spikes(result: EmulationResult, network: LoihiNetwork, layers: list[ChainLayer], shifts: dict[str, int],
+                 steps: int) -> dict[str, np.ndarray]:
+    """Emulated spikes per population, undoing each population's timing shift, cut to ``steps``
+    (the always-on bias compartments left out)."""
     out = {}
     for i, c in enumerate(layers, start=1):
         s = shifts.get(c.lif, 0)
-        out[c.lif] = result.spikes[i][:, s:s + steps]
+        out[c.lif] = result.spikes[i][:, s:s + steps, :network.layers[i].model_n]
     return out
 
 
 def pad(x: np.ndarray, extra: int) -> np.ndarray:
     return np.concatenate([x, np.zeros((x.shape[0], extra, x.shape[2]), x.dtype)], axis=1) if extra else x
+
+
+def lead_steps(shifts: dict[str, int], output_shift: int) -> int:
+    """Blank steps to append so every population's shifted spike train fits in the run."""
+    return max([int(output_shift), *(int(v) for v in shifts.values())])
 
 
 def agreement(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> dict[str, float]:
@@ -98,7 +105,7 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
                       rate: float = 0.05, seed: int = 0) -> ValidationRecord:
     steps = int(steps or network.t_sample - output_shift)
     x = random_spikes(batch, steps, network.input_width, rate, seed)
-    xp = pad(x, output_shift)
+    xp = pad(x, lead_steps(shifts, output_shift))
     names = [c.lif for c in layers]
     record = ValidationRecord(inputs=f"{batch} seeded random spike trains (p={rate}, seed {seed}), {steps} steps")
     ir_trained = ir_spikes(trained, x, names)
@@ -107,15 +114,17 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
     record.trained_vs_loihi_order = agreement(ir_order, ir_trained)
 
     with one_thread():
-        twin = reference_run(float_twin(network, order, layers), xp, arithmetic="float", record="all")
-    problem = _same(loihi_spikes(twin, layers, shifts, steps), ir_order)
+        twin_net = float_twin(network, order, layers)
+        twin = reference_run(twin_net, xp, arithmetic="float", record="all")
+    problem = _same(loihi_spikes(twin, twin_net, layers, shifts, steps), ir_order)
     if problem:
         raise SnnccError(f"internal check failed: the lowered timing does not reproduce the IR in float ({problem})",
                          field="timing")
     record.timing_exact = True
     with one_thread():
-        twin_q = reference_run(float_twin(network, quantized, layers), xp, arithmetic="float", record="all")
-    problem = _same(loihi_spikes(twin_q, layers, shifts, steps), ir_quant)
+        twin_q_net = float_twin(network, quantized, layers)
+        twin_q = reference_run(twin_q_net, xp, arithmetic="float", record="all")
+    problem = _same(loihi_spikes(twin_q, twin_q_net, layers, shifts, steps), ir_quant)
     if problem:
         raise SnnccError(f"internal check failed: quantized registers do not reproduce the quantized IR ({problem})",
                          field="quantization")
@@ -132,7 +141,7 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
             raise SnnccError(f"internal check failed: the emulator kernel differs from the chip's rules in layer {i}",
                              field="emulator")
     record.kernel_exact = True
-    emu = loihi_spikes(fast, layers, shifts, steps)
+    emu = loihi_spikes(fast, network, layers, shifts, steps)
     record.emulator_vs_quantized_ir = agreement(emu, ir_quant)
     record.emulator_vs_trained = agreement(emu, ir_trained)
     last = names[-1]

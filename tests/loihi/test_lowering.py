@@ -28,8 +28,9 @@ def test_without_quantization_the_lowered_model_reproduces_the_float_model_spike
     low = lower_model(graph, {"timing": "exact"})
     x = _x(1)
     ref = simulate(graph, x, record="spikes")
-    twin = reference_run(float_twin(low.network, graph, low.layers), x, arithmetic="float", record="all")
-    got = loihi_spikes(twin, low.layers, low.timing_record.shifts, x.shape[1])
+    twin_net = float_twin(low.network, graph, low.layers)
+    twin = reference_run(twin_net, x, arithmetic="float", record="all")
+    got = loihi_spikes(twin, twin_net, low.layers, low.timing_record.shifts, x.shape[1])
     for name in ("hidden", "out"):
         expected = ref.spikes[name].numpy().astype(np.uint8)
         assert expected.sum() > 0
@@ -91,11 +92,13 @@ def _bias_graph(placement):
     return g
 
 
-def test_voltage_bias_lowers_and_current_bias_is_refused():
+def test_voltage_bias_is_a_register_and_current_bias_an_always_on_axon():
     art = target.lower(_bias_graph("voltage"), {"scale": "global"})
     assert art.network.layers[1].bias is not None and art.validation["quantized_params_exact"]
-    with pytest.raises(SnnccError, match="current"):
-        target.lower(_bias_graph("current"), {})
+    assert art.network.layers[0].always_on == 0
+    art = target.lower(_bias_graph("current"), {"scale": "global"})
+    assert art.network.layers[1].bias is None and art.network.layers[0].always_on == 1
+    assert art.validation["timing_exact"] and art.validation["quantized_params_exact"]
 
 
 def test_auto_scale_handles_an_outlier_recurrent_matrix():

@@ -1,0 +1,108 @@
+"""Current biases on Loihi 1, exactly: synapses from always-on sources.
+
+A Loihi 1 compartment's bias enters the voltage; a bias on the current (``I[t] += b`` for IR steps
+t >= k, see ``snncc/passes/current_bias.py``) has no register. It is lowered as one more synapse
+column of the population's feed-forward weights, fed by a source that spikes at every step:
+
+    first layer:   an always-on input axon, held at 1 every step by the driver (snncc adds it);
+    deeper layer:  r = refDelay compartments appended to the previous layer, each with a voltage
+                   bias above threshold and no inputs, so each fires at steps 0, r, 2r, ...; their
+                   synapses carry delays D, D+1, ..., D+r-1, which together deliver one spike at
+                   every step from D+1 on.
+
+D = s + k - 1 makes the first delivery land at chip step s + k, the population's IR step k
+(s: its timing shift; the timing pass guarantees s + k >= 1). A spike from step m with delay D
+arrives at m + 1 + D, so the bias is present at every step from then on and never before.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.passes.timing import MAX_EXTRA_DELAY
+from snncc.targets.loihi.network import LoihiLayer
+
+BIAS_MANT_MAX = 2**12 - 1
+
+
+def source_bias(pre: LoihiLayer, arithmetic: str) -> tuple[float, int]:
+    """(mantissa, exponent) of a voltage bias that makes a compartment of ``pre`` fire every free step.
+
+    Chip units: mant * 2**exp > vThMant * 2**6; the exponent is the layer's own when it already has
+    biases, else 6 (the one netx assumes), else 7.
+    """
+    if arithmetic == "float":
+        return 2.0 * abs(float(pre.v_th_mant)) * 64.0 + 1.0, 0
+    threshold = int(pre.v_th_mant) * 64
+    for exp in ([pre.bias_exp] if pre.bias is not None else [6, 7]):
+        mant = (threshold >> exp) + 1
+        if mant <= BIAS_MANT_MAX:
+            return mant, exp
+    raise SnnccError(f"vThMant {pre.v_th_mant} is too high for an always-on compartment (its voltage bias must exceed "
+                     "the threshold with a 13-bit mantissa) to carry the next layer's current bias",
+                     field=f"layer '{pre.name}'")
+
+
+def _pad_rows(a, k: int):
+    if a is None or np.ndim(a) == 0:
+        return a
+    return np.concatenate([a, np.zeros((k,) + a.shape[1:], a.dtype)], axis=0)
+
+
+def _pad_square(a, k: int):
+    if a is None or np.ndim(a) == 0:
+        return a
+    a = _pad_rows(a, k)
+    return np.concatenate([a, np.zeros((a.shape[0], k), a.dtype)], axis=1)
+
+
+def _append_compartments(pre: LoihiLayer, k: int, arithmetic: str) -> None:
+    """``k`` always-on compartments at the end of ``pre``: no synapses in, a voltage bias above threshold."""
+    mant, exp = source_bias(pre, arithmetic)
+    dtype = np.float64 if arithmetic == "float" else np.int64
+    bias = np.zeros(pre.n, dtype) if pre.bias is None else np.asarray(pre.bias, dtype)
+    pre.bias = np.concatenate([bias, np.full(k, mant, dtype)])
+    pre.bias_exp = exp
+    pre.weight = _pad_rows(pre.weight, k)
+    pre.delay = _pad_rows(pre.delay, k)
+    pre.weight_rec = _pad_square(pre.weight_rec, k)
+    pre.delay_rec = _pad_square(pre.delay_rec, k)
+    pre.n += k
+    pre.always_on += k
+
+
+def attach(pre: LoihiLayer, post: LoihiLayer, shift: int, terms: list[tuple[int, np.ndarray]],
+           arithmetic: str = "int") -> None:
+    """Add bias-source columns for ``terms`` [(first IR step k, weight column (n,))] to ``post``.
+
+    ``pre`` is the layer before ``post`` (the input layer for the first population); both are
+    changed in place. ``shift`` is ``post``'s timing shift.
+    """
+    if not terms:
+        return
+    repeats = 1 if pre.kind == "input" else int(pre.ref_delay)
+    columns, delays = [], []
+    for start, column in terms:
+        first = shift + start - 1
+        if first < 0:
+            raise SnnccError("a current bias from IR step 0 needs the population shifted by one step (timing pass)",
+                             field=f"layer '{post.name}'")
+        if first + repeats - 1 > MAX_EXTRA_DELAY:
+            raise SnnccError(f"a current bias starting at IR step {start} needs a synaptic delay of "
+                             f"{first + repeats - 1} steps; Loihi allows at most {MAX_EXTRA_DELAY}",
+                             field=f"layer '{post.name}'")
+        for p in range(repeats):
+            columns.append(np.asarray(column).reshape(-1, 1))
+            delays.append(first + p)
+    k = len(columns)
+    if pre.kind == "input":
+        pre.n += k
+        pre.always_on += k
+    else:
+        _append_compartments(pre, k, arithmetic)
+    n_old = post.weight.shape[1]
+    base_delay = np.broadcast_to(np.asarray(post.delay, np.int64), (post.n, n_old))
+    post.weight = np.concatenate([post.weight, np.concatenate(columns, axis=1).astype(post.weight.dtype)], axis=1)
+    new_delay = np.concatenate([base_delay, np.broadcast_to(np.asarray(delays, np.int64), (post.n, k))], axis=1)
+    post.delay = int(new_delay[0, 0]) if np.all(new_delay == new_delay[0, 0]) else new_delay
