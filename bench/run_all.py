@@ -32,7 +32,7 @@ def benches(quick: bool) -> list[tuple[str, list[str], Path | None]]:
          + (["--neurons", "100000"] if quick else []), RESULTS / "mapping.json"),
         ("energy", ["bench_energy.py", "--json"] + (["--samples", "8"] if quick else []), None),
         ("nir_loihi_agreement", ["nir_loihi_agreement.py", "--json"]
-         + (["--samples", "50", "--seeds", "0"] if quick else []), None),
+         + (["--samples", "50", "--seeds", "0", "--no-trained"] if quick else []), None),
     ]
 
 

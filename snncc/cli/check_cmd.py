@@ -72,7 +72,7 @@ def check_command(
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
     reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR)."),
     timing: str = typer.Option("exact", "--timing", help="Loihi: 'exact' or 'paper' (the authors' export order)."),
-    scale: str = typer.Option("auto", "--scale", help="Loihi weight scale rule: global, per-layer or auto."),
+    scale: str = typer.Option("auto", "--scale", help="Loihi weight scale rule: global, per-layer, split or auto."),
     allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: deploy a subtract-reset model with reset to zero."),
     stream: bool = typer.Option(False, "--stream", help="Loihi: the paper's protocol, one stream with 100 blank steps between samples."),
     limit: Optional[int] = typer.Option(None, "--limit", help="Use only the first N samples."),

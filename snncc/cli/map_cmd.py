@@ -41,7 +41,7 @@ def map_command(
     json_out: bool = typer.Option(False, "--json", help="Print the core map as JSON."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw utilisation per core as a PNG (written atomically)."),
     timing: str = typer.Option("exact", "--timing", help="For a model file: Loihi timing 'exact' or 'paper' (the authors' export)."),
-    scale: str = typer.Option("auto", "--scale", help="For a model file: Loihi weight scale rule (auto | global | per-layer)."),
+    scale: str = typer.Option("auto", "--scale", help="For a model file: Loihi weight scale rule (auto | global | per-layer | split)."),
 ) -> None:
     """Place every population on Loihi 1 cores under all per-core limits; print the core map."""
     from snncc.targets.loihi.partition import map_network

@@ -3,6 +3,8 @@
     w_scale = floor(256 / max_k max|W_k|)                  one integer scale for the network
     w_q     = clip(round(W * s / 2**e / 2) * 2, -256, 254)  even 8-bit mantissas, round half to even
     w_chip  = w_q * 2**(6 + e)                             e = wgtExp (0 under the paper's rule)
+    split:  e per synapse = e_fine where the weight fits 8 bits at e_fine, else e_coarse
+            (e_coarse fits max|W|; e_fine fits the bulk: weights within 20x the median |W|)
     vThMant = round(theta * s)                             1 <= vThMant <= 2**17 - 1
     iDecay  = int(4096 * (1 - exp(-dt / tau_syn)))         exp discretisation ("euler": int(4096*dt/tau))
     vDecay  = int(4096 * (1 - exp(-dt / tau_mem)))
@@ -37,7 +39,8 @@ DECAY_ONE = 4096
 WGT_EXP_MIN, WGT_EXP_MAX = -6, 7     # below -6 the chip weight w_q * 2**(6+e) stops being an integer
 BIAS_MANT_MAX = 2**12 - 1            # Loihi 1: 13-bit signed bias mantissa
 BIAS_EXP_MAX = 7
-SCALE_RULES = ("global", "per-layer", "auto")
+SCALE_RULES = ("global", "per-layer", "split", "auto")
+OUTLIER_RATIO = 20.0                 # |W| above 20x the median |W != 0| is an outlier
 
 
 # -- small pure rules (reused by other engineers) -----------------------------------------------
@@ -57,6 +60,21 @@ def quantize_weights(weight: np.ndarray, w_scale: float, wgt_exp: int = 0) -> np
     """clip(round(W * w_scale / 2**wgt_exp / 2) * 2, -256, 254) as int16 (np.round: half to even)."""
     scaled = np.asarray(weight, np.float64) * (float(w_scale) / 2.0 ** wgt_exp)
     return np.clip(np.round(scaled / 2.0) * 2.0, WEIGHT_MIN, WEIGHT_MAX).astype(np.int16)
+
+
+def synapse_exponents(values: np.ndarray, scale: float, fine: int, coarse: int) -> np.ndarray:
+    """Per synapse: ``fine`` where round(W * s / 2**fine / 2) * 2 fits [-256, 254], else ``coarse``."""
+    r = np.round(np.asarray(values, np.float64) * (float(scale) / 2.0 ** fine) / 2.0) * 2.0
+    return np.where((r >= WEIGHT_MIN) & (r <= WEIGHT_MAX), fine, coarse).astype(np.int64)
+
+
+def bulk_max(values: np.ndarray, ratio: float = OUTLIER_RATIO) -> float:
+    """max |W| over the weights within ``ratio`` x the median |W != 0| (the projection without outliers)."""
+    a = np.abs(np.asarray(values, np.float64)).reshape(-1)
+    nz = a[a > 0]
+    if not nz.size:
+        return 0.0
+    return float(np.max(nz[nz <= ratio * np.median(nz)]))
 
 
 def clipped_to_254(weight: np.ndarray, w_scale: float, wgt_exp: int = 0) -> int:
@@ -117,6 +135,14 @@ class ProjectionQuant:
     range_used: float       # max|W| * s / 2**e / 256: the fraction of the 8-bit range in use
     bias_starts: list[int] = field(default_factory=list)   # current biases carried as columns (first IR step)
     bias_max_error: float | None = None                     # max |b_q * 2**e / s - b| over those columns
+    wgt_exp_outliers: int | None = None    # split: the coarse exponent of the outlier synapses (wgt_exp: the fine one)
+    outliers: int = 0                      # split: synapses (bias columns included) at the coarse exponent
+
+    def exponents(self, values: np.ndarray):
+        """The exponent of each synapse carrying ``values``: one int, or an int array when split."""
+        if self.wgt_exp_outliers is None:
+            return self.wgt_exp
+        return synapse_exponents(values, self.scale, self.wgt_exp, self.wgt_exp_outliers)
 
 
 @dataclass
@@ -211,13 +237,15 @@ def quantize_graph(
     rule: str = "global",
     *,
     exponents: dict[str, int] | None = None,
+    split: set[str] | frozenset[str] = frozenset(),
     reason: str = "",
 ) -> tuple[Graph, QuantizationRecord]:
     """Quantize every projection and LIF of ``graph``; return (graph in quantized float units, record).
 
     ``rule``: "global" (the paper: one w_scale, wgtExp 0) or "per-layer" (each LIF its own
     integer scale, each projection the smallest weight exponent that fits 8 bits). ``exponents``
-    overrides wgtExp per Dense (used by the calibrated scale search).
+    overrides wgtExp per Dense (used by the calibrated scale search). Denses in ``split`` get two
+    exponents (``synapse_exponents``): outliers keep the coarse one, the bulk gets a finer one.
     """
     if rule not in ("global", "per-layer"):
         raise SnnccError(f"scale rule must be one of {SCALE_RULES}", field="--scale")
@@ -232,22 +260,30 @@ def quantize_graph(
             e = int(exponents[dense])
         else:
             e = 0 if rule == "global" else exponent_for(max_abs, s)
-        wq = quantize_weights(w, s, e)
-        back = wq.astype(np.float64) * (2.0 ** e / s)
-        pq = ProjectionQuant(
-            dense=dense, target=lif, scale=s, wgt_exp=e, max_abs=max_abs,
-            clipped=clipped_to_254(w, s, e), zeroed=int(np.count_nonzero((wq == 0) & (w != 0))),
-            rms_error=float(np.sqrt(np.mean((back - w) ** 2))) if w.size else 0.0,
-            range_used=float(max_abs * s / 2.0 ** e / 256.0),
-        )
+        carried = current_biases(graph, lif) if bias_carrier(graph, lif) == dense else []
+        pq = ProjectionQuant(dense=dense, target=lif, scale=s, wgt_exp=e, max_abs=max_abs, clipped=0, zeroed=0,
+                             rms_error=0.0, range_used=float(max_abs * s / 2.0 ** e / 256.0))
+        if dense in split:
+            values = np.concatenate([w.reshape(-1)] + [t.vector for t in carried])
+            fine = exponent_for(bulk_max(values), s)
+            if fine < e:
+                pq.wgt_exp, pq.wgt_exp_outliers = fine, e
+                pq.outliers = int(np.count_nonzero(pq.exponents(values) == e))
+        ew = pq.exponents(w)
+        wq = quantize_weights(w, s, ew)
+        back = wq.astype(np.float64) * (2.0 ** ew / s)
+        pq.clipped = clipped_to_254(w, s, ew)
+        pq.zeroed = int(np.count_nonzero((wq == 0) & (w != 0)))
+        pq.rms_error = float(np.sqrt(np.mean((back - w) ** 2))) if w.size else 0.0
         g.node(dense).weight = back
-        if bias_carrier(graph, lif) == dense:
-            terms = current_biases(graph, lif)
-            quantized = [BiasTerm(t.start, quantize_weights(t.vector, s, e) * (2.0 ** e / s), t.origins) for t in terms]
-            pq.bias_starts = [t.start for t in terms]
-            pq.clipped += sum(clipped_to_254(t.vector, s, e) for t in terms)
-            if terms:
-                pq.bias_max_error = float(max(np.max(np.abs(q.vector - t.vector)) for q, t in zip(quantized, terms)))
+        if carried:
+            quantized = []
+            for t in carried:
+                et = pq.exponents(t.vector)
+                quantized.append(BiasTerm(t.start, quantize_weights(t.vector, s, et) * (2.0 ** et / s), t.origins))
+                pq.clipped += clipped_to_254(t.vector, s, et)
+            pq.bias_starts = [t.start for t in carried]
+            pq.bias_max_error = float(max(np.max(np.abs(q.vector - t.vector)) for q, t in zip(quantized, carried)))
             restore_biases(g, lif, quantized)
         record.projections.append(pq)
     for dense, lif in projections(graph):

@@ -3,7 +3,7 @@
 ``target.lower(graph, options)`` returns a ``LoihiArtefact`` that has already been checked
 against the IR reference (``validation.py``); ``target.check(...)`` measures the accuracy lost
 on a data set (``check.py``). Options: timing ("exact" | "paper"), scale ("auto" | "global" |
-"per-layer"), allow_reset_change (bool), source (model path).
+"per-layer" | "split"), allow_reset_change (bool), source (model path).
 """
 
 from __future__ import annotations
@@ -49,8 +49,9 @@ class LoihiArtefact:
             "layers": [
                 {"index": i, "name": lay.name, "type": lay.kind, "neurons": lay.n, "bias_sources": lay.always_on,
                  **({} if i == 0 else {"vThMant": lay.v_th_mant, "iDecay": lay.i_decay, "vDecay": lay.v_decay,
-                                       "refDelay": lay.ref_delay, "wgtExp": lay.wgt_exp,
-                                       **({"wgtExpRec": lay.wgt_exp_rec} if lay.weight_rec is not None else {}),
+                                       "refDelay": lay.ref_delay, "wgtExp": _exp_text(lay.wgt_exp),
+                                       **({"wgtExpRec": _exp_text(lay.wgt_exp_rec)} if lay.weight_rec is not None
+                                          else {}),
                                        "delay": _delay_text(lay.delay),
                                        **({"delay_rec": _delay_text(lay.delay_rec)} if lay.weight_rec is not None else {})})}
                 for i, lay in enumerate(net.layers)
@@ -111,6 +112,16 @@ def _delay_text(delay) -> Any:
 
     d = np.asarray(delay)
     return int(d) if d.ndim == 0 else f"per-synapse {int(d.min())}..{int(d.max())}"
+
+
+def _exp_text(exp) -> Any:
+    import numpy as np
+
+    e = np.asarray(exp)
+    if e.ndim == 0:
+        return int(e)
+    values, counts = np.unique(e, return_counts=True)
+    return "per-synapse " + ", ".join(f"{int(v)} ({int(c)})" for v, c in zip(values, counts))
 
 
 def _core_text(core_map: dict) -> str:

@@ -66,24 +66,27 @@ def _append_compartments(pre: LoihiLayer, k: int, arithmetic: str) -> None:
     pre.bias_exp = exp
     pre.weight = _pad_rows(pre.weight, k)
     pre.delay = _pad_rows(pre.delay, k)
+    pre.wgt_exp = _pad_rows(pre.wgt_exp, k)
     pre.weight_rec = _pad_square(pre.weight_rec, k)
     pre.delay_rec = _pad_square(pre.delay_rec, k)
+    pre.wgt_exp_rec = _pad_square(pre.wgt_exp_rec, k)
     pre.n += k
     pre.always_on += k
 
 
 def attach(pre: LoihiLayer, post: LoihiLayer, shift: int, terms: list[tuple[int, np.ndarray]],
-           arithmetic: str = "int") -> None:
+           arithmetic: str = "int", exponents: list | None = None) -> None:
     """Add bias-source columns for ``terms`` [(first IR step k, weight column (n,))] to ``post``.
 
     ``pre`` is the layer before ``post`` (the input layer for the first population); both are
-    changed in place. ``shift`` is ``post``'s timing shift.
+    changed in place. ``shift`` is ``post``'s timing shift. ``exponents``: each column's weight
+    exponent (an int or an (n,) array per term); by default the projection's own.
     """
     if not terms:
         return
     repeats = 1 if pre.kind == "input" else int(pre.ref_delay)
-    columns, delays = [], []
-    for start, column in terms:
+    columns, delays, exps = [], [], []
+    for j, (start, column) in enumerate(terms):
         first = shift + start - 1
         if first < 0:
             raise SnnccError("a current bias from IR step 0 needs the population shifted by one step (timing pass)",
@@ -92,8 +95,10 @@ def attach(pre: LoihiLayer, post: LoihiLayer, shift: int, terms: list[tuple[int,
             raise SnnccError(f"a current bias starting at IR step {start} needs a synaptic delay of "
                              f"{first + repeats - 1} steps; Loihi allows at most {MAX_EXTRA_DELAY}",
                              field=f"layer '{post.name}'")
+        exp = post.wgt_exp if exponents is None else exponents[j]
         for p in range(repeats):
             columns.append(np.asarray(column).reshape(-1, 1))
+            exps.append(np.broadcast_to(np.asarray(exp, np.int64), (post.n,)).reshape(-1, 1))
             delays.append(first + p)
     k = len(columns)
     if pre.kind == "input":
@@ -102,6 +107,9 @@ def attach(pre: LoihiLayer, post: LoihiLayer, shift: int, terms: list[tuple[int,
     else:
         _append_compartments(pre, k, arithmetic)
     n_old = post.weight.shape[1]
+    base_exp = np.broadcast_to(np.asarray(post.wgt_exp, np.int64), (post.n, n_old))
+    new_exp = np.concatenate([base_exp] + exps, axis=1)
+    post.wgt_exp = int(new_exp[0, 0]) if np.all(new_exp == new_exp[0, 0]) else new_exp
     base_delay = np.broadcast_to(np.asarray(post.delay, np.int64), (post.n, n_old))
     post.weight = np.concatenate([post.weight, np.concatenate(columns, axis=1).astype(post.weight.dtype)], axis=1)
     new_delay = np.concatenate([base_delay, np.broadcast_to(np.asarray(delays, np.int64), (post.n, k))], axis=1)

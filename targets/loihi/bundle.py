@@ -56,10 +56,13 @@ def netx_compat(network: LoihiNetwork) -> list[str]:
                          "sources for the next layer, timed by refDelay")
         if lay.ref_delay != 1:
             notes.append(f"/layer/{i}/neuron/refDelay = {lay.ref_delay} (netx's LIF has no refractory period)")
-        if lay.wgt_exp != 0:
-            notes.append(f"/layer/{i}/neuron/wgtExp = {lay.wgt_exp} (netx ignores weight exponents)")
-        if lay.weight_rec is not None and lay.wgt_exp_rec != 0:
-            notes.append(f"/layer/{i}/neuron/wgtExpRec = {lay.wgt_exp_rec} (snncc extension)")
+        for key, exp in (("wgtExp", lay.wgt_exp), ("wgtExpRec", lay.wgt_exp_rec if lay.weight_rec is not None else 0)):
+            if np.ndim(exp):
+                notes.append(f"/layer/{i}/neuron/{key}: one exponent per synapse, {sorted(set(np.unique(exp).tolist()))} "
+                             "(two synapse formats; snncc extension, netx has one exponent per layer)")
+            elif exp != 0:
+                notes.append(f"/layer/{i}/neuron/{key} = {exp} ("
+                             + ("netx ignores weight exponents)" if key == "wgtExp" else "snncc extension)"))
         if lay.weight_rec is not None and np.any(np.asarray(lay.delay_rec) != 0):
             notes.append(f"/layer/{i}/delay_rec (snncc extension: recurrent synaptic delay)")
         if lay.bias is not None and lay.bias_exp != 6:
@@ -88,6 +91,14 @@ def _json(obj: Any) -> str:
 
 def _delay_array(delay, shape) -> np.ndarray:
     return np.ascontiguousarray(np.broadcast_to(np.asarray(delay, np.uint8), shape))
+
+
+def _exponent_field(group: h5py.Group, key: str, exp) -> None:
+    """A weight exponent: a scalar, or (split exponents) an int8 array shaped like the weights."""
+    if np.ndim(exp):
+        _array(group, key, exp, np.int8)
+    else:
+        _scalar(group, key, exp, np.int64)
 
 
 def write_bundle(network: LoihiNetwork, path: str | Path, extra: dict[str, Any] | None = None) -> None:
@@ -120,10 +131,11 @@ def write_bundle(network: LoihiNetwork, path: str | Path, extra: dict[str, Any] 
                 nrn = g.create_group("neuron")
                 _string(nrn, "type", "LOIHI")
                 for key, value in (("vThMant", lay.v_th_mant), ("iDecay", lay.i_decay), ("vDecay", lay.v_decay),
-                                   ("refDelay", lay.ref_delay), ("wgtExp", lay.wgt_exp)):
+                                   ("refDelay", lay.ref_delay)):
                     _scalar(nrn, key, value, np.int64)
+                _exponent_field(nrn, "wgtExp", lay.wgt_exp)
                 if lay.weight_rec is not None:
-                    _scalar(nrn, "wgtExpRec", lay.wgt_exp_rec, np.int64)
+                    _exponent_field(nrn, "wgtExpRec", lay.wgt_exp_rec)
                 if lay.bias is not None:
                     _scalar(nrn, "biasExp", lay.bias_exp, np.int64)
             s = f.create_group(SNNCC_GROUP)
@@ -222,6 +234,23 @@ def _shape_width(group: h5py.Group, path: str, where: str) -> int:
     if shape.size == 0 or np.any(shape < 1) or np.any(shape != np.round(shape)):
         _fail(path, f"{where}/shape", "must be positive integers")
     return int(np.prod(shape))
+
+
+def _exponents(group: h5py.Group, key: str, path: str, where: str, shape: tuple, default):
+    """A weight exponent in -6..7: one value, or one per synapse (an array shaped like the weights)."""
+    if key in group and isinstance(group[key], h5py.Dataset) and group[key].size > 1:
+        ds = group[key]
+        if ds.dtype.kind not in "iu" or ds.shape != tuple(shape):
+            _fail(path, f"{where}/{key}", f"per-synapse exponents must be an integer array shaped {tuple(shape)}")
+        value = np.asarray(ds[()], np.int64)
+        low, high = int(value.min()), int(value.max())
+    else:
+        if default is None and key not in group:
+            _fail(path, f"{where}/{key}", "missing (required with per-synapse feed-forward exponents)")
+        value = low = high = _number(group, key, path, where, default=default)
+    if not (-6 <= low and high <= 7):
+        _fail(path, f"{where}/{key}", f"must lie in -6..7 (integer chip weights), got {low}..{high}")
+    return value
 
 
 def _always_on(group: h5py.Group, path: str, where: str, n: int) -> int:
@@ -329,12 +358,10 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
         lay.ref_delay = _number(nrn, "refDelay", path, nw, default=1)
         if not 1 <= lay.ref_delay <= 63:
             _fail(path, f"{nw}/refDelay", f"must lie in 1..63, got {lay.ref_delay}")
-        lay.wgt_exp = _number(nrn, "wgtExp", path, nw, default=0)
+        lay.wgt_exp = _exponents(nrn, "wgtExp", path, nw, lay.weight.shape, default=0)
         if lay.weight_rec is not None:  # SLAYER's recurrent layers share one exponent
-            lay.wgt_exp_rec = _number(nrn, "wgtExpRec", path, nw, default=lay.wgt_exp)
-        for key, value in (("wgtExp", lay.wgt_exp), ("wgtExpRec", lay.wgt_exp_rec)):
-            if not -6 <= value <= 7:
-                _fail(path, f"{nw}/{key}", f"must lie in -6..7 (integer chip weights), got {value}")
+            lay.wgt_exp_rec = _exponents(nrn, "wgtExpRec", path, nw, lay.weight_rec.shape,
+                                         default=lay.wgt_exp if np.ndim(lay.wgt_exp) == 0 else None)
         if "bias" in g:
             b = g["bias"]
             if not isinstance(b, h5py.Dataset) or b.dtype.kind not in "iuf":
@@ -395,6 +422,11 @@ def check_network(network: LoihiNetwork, where: str = "<network>") -> None:
                 raise SnnccError(f"shape {w.shape} does not chain, expected {shape}", file=where, field=f"/layer/{i}/{key}")
             if w.size and (w.min() < -256 or w.max() > 254 or np.any(w % 2)):
                 raise SnnccError("weights must be even integers in [-256, 254]", file=where, field=f"/layer/{i}/{key}")
+        for key, exp, w in (("wgtExp", lay.wgt_exp, lay.weight), ("wgtExpRec", lay.wgt_exp_rec, lay.weight_rec)):
+            e = np.asarray(exp)
+            if (e.ndim and (w is None or e.shape != np.shape(w))) or (e.size and not (-6 <= e.min() and e.max() <= 7)):
+                raise SnnccError("weight exponents must lie in -6..7, one per layer or one per synapse",
+                                 file=where, field=f"/layer/{i}/neuron/{key}")
         for key in ("i_decay", "v_decay"):
             if not 0 <= getattr(lay, key) <= 4096:
                 raise SnnccError("decays must lie in 0..4096", file=where, field=f"/layer/{i}/neuron/{key}")

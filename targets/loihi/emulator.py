@@ -125,7 +125,8 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
         state.append({"u": z.copy(), "v": z.copy(), "ref": np.zeros((batch, layer.n), np.int64)})
         hist.append([])
         rec_s[i], rec_u[i], rec_v[i] = hist[i], [], []
-    def chip(weight, exp):  # w_chip = w * 2**(6 + wgtExp)
+    def chip(weight, exp):  # w_chip = w * 2**(6 + wgtExp); wgtExp an int or one per synapse
+        exp = np.asarray(exp, np.int64)
         return np.asarray(weight, dt) * (2.0 ** (6 + exp) if as_float else np.int64(1) << (6 + exp))
 
     ff = [None] + [_by_delay(chip(lay.weight, lay.wgt_exp), lay.delay) for lay in layers[1:]]
@@ -202,7 +203,8 @@ class _Program:
 
 def _chip_weights(weight, exp: int, where: str) -> np.ndarray:
     """w_chip = w * 2**(6 + wgtExp) as int64 (an integer only for wgtExp >= -6)."""
-    if exp < -6:
+    exp = np.asarray(exp, np.int64)
+    if exp.size and exp.min() < -6:
         raise SnnccError("wgtExp below -6 gives fractional chip weights", field=where)
     return np.asarray(weight, np.int64) << (6 + exp)
 

@@ -107,6 +107,9 @@ def relay_layer(layer: LoihiLayer, chip: ChipSpec = LOIHI1) -> tuple[LoihiLayer,
     rest_w = np.abs(w[:, rest])
     nz = rest_w[rest_w > 0]
     omega = int(np.clip(2 * round(float(np.median(nz)) / 2) if nz.size else 2, 2, MAX_QUANTUM))
+    if np.ndim(layer.wgt_exp):
+        raise SnnccError("relaying a projection with per-synapse weight exponents is not supported",
+                         field=f"layer '{layer.name}'")
     e = int(layer.wgt_exp)
     if e < 0:
         step = 2 ** (-e)

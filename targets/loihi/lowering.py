@@ -130,14 +130,16 @@ def build_network(graph: Graph, layers: list[ChainLayer], quant: QuantizationRec
         pq, lq = proj_q[c.ff], layer_q[c.lif]
         layer = LoihiLayer(
             name=c.lif, kind="dense_rec" if c.rec else "dense", n=op.n,
-            weight=quantize_weights(graph.node(c.ff).weight, pq.scale, pq.wgt_exp), wgt_exp=pq.wgt_exp,
+            weight=quantize_weights(graph.node(c.ff).weight, pq.scale, pq.exponents(graph.node(c.ff).weight)),
+            wgt_exp=pq.exponents(graph.node(c.ff).weight),
             delay=int(extra[(c.pre, c.ff)]),
             v_th_mant=lq.v_th_mant, i_decay=lq.i_decay, v_decay=lq.v_decay, ref_delay=timing.ref_delay[c.lif],
         )
         if c.rec:
             rq = proj_q[c.rec]
-            layer.weight_rec = quantize_weights(graph.node(c.rec).weight, rq.scale, rq.wgt_exp)
-            layer.wgt_exp_rec = rq.wgt_exp
+            w_rec = graph.node(c.rec).weight
+            layer.weight_rec = quantize_weights(w_rec, rq.scale, rq.exponents(w_rec))
+            layer.wgt_exp_rec = rq.exponents(w_rec)
             layer.delay_rec = int(extra[(c.lif, c.rec)])
         if lq.bias_mant is not None:
             layer.bias = np.asarray(lq.bias_mant, np.int64)
@@ -145,8 +147,10 @@ def build_network(graph: Graph, layers: list[ChainLayer], quant: QuantizationRec
         net_layers.append(layer)
     for i, c in enumerate(layers, start=1):
         pq = proj_q[c.ff]
-        terms = [(t.start, quantize_weights(t.vector, pq.scale, pq.wgt_exp)) for t in current_biases(graph, c.lif)]
-        bias_sources.attach(net_layers[i - 1], net_layers[i], timing.shifts.get(c.lif, 0), terms)
+        terms = current_biases(graph, c.lif)
+        columns = [(t.start, quantize_weights(t.vector, pq.scale, pq.exponents(t.vector))) for t in terms]
+        bias_sources.attach(net_layers[i - 1], net_layers[i], timing.shifts.get(c.lif, 0), columns,
+                            exponents=[pq.exponents(t.vector) for t in terms])
     return LoihiNetwork(layers=net_layers, t_sample=int(t_sample), metadata=dict(metadata))
 
 

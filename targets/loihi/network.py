@@ -10,6 +10,8 @@ itself through ``weight_rec`` (n, n). Integer fields follow Loihi's registers:
     ref_delay: steps a neuron stays silent after a spike, including the spike step (1 = none)
     delay / delay_rec: extra synaptic delay in steps (0..62) on top of the one-step delivery;
     a scalar for the whole projection or an int array shaped like the weights
+    wgt_exp / wgt_exp_rec: an int, or an int array shaped like the weights when a projection
+    uses two synapse formats (a fine exponent for the bulk, a coarse one for outliers)
     always_on: the layer's last ``always_on`` units are bias sources (``bias_sources.py``): input
     axons the driver holds at 1 every step, or compartments that fire on their own
 """
@@ -31,8 +33,8 @@ class LoihiLayer:
     n: int
     weight: np.ndarray | None = None        # (n, n_prev) even ints, None for the input layer
     weight_rec: np.ndarray | None = None    # (n, n) even ints for dense_rec
-    wgt_exp: int = 0
-    wgt_exp_rec: int = 0                    # snncc extension: exponent of the recurrent matrix
+    wgt_exp: Any = 0                        # int, or int array like weight (split exponents)
+    wgt_exp_rec: Any = 0                    # snncc extension: exponent of the recurrent matrix
     delay: Any = 0                          # extra synaptic delay (steps), int or int array like weight
     delay_rec: Any = 0
     bias: np.ndarray | None = None          # bias mantissa per neuron

@@ -5,9 +5,10 @@ scale="auto" keeps the paper's global rule unless a screen finds projections it 
     range used     max|W_k| * w_scale / 256 < 1/8   (a projection left with fewer than 5 bits)
     max|W| > 256                                     (w_scale would be 0)
 When flagged, candidates are measured by emulating calibration inputs and comparing every layer's
-spike trains with the float model (in the order Loihi runs): the global rule, per-layer scales, and
-per-layer scales with each flagged projection's weight exponent lowered 1..3 steps (finer steps,
-outliers clipped). A candidate replaces the paper's rule only if it cuts the error by >= 25 %.
+spike trains with the float model (in the order Loihi runs): the global rule, per-layer scales,
+and per-layer scales with split exponents on the projections that have outliers (the outliers keep
+the exponent that fits them, the bulk of the weights gets a finer one: two synapse formats). A
+candidate replaces the paper's rule only if it cuts the error by >= 25 %.
 """
 
 from __future__ import annotations
@@ -19,10 +20,9 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.passes.quantize import (QuantizationRecord, exponent_for, layer_scales, projection_max, projections,
-                                   quantize_graph)
+from snncc.passes.quantize import OUTLIER_RATIO, QuantizationRecord, projection_max, projections, quantize_graph
 
-OUTLIER_RATIO = 20.0
+OUTLIER_REASON = "max|W| is"
 MIN_RANGE = 1.0 / 8.0
 IMPROVEMENT = 0.75          # a candidate must cut the measured error by at least 25 %
 
@@ -43,7 +43,7 @@ def screen(graph: Graph) -> Screen:
         nz = w[w > 0]
         med = float(np.median(nz)) if nz.size else 0.0
         if med > 0 and m / med > OUTLIER_RATIO:
-            flagged[dense] = f"max|W| is {m / med:.0f}x the median |W|"
+            flagged[dense] = f"{OUTLIER_REASON} {m / med:.0f}x the median |W|"
         elif possible and m * np.floor(256.0 / top) / 256.0 < MIN_RANGE:
             flagged[dense] = f"uses {100 * m * np.floor(256.0 / top) / 256.0:.1f}% of the 8-bit range under one global scale"
     return Screen(flagged, possible)
@@ -58,9 +58,15 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
         return quantize_graph(graph, "global", reason="requested: the paper's rule (one w_scale, wgtExp 0)")
     if rule == "per-layer":
         return quantize_graph(graph, "per-layer", reason="requested: one scale per layer, weight exponent per projection")
-    if rule != "auto":
-        raise SnnccError("scale must be one of global, per-layer, auto", field="--scale")
+    if rule not in ("auto", "split"):
+        raise SnnccError("scale must be one of global, per-layer, split, auto", field="--scale")
     sc = screen(graph)
+    outliers = {d for d, why in sc.flagged.items() if why.startswith(OUTLIER_REASON)}
+    if rule == "split":
+        return quantize_graph(graph, "per-layer", split=outliers, reason=(
+            f"requested: per-layer scales, split exponents on the projections with outliers {sorted(outliers)}"
+            if outliers else f"requested split, but no projection has outliers (max|W| > {OUTLIER_RATIO:.0f}x its "
+            "median): per-layer scales"))
     if sc.global_possible and not sc.flagged:
         return quantize_graph(graph, "global", reason="auto: the paper's global rule; no outlier weights (every "
                               f"max|W| <= {OUTLIER_RATIO:.0f}x its median, every projection uses >= 1/8 of the 8-bit range)")
@@ -70,28 +76,10 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
         candidates.append(("global", g, r, measure(g, r)))
     g, r = quantize_graph(graph, "per-layer")
     candidates.append(("per-layer", g, r, measure(g, r)))
-    scales, _ = layer_scales(graph, "per-layer")
-    exps = {p.dense: p.wgt_exp for p in r.projections}
-    best_exps = dict(exps)
-    best_err = candidates[-1][3]
-    for dense in sc.flagged:
-        target = next(lif for d, lif in projections(graph) if d == dense)
-        base = exponent_for(projection_max(graph, dense, target), scales[target])
-        worse = 0
-        for shrink in range(1, 6):
-            trial = dict(best_exps)
-            trial[dense] = max(base - shrink, -6)
-            if trial[dense] == best_exps[dense]:
-                break
-            g, r = quantize_graph(graph, "per-layer", exponents=trial)
-            err = measure(g, r)
-            candidates.append((f"per-layer, {dense} wgtExp {trial[dense]}", g, r, err))
-            if err < best_err:
-                best_err, best_exps, worse = err, trial, 0
-            else:
-                worse += 1
-                if worse == 2:
-                    break
+    if outliers:
+        g, r = quantize_graph(graph, "per-layer", split=outliers)
+        if any(p.wgt_exp_outliers is not None for p in r.projections):
+            candidates.append((f"per-layer, split exponents on {sorted(outliers)}", g, r, measure(g, r)))
     errors = {name: err for name, _, _, err in candidates}
     paper = errors.get("global")
     name, g, r, err = min(candidates, key=lambda c: c[3])

@@ -12,8 +12,10 @@ def even(rng, shape, lo=-256, hi=254):
     return (rng.integers(lo // 2, hi // 2 + 1, size=shape) * 2).astype(np.int16)
 
 
-def random_network(seed: int, *, recurrent=True, per_synapse_delays=True, bias=True, big=False) -> LoihiNetwork:
-    """A random 3-layer network; ``big`` uses weight exponents large enough to overflow q and u."""
+def random_network(seed: int, *, recurrent=True, per_synapse_delays=True, bias=True, big=False,
+                   split_exponents=False) -> LoihiNetwork:
+    """A random 3-layer network; ``big`` uses weight exponents large enough to overflow q and u;
+    ``split_exponents`` gives the hidden layer's projections one exponent per synapse (two values)."""
     rng = np.random.default_rng(seed)
     n_in, n_h, n_out = 7, 11, 5
     wexp = 7 if big else int(rng.integers(-2, 3))
@@ -28,6 +30,10 @@ def random_network(seed: int, *, recurrent=True, per_synapse_delays=True, bias=T
         hidden.weight_rec = even(rng, (n_h, n_h))
         hidden.wgt_exp_rec = int(rng.integers(-3, 3)) if not big else 6
         hidden.delay_rec = rng.integers(0, 3, (n_h, n_h)) if per_synapse_delays else 1
+    if split_exponents:
+        hidden.wgt_exp = np.where(rng.random((n_h, n_in)) < 0.1, 3, -4)
+        if recurrent:
+            hidden.wgt_exp_rec = np.where(rng.random((n_h, n_h)) < 0.1, 2, -5)
     if bias:
         hidden.bias = rng.integers(-300, 300, n_h)
         hidden.bias_exp = int(rng.integers(0, 7))
@@ -60,6 +66,8 @@ def chip_model(network: LoihiNetwork, x: np.ndarray):
     def delay_of(d, j, i):
         return int(d) if np.ndim(d) == 0 else int(d[j][i])
 
+    exponent_of = delay_of   # a scalar, or one per synapse
+
     state = {i: {"u": [0] * l.n, "v": [0] * l.n, "r": [0] * l.n} for i, l in enumerate(layers) if i}
     for i in range(1, len(layers)):
         spikes[i], us[i], vs[i] = [], [], []
@@ -76,7 +84,7 @@ def chip_model(network: LoihiNetwork, x: np.ndarray):
                     for k in range(len(w[j])):
                         ts = t - 1 - delay_of(d, j, k)
                         if ts >= 0 and spikes[src_layer][ts][k]:
-                            q += int(w[j][k]) * 2 ** (6 + e)
+                            q += int(w[j][k]) * 2 ** (6 + exponent_of(e, j, k))
                 qw = to_signed(q, 21)
                 counts["q_wrap"] += qw != q
                 u_raw = decay(st["u"][j], lay.i_decay) + qw

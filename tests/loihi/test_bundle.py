@@ -23,7 +23,7 @@ def _assert_same(a, b):
     for x, y in zip(a.layers, b.layers):
         for f in FIELDS:
             if x.kind != "input" or f in ("kind", "n"):
-                assert getattr(x, f) == getattr(y, f), f
+                assert np.array_equal(getattr(x, f), getattr(y, f)), f
         for f in ("weight", "weight_rec", "bias", "delay", "delay_rec"):
             vx, vy = getattr(x, f), getattr(y, f)
             if x.kind == "input" or (vx is None and vy is None):
@@ -54,9 +54,27 @@ def test_bundle_round_trip_and_byte_identity(tmp_path):
 
 def test_random_networks_with_per_synapse_delays_and_bias_round_trip(tmp_path):
     for seed in range(4):
-        net = random_network(seed)
+        net = random_network(seed, split_exponents=seed >= 2)
         write_bundle(net, tmp_path / "r.net")
         _assert_same(net, read_bundle(tmp_path / "r.net"))
+
+
+def test_per_synapse_exponents_are_checked_on_read_and_write(tmp_path):
+    net = random_network(0, split_exponents=True)
+    path = tmp_path / "s.net"
+    write_bundle(net, path)
+    with h5py.File(path, "r") as f:
+        assert f["layer/1/neuron/wgtExp"].shape == net.layers[1].weight.shape
+    with h5py.File(path, "r+") as f:
+        e = f["layer/1/neuron/wgtExpRec"][()]
+        del f["layer/1/neuron/wgtExpRec"]
+        f["layer/1/neuron/wgtExpRec"] = e[:, :-1]
+    with pytest.raises(SnnccError, match="wgtExpRec: per-synapse exponents must be an integer array shaped"):
+        read_bundle(path)
+    net.layers[1].wgt_exp = np.full(net.layers[1].weight.shape, 9)
+    with pytest.raises(SnnccError, match="weight exponents must lie in -6..7"):
+        write_bundle(net, tmp_path / "t.net")
+    assert not (tmp_path / "t.net").exists()
 
 
 def _slayer_v1(path, rng):

@@ -99,3 +99,41 @@ def test_per_layer_scale_uses_exponents_and_stays_exact():
     assert art.validation["quantized_params_exact"] and art.validation["kernel_exact"]
     # every projection fills at least half its 8-bit range
     assert all(p["range_used"] > 0.5 for p in q["projections"])
+
+
+def test_split_exponents_keep_small_weights_and_outliers():
+    """Outliers keep the exponent that fits them; the bulk gets a finer one (two synapse formats)."""
+    from snncc.passes.quantize import bulk_max, synapse_exponents
+
+    w = np.full((4, 5), 0.01)
+    w[0, 0] = 1.0                                     # 100x the rest
+    assert bulk_max(w) == pytest.approx(0.01)
+    e = synapse_exponents(w, 256, -6, 0)
+    assert e[0, 0] == 0 and np.all(e.flat[1:] == -6)
+    g = small_graph(seed=2)
+    rec = g.node("w_rec").weight
+    rec.flat[[3, 50, 97]] = 100 * np.median(np.abs(rec))
+    plain, rp = quantize_graph(g, "per-layer")
+    split, rs = quantize_graph(g, "per-layer", split={"w_rec"})
+    ps = {p.dense: p for p in rs.projections}["w_rec"]
+    pp = {p.dense: p for p in rp.projections}["w_rec"]
+    assert ps.wgt_exp_outliers == pp.wgt_exp and ps.wgt_exp < pp.wgt_exp and ps.outliers == 3
+    assert ps.rms_error < pp.rms_error / 4 and ps.zeroed < pp.zeroed
+    exps = ps.exponents(rec)
+    np.testing.assert_allclose(split.node("w_rec").weight, quantize_weights(rec, ps.scale, exps) * 2.0 ** exps / ps.scale)
+    # the outliers themselves are quantized as before
+    np.testing.assert_allclose(split.node("w_rec").weight.flat[[3, 50, 97]], plain.node("w_rec").weight.flat[[3, 50, 97]])
+
+
+def test_split_lowers_exactly_and_auto_prefers_it_on_outliers():
+    g = small_graph(seed=3)
+    rec = g.node("w_rec").weight
+    rec.flat[[5, 77, 130]] = 100 * np.median(np.abs(rec))
+    art = target.lower(g, {"scale": "split"})
+    assert art.validation["timing_exact"] and art.validation["quantized_params_exact"] and art.validation["kernel_exact"]
+    exp = art.network.layers[1].wgt_exp_rec
+    assert np.ndim(exp) == 2 and np.count_nonzero(exp == exp.max()) == 3
+    auto = target.lower(g, {"scale": "auto"})
+    errors = auto.quantization["calibration"]["errors"]
+    split_name = next(k for k in errors if k.startswith("per-layer, split"))
+    assert errors[split_name] < errors["per-layer"], errors

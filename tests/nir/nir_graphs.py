@@ -161,3 +161,94 @@ def run_cli(args: list, capsys) -> tuple[int, str, str]:
     code = run([str(a) for a in args])
     out = capsys.readouterr()
     return code, out.out, out.err
+
+
+# -- a trained graph ---------------------------------------------------------------------------------
+def rate_patterns(rng, classes=7, channels=12, active=3, base=0.02, high=0.2) -> np.ndarray:
+    """Per class, a firing probability per channel: ``active`` random channels at ``high``, the rest ``base``."""
+    p = np.full((classes, channels), base)
+    for c in range(classes):
+        p[c, rng.choice(channels, size=active, replace=False)] = high
+    return p
+
+
+def pattern_inputs(rng, patterns: np.ndarray, batch: int, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """Random sparse spike trains, each drawn from a class's rate pattern: (x (B, T, C) 0/1, labels (B,))."""
+    labels = rng.integers(0, patterns.shape[0], batch)
+    x = (rng.random((batch, steps, patterns.shape[1])) < patterns[labels][:, None, :]).astype(np.float64)
+    return x, labels
+
+
+def train_snntorch_style(model: BrailleRSNN, rng, patterns: np.ndarray, steps=100, iterations=150, batch=64,
+                         lr=5e-3, freeze_outliers=False) -> BrailleRSNN:
+    """Train ``model``'s weights and biases in snnTorch's step order (the order of ``simulate``).
+
+    Fast-sigmoid surrogate, reset detached, loss = cross-entropy of the output spike counts; alpha,
+    beta and thresholds stay fixed (one per layer, as Loihi needs). ``freeze_outliers`` keeps
+    recurrent weights > 20x the median |w| fixed, so the trained graph still has them.
+    """
+    import torch
+
+    torch.manual_seed(int(rng.integers(1 << 31)))
+    names = ("w1", "b1", "w_rec", "b_rec", "w2", "b2")
+    params = {k: torch.tensor(getattr(model, k), dtype=torch.float32, requires_grad=True) for k in names}
+    med = float(np.median(np.abs(model.w_rec)))
+    frozen = torch.tensor(np.abs(model.w_rec) > 20 * med) if freeze_outliers else None
+    opt = torch.optim.Adam(params.values(), lr=lr)
+
+    def spike(v):  # Heaviside forward, fast-sigmoid gradient
+        sg = v / (1 + 10 * v.abs())
+        return (v > 0).float().detach() + sg - sg.detach()
+
+    layer = {k: [torch.tensor(float(getattr(model, k).__dict__[a][0])) for a in ("alpha", "beta", "threshold")]
+             for k in ("hidden", "out")}
+    for _ in range(iterations):
+        x, y = pattern_inputs(rng, patterns, batch, steps)
+        x = torch.tensor(x, dtype=torch.float32)
+        p = params
+        (a1, b1, t1), (a2, b2, t2) = layer["hidden"], layer["out"]
+        syn1 = mem1 = spk1 = torch.zeros(batch, p["w1"].shape[0])
+        syn2 = mem2 = torch.zeros(batch, p["w2"].shape[0])
+        count = 0
+        for t in range(steps):
+            syn1 = a1 * syn1 + x[:, t] @ p["w1"].T + p["b1"] + spk1 @ p["w_rec"].T + p["b_rec"]
+            mem1 = b1 * mem1 + syn1
+            spk1 = spike(mem1 - t1)
+            mem1 = mem1 * (1 - spk1.detach())
+            syn2 = a2 * syn2 + spk1 @ p["w2"].T + p["b2"]
+            mem2 = b2 * mem2 + syn2
+            spk2 = spike(mem2 - t2)
+            mem2 = mem2 * (1 - spk2.detach())
+            count = count + spk2
+        loss = torch.nn.functional.cross_entropy(count, torch.tensor(y))
+        opt.zero_grad()
+        loss.backward()
+        if frozen is not None:
+            p["w_rec"].grad[frozen] = 0
+        opt.step()
+    for k in names:
+        setattr(model, k, params[k].detach().double().numpy())
+    return model
+
+
+def trained_braille_rsnn(seed: int, outliers: bool = False, steps: int = 100, iterations: tuple[int, int] = (150, 100),
+                         batch: int = 64) -> tuple[BrailleRSNN, np.ndarray]:
+    """A snnTorch-style 12 -> 38 -> 7 graph with biases, trained on 7 rate patterns: (model, patterns).
+
+    ``outliers``: after training, 7 recurrent weights are set to 100x the median |w| and the rest
+    fine-tuned around them (frozen), as graphs from other frameworks arrive with outliers that matter.
+    """
+    import copy
+
+    rng = np.random.default_rng(seed)
+    model = BrailleRSNN.random(rng, bias=True, scale=0.3, per_neuron=False, rec_std=0.1)
+    patterns = rate_patterns(rng)
+    model = train_snntorch_style(model, rng, patterns, steps=steps, iterations=iterations[0], batch=batch)
+    if outliers:
+        model = copy.deepcopy(model)
+        w = model.w_rec
+        idx = rng.choice(w.size, size=max(2, w.size // 200), replace=False)
+        w.flat[idx] = np.sign(w.flat[idx]) * 100 * np.median(np.abs(w))
+        model = train_snntorch_style(model, rng, patterns, steps=steps, iterations=iterations[1], batch=batch,
+                                     freeze_outliers=True)
+    return model, patterns

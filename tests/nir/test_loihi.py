@@ -9,7 +9,7 @@ import json
 import nir
 import numpy as np
 
-from nir_graphs import BrailleRSNN, run_cli, sparse_inputs
+from nir_graphs import BrailleRSNN, pattern_inputs, run_cli, sparse_inputs, trained_braille_rsnn
 from snncc.frontends import LoadOptions, load_model
 from snncc.ir.simulate import simulate
 
@@ -72,20 +72,40 @@ def test_braille_sized_nir_graph_on_loihi(tmp_path, capsys):
 
 
 def test_braille_sized_with_recurrent_outliers(tmp_path, capsys):
-    """A few recurrent weights 100x the median |w|: a single global 8-bit scale loses the small weights.
+    """A few recurrent weights 100x the median |w|: one 8-bit scale crushes the small weights; split
+    exponents (outliers in a coarse synapse format, the bulk in a fine one) keep them.
 
-    Measured (200 samples): global 0.63, per-layer 0.74, auto 0.63 (auto keeps global here); the
-    goal of 0.95 is NOT reached by the current Loihi scaling rules. The bounds guard regressions."""
+    This random graph is near-chaotic: the float model against itself with 1 % weight noise agrees
+    on only 0.81 of these inputs, so no 8-bit deployment can reach 0.95 here (bench/README.md).
+    Measured (200 samples): global 0.63, per-layer 0.74, split 0.82, auto 0.82 (picks split)."""
     _, src, x = _braille(tmp_path, outliers=True)
     figures = {}
-    for rule in ("global", "per-layer"):
+    for rule in ("global", "per-layer", "split", "auto"):
         net_path = tmp_path / f"g_{rule}.net"
-        code, _, err = _compile(src, net_path, capsys, "--scale", rule)
+        code, out, err = _compile(src, net_path, capsys, "--scale", rule, "--json")
         assert code == 0, err
-        figures[rule], _, _ = _agreement(src, net_path, x)
+        figures[rule], net, _ = _agreement(src, net_path, x)
+        if rule in ("split", "auto"):
+            assert np.ndim(net.layers[1].wgt_exp_rec) == 2 and len(np.unique(net.layers[1].wgt_exp_rec)) == 2
+            assert "split" in json.loads(out)["scale_reason"]
     assert figures["global"] >= 0.55 and figures["per-layer"] >= 0.70, figures
+    assert figures["split"] >= figures["per-layer"] + 0.05 and figures["auto"] == figures["split"], figures
 
 
+def test_trained_graph_with_outliers_agrees_on_loihi(tmp_path, capsys):
+    """The issue's goal on a trained graph: snnTorch-style 12 -> 38 -> 7 with biases, trained on 7 random
+    rate patterns (shortened training), 7 recurrent outliers at 100x the median |w| fine-tuned around;
+    compiled with the default scale rule and emulated bit-exactly on fresh random sparse inputs."""
+    model, patterns = trained_braille_rsnn(0, outliers=True, iterations=(60, 40), batch=32)
+    src = tmp_path / "trained.nir"
+    nir.write(str(src), model.to_nir())
+    x, labels = pattern_inputs(np.random.default_rng(7), patterns, SAMPLES, STEPS)
+    net_path = tmp_path / "trained.net"
+    code, out, err = _compile(src, net_path, capsys, "--json")
+    assert code == 0, err
+    assert "split" in json.loads(out)["scale_reason"]
+    agree, _, res = _agreement(src, net_path, x.astype(np.uint8))
+    assert agree >= 0.95, agree   # measured 0.97
 def test_subtract_reset_refused_for_loihi_unless_allowed(tmp_path, capsys):
     _, src, x = _braille(tmp_path)
     out = tmp_path / "s.net"
