@@ -147,11 +147,13 @@ class ProjectionQuant:
 
 @dataclass
 class LayerQuant:
+    """Registers of one population: ints, or per-neuron lists (one compartment profile per neuron)."""
+
     lif: str
     scale: float
-    v_th_mant: int
-    i_decay: int
-    v_decay: int
+    v_th_mant: int | list[int]
+    i_decay: int | list[int]
+    v_decay: int | list[int]
     bias_mant: list[int] | None = None
     bias_exp: int | None = None
     bias_max_error: float | None = None
@@ -199,11 +201,16 @@ def projection_max(graph: Graph, dense: str, lif: str) -> float:
     return m
 
 
-def _uniform(arr: np.ndarray, what: str, layer: str) -> float:
-    if not np.all(arr == arr[0]):
-        raise SnnccError(f"{what} differs between neurons; the Loihi lowering needs one value per layer "
-                         "(one compartment profile)", field=f"node '{layer}'.{what}")
-    return float(arr[0])
+def per_neuron(values: np.ndarray, rule) -> np.ndarray:
+    """``rule`` applied to each neuron's value (once per distinct value)."""
+    uniq, inv = np.unique(np.asarray(values, np.float64), return_inverse=True)
+    return np.array([rule(float(u)) for u in uniq])[inv.reshape(-1)]
+
+
+def register_value(arr: np.ndarray):
+    """One int when every neuron shares the register (one compartment profile), else a list of ints."""
+    arr = np.asarray(arr)
+    return int(arr[0]) if np.all(arr == arr[0]) else [int(a) for a in arr]
 
 
 def exponent_for(max_abs: float, scale: float, shrink: int = 0) -> int:
@@ -298,23 +305,20 @@ def quantize_graph(
             raise SnnccError("a LIF population without an incoming Dense projection cannot be quantized",
                              field=f"node '{name}'")
         s = scales[name]
-        theta = _uniform(op.threshold, "threshold", name)
-        if not math.isfinite(theta):
+        if not np.all(np.isfinite(op.threshold)):
             raise SnnccError("a non-spiking integrator (threshold +inf) has no Loihi equivalent here: Loihi "
                              "reads out spikes", field=f"node '{name}'.threshold")
-        tau_syn = _uniform(op.tau_syn, "tau_syn", name)
-        tau_mem = _uniform(op.tau_mem, "tau_mem", name)
-        lq = LayerQuant(
-            lif=name, scale=s, v_th_mant=threshold_mantissa(theta, s, name),
-            i_decay=decay_register(graph.dt, tau_syn, op.discretisation),
-            v_decay=decay_register(graph.dt, tau_mem, op.discretisation),
-        )
+        vth = per_neuron(op.threshold, lambda th: threshold_mantissa(th, s, name))
+        i_dec = per_neuron(op.tau_syn, lambda tau: decay_register(graph.dt, tau, op.discretisation))
+        v_dec = per_neuron(op.tau_mem, lambda tau: decay_register(graph.dt, tau, op.discretisation))
+        lq = LayerQuant(lif=name, scale=s, v_th_mant=register_value(vth), i_decay=register_value(i_dec),
+                        v_decay=register_value(v_dec))
         q = g.node(name)
-        q.threshold = np.full(op.n, lq.v_th_mant / s)
+        q.threshold = vth / s
         q.discretisation = "exp"
         # decays read back: alpha = 1 - iDecay/4096 expressed through an equivalent tau
-        q.tau_syn = np.full(op.n, _tau_for(graph.dt, lq.i_decay))
-        q.tau_mem = np.full(op.n, _tau_for(graph.dt, lq.v_decay))
+        q.tau_syn = per_neuron(i_dec, lambda r: _tau_for(graph.dt, int(r)))
+        q.tau_mem = per_neuron(v_dec, lambda r: _tau_for(graph.dt, int(r)))
         if op.bias is not None and op.bias_placement == "voltage":
             mant, bexp = bias_registers(op.bias, s)
             back = mant.astype(np.float64) * 2.0 ** bexp / (64.0 * s)

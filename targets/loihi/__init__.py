@@ -48,7 +48,8 @@ class LoihiArtefact:
             "t_sample": net.t_sample,
             "layers": [
                 {"index": i, "name": lay.name, "type": lay.kind, "neurons": lay.n, "bias_sources": lay.always_on,
-                 **({} if i == 0 else {"vThMant": lay.v_th_mant, "iDecay": lay.i_decay, "vDecay": lay.v_decay,
+                 **({} if i == 0 else {"vThMant": _register_text(lay.v_th_mant), "iDecay": _register_text(lay.i_decay),
+                                       "vDecay": _register_text(lay.v_decay),
                                        "refDelay": lay.ref_delay, "wgtExp": _exp_text(lay.wgt_exp),
                                        **({"wgtExpRec": _exp_text(lay.wgt_exp_rec)} if lay.weight_rec is not None
                                           else {}),
@@ -114,6 +115,13 @@ def _delay_text(delay) -> Any:
     return int(d) if d.ndim == 0 else f"per-synapse {int(d.min())}..{int(d.max())}"
 
 
+def _register_text(value) -> Any:
+    import numpy as np
+
+    v = np.asarray(value)
+    return int(v) if v.ndim == 0 else f"per-neuron {int(v.min())}..{int(v.max())} ({len(np.unique(v))} values)"
+
+
 def _exp_text(exp) -> Any:
     import numpy as np
 
@@ -143,6 +151,7 @@ class LoweredModel:
     network: LoihiNetwork
     quant_record: Any
     timing_record: Any
+    deployed: Graph | None = None   # ``trained`` with only the reset change (None: same as ``trained``)
 
 
 def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
@@ -203,7 +212,8 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
         "t_sample_rule": t_rule,
     }
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
-    return LoweredModel(graph, order, quantized, layers, network, qrec, trec)
+    return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
+                        deployed=None if deployed is graph else deployed)
 
 
 def attach_core_map(network: LoihiNetwork) -> None:

@@ -32,18 +32,18 @@ def _scatter(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform):
 
 
 @njit(cache=True, parallel=True)
-def _run(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
+def _run(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
          out_spikes, all_s, all_u, all_v, ovf, wraps):
     for b in prange(x.shape[0]):
-        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
+        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
                 out_spikes, all_s, all_u, all_v, ovf, wraps)
 
 
 @njit(cache=True)
-def _run_serial(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
+def _run_serial(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
                 out_spikes, all_s, all_u, all_v, ovf, wraps):
     for b in range(x.shape[0]):
-        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
+        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
                 out_spikes, all_s, all_u, all_v, ovf, wraps)
 
 
@@ -56,7 +56,8 @@ def _decay(x, keep):
 
 @njit(cache=True)
 def _update(qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax, counts, qh, qm, uh, um):
-    """One step of one layer's compartments (slices of the flat state); q is read and cleared."""
+    """One step of one layer's compartments (slices of the flat state); q is read and cleared.
+    One compartment profile for the whole layer (scalars: the fast, common case)."""
     cq = 0
     cu = 0
     cv = 0
@@ -87,7 +88,39 @@ def _update(qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, 
 
 
 @njit(cache=True)
-def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, ring, record_all,
+def _update_profiles(qrow, u, v, ref, fired, bias, cells, ref_delay, vmin, vmax, counts, qh, qm, uh, um):
+    """``_update`` with a profile per compartment: ``cells`` (3, n) = 4096 - iDecay, 4096 - vDecay, vThMant * 2**6."""
+    cq = 0
+    cu = 0
+    cv = 0
+    for j in range(u.shape[0]):
+        q = qrow[j]
+        qrow[j] = 0
+        qw = ((q + qh) & qm) - qh
+        cq += np.int64(qw != q)
+        ur = _decay(u[j], cells[0, j]) + qw
+        un = ((ur + uh) & um) - uh
+        cu += np.int64(un != ur)
+        vr = _decay(v[j], cells[1, j]) + un + bias[j]
+        vn = min(max(vr, vmin), vmax)
+        cv += np.int64(vn != vr)
+        r = ref[j]
+        refractory = r > 0
+        vn = 0 if refractory else vn
+        r = r - 1 if refractory else r
+        s = vn > cells[2, j]
+        vn = 0 if s else vn
+        ref[j] = ref_delay - 1 if s else r
+        u[j] = un
+        v[j] = vn
+        fired[j] = s
+    counts[0] += cq
+    counts[1] += cu
+    counts[2] += cv
+
+
+@njit(cache=True)
+def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
             out_spikes, all_s, all_u, all_v, ovf, wraps):
     """One sample from zero state: the chip's rules, step by step, layer by layer."""
     steps, width = x.shape[1], x.shape[2]
@@ -111,9 +144,14 @@ def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, 
         for i in range(1, n_layers):
             lo = noff[i]
             hi = lo + n[i]
-            _update(buf[slot, lo:hi], u[lo:hi], v[lo:hi], ref[lo:hi], fired[lo:hi], bias[lo:hi],
-                    4096 - params[i, 0], 4096 - params[i, 1], params[i, 2], params[i, 3],
-                    params[i, 4], params[i, 5], counts, wraps[0], wraps[1], wraps[2], wraps[3])
+            if params[i, 6]:
+                _update(buf[slot, lo:hi], u[lo:hi], v[lo:hi], ref[lo:hi], fired[lo:hi], bias[lo:hi],
+                        params[i, 0], params[i, 1], params[i, 2], params[i, 3],
+                        params[i, 4], params[i, 5], counts, wraps[0], wraps[1], wraps[2], wraps[3])
+            else:
+                _update_profiles(buf[slot, lo:hi], u[lo:hi], v[lo:hi], ref[lo:hi], fired[lo:hi], bias[lo:hi],
+                                 cells[:, lo:hi], params[i, 3], params[i, 4], params[i, 5], counts,
+                                 wraps[0], wraps[1], wraps[2], wraps[3])
             if record_all:
                 for j in range(lo, hi):
                     all_s[b, t, j] = fired[j]
@@ -178,6 +216,7 @@ class Flat:
             wflat = wflat.astype(np.int32)
         dflat = np.ascontiguousarray(np.concatenate(blocks_d) if blocks_d else np.zeros(0, np.int64), dtype=np.int64)
         self.wflat, self.dflat, self.woff, self.roff, self.duni, self.druni = wflat, dflat, woff, roff, duni, druni
+        self.cells = np.ascontiguousarray(np.stack([prog.keep_u, prog.keep_v, prog.vth]), dtype=np.int64)
 
 
 def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
@@ -215,7 +254,7 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False):
         params = prog.params
     runner = _run if batch > 1 else _run_serial
     runner(np.ascontiguousarray(x), prog.n, prog.noff, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni, flat.druni,
-         params, prog.bias, int(prog.ring), record_all, out, all_s, all_u, all_v, ovf, wraps)
+         params, prog.bias, flat.cells, int(prog.ring), record_all, out, all_s, all_u, all_v, ovf, wraps)
     counts = out.sum(axis=1, dtype=np.int64)
     res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts),
                           overflow={"q_wrap": int(ovf[:, 0].sum()), "u_wrap": int(ovf[:, 1].sum()),

@@ -29,19 +29,27 @@ BIAS_MANT_MAX = 2**12 - 1
 def source_bias(pre: LoihiLayer, arithmetic: str) -> tuple[float, int]:
     """(mantissa, exponent) of a voltage bias that makes a compartment of ``pre`` fire every free step.
 
-    Chip units: mant * 2**exp > vThMant * 2**6; the exponent is the layer's own when it already has
-    biases, else 6 (the one netx assumes), else 7.
+    Chip units: mant * 2**exp > vThMant * 2**6 (the highest of the layer's thresholds when they differ);
+    the exponent is the layer's own when it already has biases, else 6 (the one netx assumes), else 7.
     """
+    v_th = int(np.max(pre.v_th_mant)) if arithmetic != "float" else float(np.max(pre.v_th_mant))
     if arithmetic == "float":
-        return 2.0 * abs(float(pre.v_th_mant)) * 64.0 + 1.0, 0
-    threshold = int(pre.v_th_mant) * 64
+        return 2.0 * abs(v_th) * 64.0 + 1.0, 0
+    threshold = v_th * 64
     for exp in ([pre.bias_exp] if pre.bias is not None else [6, 7]):
         mant = (threshold >> exp) + 1
         if mant <= BIAS_MANT_MAX:
             return mant, exp
-    raise SnnccError(f"vThMant {pre.v_th_mant} is too high for an always-on compartment (its voltage bias must exceed "
+    raise SnnccError(f"vThMant {v_th} is too high for an always-on compartment (its voltage bias must exceed "
                      "the threshold with a 13-bit mantissa) to carry the next layer's current bias",
                      field=f"layer '{pre.name}'")
+
+
+def _extend(value, k: int, fill):
+    """A per-neuron register with ``k`` more entries (a scalar register stays a scalar)."""
+    if np.ndim(value) == 0:
+        return value
+    return np.concatenate([np.asarray(value), np.full(k, fill, np.asarray(value).dtype)])
 
 
 def _pad_rows(a, k: int):
@@ -70,6 +78,10 @@ def _append_compartments(pre: LoihiLayer, k: int, arithmetic: str) -> None:
     pre.weight_rec = _pad_square(pre.weight_rec, k)
     pre.delay_rec = _pad_square(pre.delay_rec, k)
     pre.wgt_exp_rec = _pad_square(pre.wgt_exp_rec, k)
+    # per-neuron registers: the sources reuse existing profiles (neuron 0's decays, the layer's top threshold)
+    pre.v_th_mant = _extend(pre.v_th_mant, k, np.max(pre.v_th_mant))
+    pre.i_decay = _extend(pre.i_decay, k, np.asarray(pre.i_decay).flat[0])
+    pre.v_decay = _extend(pre.v_decay, k, np.asarray(pre.v_decay).flat[0])
     pre.n += k
     pre.always_on += k
 

@@ -51,6 +51,11 @@ def netx_compat(network: LoihiNetwork) -> list[str]:
         notes.append(f"/layer/0/alwaysOn = {k}: the last {k} input axon(s) carry current biases and must spike at "
                      "every step (snncc's emulator and runner add them; a Lava driver must too)")
     for i, lay in enumerate(network.layers[1:], start=1):
+        per_neuron = [key for key, value in (("vThMant", lay.v_th_mant), ("iDecay", lay.i_decay),
+                                             ("vDecay", lay.v_decay)) if np.ndim(value)]
+        if per_neuron:
+            notes.append(f"/layer/{i}/neuron/{{{', '.join(per_neuron)}}}: one value per neuron (compartment profiles; "
+                         "snncc extension, netx reads one value per layer)")
         if lay.always_on:
             notes.append(f"/layer/{i}/alwaysOn = {lay.always_on}: the last {lay.always_on} compartment(s) are bias "
                          "sources for the next layer, timed by refDelay")
@@ -132,7 +137,7 @@ def write_bundle(network: LoihiNetwork, path: str | Path, extra: dict[str, Any] 
                 _string(nrn, "type", "LOIHI")
                 for key, value in (("vThMant", lay.v_th_mant), ("iDecay", lay.i_decay), ("vDecay", lay.v_decay),
                                    ("refDelay", lay.ref_delay)):
-                    _scalar(nrn, key, value, np.int64)
+                    (_array if np.ndim(value) else _scalar)(nrn, key, value, np.int64)
                 _exponent_field(nrn, "wgtExp", lay.wgt_exp)
                 if lay.weight_rec is not None:
                     _exponent_field(nrn, "wgtExpRec", lay.wgt_exp_rec)
@@ -234,6 +239,19 @@ def _shape_width(group: h5py.Group, path: str, where: str) -> int:
     if shape.size == 0 or np.any(shape < 1) or np.any(shape != np.round(shape)):
         _fail(path, f"{where}/shape", "must be positive integers")
     return int(np.prod(shape))
+
+
+def _register(group: h5py.Group, key: str, path: str, where: str, n: int):
+    """A compartment register: one integer, or (a profile per neuron) an integer array of n values."""
+    if key in group and isinstance(group[key], h5py.Dataset) and group[key].size > 1:
+        ds = group[key]
+        if ds.dtype.kind not in "iuf" or ds.shape != (n,):
+            _fail(path, f"{where}/{key}", f"per-neuron values must be a numeric array of {n}")
+        value = np.asarray(ds[()], np.float64)
+        if not np.all(np.isfinite(value)) or np.any(value != np.round(value)):
+            _fail(path, f"{where}/{key}", "must be integers")
+        return value.astype(np.int64)
+    return _number(group, key, path, where)
 
 
 def _exponents(group: h5py.Group, key: str, path: str, where: str, shape: tuple, default):
@@ -340,7 +358,7 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
         nrn = g["neuron"]
         nw = f"{where}/neuron"
         if "vThMant" in nrn:
-            lay.v_th_mant = _number(nrn, "vThMant", path, nw)
+            lay.v_th_mant = _register(nrn, "vThMant", path, nw, n)
         elif "theta" in nrn:
             theta = _number(nrn, "theta", path, nw, integer=False)
             if theta <= 0 or theta % 64:
@@ -348,12 +366,12 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
             lay.v_th_mant = int(theta) // 64
         else:
             _fail(path, f"{nw}/vThMant", "missing (required field)")
-        if not 1 <= lay.v_th_mant <= 2**17 - 1:
-            _fail(path, f"{nw}/vThMant", f"must lie in 1..{2**17 - 1}, got {lay.v_th_mant}")
+        if not (1 <= np.min(lay.v_th_mant) and np.max(lay.v_th_mant) <= 2**17 - 1):
+            _fail(path, f"{nw}/vThMant", f"must lie in 1..{2**17 - 1}, got {np.min(lay.v_th_mant)}..{np.max(lay.v_th_mant)}")
         for key, attr in (("iDecay", "i_decay"), ("vDecay", "v_decay")):
-            value = _number(nrn, key, path, nw)
-            if not 0 <= value <= 4096:
-                _fail(path, f"{nw}/{key}", f"decays must lie in 0..4096, got {value}")
+            value = _register(nrn, key, path, nw, n)
+            if not (0 <= np.min(value) and np.max(value) <= 4096):
+                _fail(path, f"{nw}/{key}", f"decays must lie in 0..4096, got {np.min(value)}..{np.max(value)}")
             setattr(lay, attr, value)
         lay.ref_delay = _number(nrn, "refDelay", path, nw, default=1)
         if not 1 <= lay.ref_delay <= 63:
@@ -427,9 +445,14 @@ def check_network(network: LoihiNetwork, where: str = "<network>") -> None:
             if (e.ndim and (w is None or e.shape != np.shape(w))) or (e.size and not (-6 <= e.min() and e.max() <= 7)):
                 raise SnnccError("weight exponents must lie in -6..7, one per layer or one per synapse",
                                  file=where, field=f"/layer/{i}/neuron/{key}")
+        for key, attr in (("iDecay", "i_decay"), ("vDecay", "v_decay"), ("vThMant", "v_th_mant")):
+            value = np.asarray(getattr(lay, attr))
+            if value.ndim and value.shape != (lay.n,):
+                raise SnnccError(f"per-neuron registers need one value per neuron ({lay.n})", file=where,
+                                 field=f"/layer/{i}/neuron/{key}")
         for key in ("i_decay", "v_decay"):
-            if not 0 <= getattr(lay, key) <= 4096:
+            if not (0 <= np.min(getattr(lay, key)) and np.max(getattr(lay, key)) <= 4096):
                 raise SnnccError("decays must lie in 0..4096", file=where, field=f"/layer/{i}/neuron/{key}")
-        if not 1 <= lay.v_th_mant <= 2**17 - 1:
+        if not (1 <= np.min(lay.v_th_mant) and np.max(lay.v_th_mant) <= 2**17 - 1):
             raise SnnccError("vThMant must lie in 1..131071", file=where, field=f"/layer/{i}/neuron/vThMant")
         width = lay.n

@@ -1,12 +1,13 @@
 """``snncc check --target loihi``: what deploying on Loihi costs, on a data set, and why.
 
-Four runs on the same inputs:
+Four runs on the same inputs (five when the reset changes):
   (a) the float model as trained (IR reference of the original graph)
+  (r) the float model with reset to zero (only when --allow-reset-change replaced a subtract reset)
   (b) the IR in the order Loihi runs, float (timing change only, e.g. the paper's export order)
   (c) the IR with the quantized weights, thresholds and decay constants, float
   (d) the bit-exact emulator of the bundle (integer, truncating decays, wrap/clip)
 plus (d') the emulator without overflow (wide registers) when any overflow occurred.
-Loss split: timing = acc(a) - acc(b); quantization = acc(b) - acc(c) + acc(c) - acc(d'),
+Loss split: reset = acc(a) - acc(r); timing = acc(r) - acc(b); quantization = acc(b) - acc(c) + acc(c) - acc(d'),
 i.e. parameters plus integer truncation; overflow = acc(d') - acc(d).
 """
 
@@ -32,8 +33,8 @@ class CheckRecord:
     timing: str
     scale_rule: str
     scale_reason: str
-    accuracy: dict[str, float]                 # float_trained, ir_loihi_order, ir_quantized, emulator
-    loss_points: dict[str, float]              # timing, quantization (params), truncation, overflow, total
+    accuracy: dict[str, float]                 # float_trained, ir_reset_changed, ir_loihi_order, ir_quantized, emulator
+    loss_points: dict[str, float]              # reset, timing, quantization (params), truncation, overflow, total
     spike_agreement: dict[str, dict[str, float]]   # comparison -> layer -> fraction of equal entries
     prediction_agreement: dict[str, float]
     overflow: dict[str, int]
@@ -47,7 +48,8 @@ class CheckRecord:
         a, l = self.accuracy, self.loss_points
         console.print(f"[bold]snncc check: {self.target}[/bold] on {self.samples} samples x {self.steps} steps "
                       f"(timing '{self.timing}', scale '{self.scale_rule}', {self.mode} mode)")
-        rows = [("(a) float model as trained", "float_trained"), ("(b) IR in Loihi order, float", "ir_loihi_order"),
+        rows = [("(a) float model as trained", "float_trained"), ("(r) reset to zero instead, float", "ir_reset_changed"),
+                ("(b) IR in Loihi order, float", "ir_loihi_order"),
                 ("(c) IR with quantized parameters, float", "ir_quantized"), ("(d) Loihi emulator (bit-exact)", "emulator")]
         for label, key in rows:
             console.print(f"  {label:<42} accuracy {100 * a[key]:6.2f} %")
@@ -87,7 +89,8 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     shift = lowered.timing_record.output_shift
     lead = lead_steps(lowered.timing_record.shifts, shift)
     mode = options.get("mode", "batch")
-    preds = {k: [] for k in ("float_trained", "ir_loihi_order", "ir_quantized", "emulator", "emulator_wide")}
+    preds = {k: [] for k in ("float_trained", "ir_reset_changed", "ir_loihi_order", "ir_quantized", "emulator",
+                             "emulator_wide")}
     agree_sum = {k: {nm: 0.0 for nm in names} for k in
                  ("emulator_vs_trained", "emulator_vs_quantized_ir", "loihi_order_vs_trained")}
     overflow = {"q_wrap": 0, "u_wrap": 0, "v_clip": 0}
@@ -96,8 +99,11 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     for start in range(0, n, CHUNK):
         x = x_all[start:start + CHUNK]
         p_a, s_a = _ir_run(lowered.trained, x, names)
+        p_r = p_a if lowered.deployed is None else _ir_run(lowered.deployed, x, names)[0]
         if lowered.order is lowered.trained:
             p_b, s_b = p_a, s_a
+        elif lowered.order is lowered.deployed:
+            p_b, s_b = p_r, _ir_run(lowered.order, x, names)[1]
         else:
             p_b, s_b = _ir_run(lowered.order, x, names)
         p_c, s_c = _ir_run(lowered.quantized, x, names)
@@ -115,7 +121,8 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
             agree_sum["emulator_vs_trained"][nm] += float(np.mean(s_d[nm] == s_a[nm])) * w
             agree_sum["emulator_vs_quantized_ir"][nm] += float(np.mean(s_d[nm] == s_c[nm])) * w
             agree_sum["loihi_order_vs_trained"][nm] += float(np.mean(s_b[nm] == s_a[nm])) * w
-        for key, p in (("float_trained", p_a), ("ir_loihi_order", p_b), ("ir_quantized", p_c), ("emulator", p_d)):
+        for key, p in (("float_trained", p_a), ("ir_reset_changed", p_r), ("ir_loihi_order", p_b),
+                       ("ir_quantized", p_c), ("emulator", p_d)):
             preds[key].append(np.asarray(p))
         if any(res.overflow.values()):
             wide_needed = True
@@ -132,7 +139,8 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     p = {k: np.concatenate(v) for k, v in preds.items()}
     acc = {k: float(np.mean(v == labels)) for k, v in p.items()}
     loss = {
-        "timing": 100 * (acc["float_trained"] - acc["ir_loihi_order"]),
+        "reset": 100 * (acc["float_trained"] - acc["ir_reset_changed"]),
+        "timing": 100 * (acc["ir_reset_changed"] - acc["ir_loihi_order"]),
         "quantization": 100 * (acc["ir_loihi_order"] - acc["ir_quantized"]),
         "integer_truncation": 100 * (acc["ir_quantized"] - acc["emulator_wide"]),
         "overflow": 100 * (acc["emulator_wide"] - acc["emulator"]),
@@ -146,7 +154,7 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     return CheckRecord(
         target="loihi", samples=n, steps=steps, timing=lowered.timing_record.mode,
         scale_rule=lowered.quant_record.rule, scale_reason=lowered.quant_record.reason,
-        accuracy={k: acc[k] for k in ("float_trained", "ir_loihi_order", "ir_quantized", "emulator")},
+        accuracy={k: acc[k] for k in ("float_trained", "ir_reset_changed", "ir_loihi_order", "ir_quantized", "emulator")},
         loss_points=loss,
         spike_agreement={k: {nm: v / n for nm, v in d.items()} for k, d in agree_sum.items()},
         prediction_agreement={

@@ -48,9 +48,9 @@ def wrap(x: np.ndarray, bits: int) -> np.ndarray:
     return ((x + half) & (span - 1)) - half
 
 
-def decay(x: np.ndarray, register: int) -> np.ndarray:
-    """sign(x) * ((|x| * (4096 - register)) >> 12): the chip's truncating decay."""
-    return np.sign(x) * ((np.abs(x) * (4096 - int(register))) >> 12)
+def decay(x: np.ndarray, register) -> np.ndarray:
+    """sign(x) * ((|x| * (4096 - register)) >> 12): the chip's truncating decay (register: one or per neuron)."""
+    return np.sign(x) * ((np.abs(x) * (4096 - np.asarray(register, np.int64))) >> 12)
 
 
 # -- input checks ---------------------------------------------------------------------------------
@@ -142,8 +142,8 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
             bias = np.zeros(layer.n, dt) if layer.bias is None else np.asarray(layer.bias, dt) * (
                 2.0 ** layer.bias_exp if as_float else np.int64(1) << layer.bias_exp)
             if as_float:
-                u = st["u"] * ((4096 - layer.i_decay) / 4096) + q
-                v = st["v"] * ((4096 - layer.v_decay) / 4096) + u + bias
+                u = st["u"] * ((4096 - np.asarray(layer.i_decay, np.float64)) / 4096) + q
+                v = st["v"] * ((4096 - np.asarray(layer.v_decay, np.float64)) / 4096) + u + bias
             else:
                 qw = wrap(q, Q_BITS)
                 overflow["q_wrap"] += int(np.count_nonzero(qw != q))
@@ -156,7 +156,7 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
             refractory = st["ref"] > 0
             v = np.where(refractory, 0, v)
             ref = np.where(refractory, st["ref"] - 1, st["ref"])
-            threshold = layer.v_th_mant * (64.0 if as_float else 64)
+            threshold = np.asarray(layer.v_th_mant, dt) * (64.0 if as_float else 64)
             s = v > threshold
             v = np.where(s, 0, v)
             ref = np.where(s, layer.ref_delay - 1, ref)
@@ -196,7 +196,11 @@ class _Program:
     dt_: list                # per layer: per-synapse delays transposed (n_pre, n) int64
     wr: list                 # recurrent (n, n) transposed, or a (0, 0) array
     dr: list
-    params: np.ndarray       # (L+1, 6) int64: i_decay, v_decay, vth, ref_delay, vmin, vmax
+    params: np.ndarray       # (L+1, 7) int64 per layer: 4096 - iDecay, 4096 - vDecay, vThMant * 2**6 (when
+                             # one profile), ref_delay, vmin, vmax, 1 if one profile for the layer else 0
+    keep_u: np.ndarray       # (N,) int64 per compartment: 4096 - iDecay
+    keep_v: np.ndarray       # (N,) int64: 4096 - vDecay
+    vth: np.ndarray          # (N,) int64: vThMant * 2**6
     bias: np.ndarray         # (N,) int64 chip units
     ring: int                # ring buffer length (max total delay + 1)
 
@@ -215,7 +219,8 @@ def _program(network: LoihiNetwork) -> _Program:
     noff = np.concatenate([[0], np.cumsum(n)[:-1]]).astype(np.int64)
     empty = np.zeros((0, 0), np.int64)
     wt, dts, wr, dr = [empty], [empty], [empty], [empty]
-    params = np.zeros((len(layers), 6), np.int64)
+    params = np.zeros((len(layers), 7), np.int64)
+    keep_u, keep_v, vth = (np.zeros(int(n.sum()), np.int64) for _ in range(3))
     bias = np.zeros(int(n.sum()), np.int64)
     max_delay = 0
     for i, lay in enumerate(layers[1:], start=1):
@@ -233,10 +238,15 @@ def _program(network: LoihiNetwork) -> _Program:
         else:
             wr.append(empty)
             dr.append(empty)
-        params[i] = (lay.i_decay, lay.v_decay, int(lay.v_th_mant) * 64, lay.ref_delay, lay.vmin, lay.vmax)
+        cells = slice(noff[i], noff[i] + lay.n)
+        keep_u[cells] = 4096 - np.asarray(lay.i_decay, np.int64)
+        keep_v[cells] = 4096 - np.asarray(lay.v_decay, np.int64)
+        vth[cells] = np.asarray(lay.v_th_mant, np.int64) * 64
+        one = all(np.all(a[cells] == a[cells][0]) for a in (keep_u, keep_v, vth)) if lay.n else True
+        params[i] = (keep_u[cells][0], keep_v[cells][0], vth[cells][0], lay.ref_delay, lay.vmin, lay.vmax, int(one))
         if lay.bias is not None:
             bias[noff[i]:noff[i] + lay.n] = np.asarray(lay.bias, np.int64) << lay.bias_exp
-    return _Program(n, noff, wt, dts, wr, dr, params, bias, max_delay + 2)
+    return _Program(n, noff, wt, dts, wr, dr, params, keep_u, keep_v, vth, bias, max_delay + 2)
 
 
 class PreparedNetwork:

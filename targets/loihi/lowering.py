@@ -133,7 +133,8 @@ def build_network(graph: Graph, layers: list[ChainLayer], quant: QuantizationRec
             weight=quantize_weights(graph.node(c.ff).weight, pq.scale, pq.exponents(graph.node(c.ff).weight)),
             wgt_exp=pq.exponents(graph.node(c.ff).weight),
             delay=int(extra[(c.pre, c.ff)]),
-            v_th_mant=lq.v_th_mant, i_decay=lq.i_decay, v_decay=lq.v_decay, ref_delay=timing.ref_delay[c.lif],
+            v_th_mant=_register(lq.v_th_mant), i_decay=_register(lq.i_decay), v_decay=_register(lq.v_decay),
+            ref_delay=timing.ref_delay[c.lif],
         )
         if c.rec:
             rq = proj_q[c.rec]
@@ -168,10 +169,16 @@ def float_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer]) ->
     for c, lay in zip(layers, network.layers[1:]):
         op = graph.node(c.lif)
         alpha, beta = op.decays(graph.dt)
-        theta = float(op.threshold[0])
+        # per compartment: the model's neurons from the graph; bias sources keep their chip registers, with
+        # threshold 1 and their voltage bias in units of their own chip threshold (so they fire as on chip)
+        theta, i_dec, v_dec = (np.ones(lay.n) for _ in range(3))
+        theta[:op.n] = op.threshold
+        i_dec[:op.n], v_dec[:op.n] = 4096.0 * (1.0 - alpha), 4096.0 * (1.0 - beta)
+        i_dec[op.n:] = np.broadcast_to(np.asarray(lay.i_decay, np.float64), (lay.n,))[op.n:]
+        v_dec[op.n:] = np.broadcast_to(np.asarray(lay.v_decay, np.float64), (lay.n,))[op.n:]
         t = LoihiLayer(
             name=lay.name, kind=lay.kind, n=lay.n, weight=_twin_weight(graph, c, lay), wgt_exp=-6, delay=lay.delay,
-            v_th_mant=theta / 64.0, i_decay=4096.0 * (1.0 - float(alpha[0])), v_decay=4096.0 * (1.0 - float(beta[0])),
+            v_th_mant=theta / 64.0, i_decay=i_dec, v_decay=v_dec,
             ref_delay=lay.ref_delay, vmin=-math.inf, vmax=math.inf, always_on=lay.always_on,
         )
         if c.rec:
@@ -185,9 +192,15 @@ def float_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer]) ->
                 t.bias[:op.n] = op.bias
             if lay.always_on:
                 chip = np.asarray(lay.bias[op.n:], np.float64) * 2.0 ** lay.bias_exp
-                t.bias[op.n:] = chip * theta / (float(lay.v_th_mant) * 64.0)
+                vth_chip = np.broadcast_to(np.asarray(lay.v_th_mant, np.float64), (lay.n,))[op.n:] * 64.0
+                t.bias[op.n:] = chip / vth_chip
         twin_layers.append(t)
     return LoihiNetwork(layers=twin_layers, t_sample=network.t_sample, metadata={})
+
+
+def _register(value):
+    """A register from the quantization record: an int, or a per-neuron list as an int array."""
+    return value if isinstance(value, int) else np.asarray(value, np.int64)
 
 
 def _twin_weight(graph: Graph, c: ChainLayer, lay: LoihiLayer) -> np.ndarray:

@@ -13,9 +13,10 @@ def even(rng, shape, lo=-256, hi=254):
 
 
 def random_network(seed: int, *, recurrent=True, per_synapse_delays=True, bias=True, big=False,
-                   split_exponents=False) -> LoihiNetwork:
+                   split_exponents=False, profiles=False) -> LoihiNetwork:
     """A random 3-layer network; ``big`` uses weight exponents large enough to overflow q and u;
-    ``split_exponents`` gives the hidden layer's projections one exponent per synapse (two values)."""
+    ``split_exponents`` gives the hidden layer's projections one exponent per synapse (two values);
+    ``profiles`` gives the hidden layer a threshold and decays per neuron."""
     rng = np.random.default_rng(seed)
     n_in, n_h, n_out = 7, 11, 5
     wexp = 7 if big else int(rng.integers(-2, 3))
@@ -30,6 +31,10 @@ def random_network(seed: int, *, recurrent=True, per_synapse_delays=True, bias=T
         hidden.weight_rec = even(rng, (n_h, n_h))
         hidden.wgt_exp_rec = int(rng.integers(-3, 3)) if not big else 6
         hidden.delay_rec = rng.integers(0, 3, (n_h, n_h)) if per_synapse_delays else 1
+    if profiles:
+        hidden.v_th_mant = rng.integers(50, 2000, n_h)
+        hidden.i_decay = rng.integers(0, 4097, n_h)
+        hidden.v_decay = rng.integers(0, 4097, n_h)
     if split_exponents:
         hidden.wgt_exp = np.where(rng.random((n_h, n_in)) < 0.1, 3, -4)
         if recurrent:
@@ -68,6 +73,9 @@ def chip_model(network: LoihiNetwork, x: np.ndarray):
 
     exponent_of = delay_of   # a scalar, or one per synapse
 
+    def per_neuron(value, j):
+        return int(value) if np.ndim(value) == 0 else int(value[j])
+
     state = {i: {"u": [0] * l.n, "v": [0] * l.n, "r": [0] * l.n} for i, l in enumerate(layers) if i}
     for i in range(1, len(layers)):
         spikes[i], us[i], vs[i] = [], [], []
@@ -87,17 +95,17 @@ def chip_model(network: LoihiNetwork, x: np.ndarray):
                             q += int(w[j][k]) * 2 ** (6 + exponent_of(e, j, k))
                 qw = to_signed(q, 21)
                 counts["q_wrap"] += qw != q
-                u_raw = decay(st["u"][j], lay.i_decay) + qw
+                u_raw = decay(st["u"][j], per_neuron(lay.i_decay, j)) + qw
                 u = to_signed(u_raw, 23)
                 counts["u_wrap"] += u != u_raw
                 b = 0 if lay.bias is None else int(lay.bias[j]) * 2 ** lay.bias_exp
-                v_raw = decay(st["v"][j], lay.v_decay) + u + b
+                v_raw = decay(st["v"][j], per_neuron(lay.v_decay, j)) + u + b
                 v = min(max(v_raw, lay.vmin), lay.vmax)
                 counts["v_clip"] += v != v_raw
                 if st["r"][j] > 0:
                     v = 0
                     st["r"][j] -= 1
-                s = int(v > lay.v_th_mant * 64)
+                s = int(v > per_neuron(lay.v_th_mant, j) * 64)
                 if s:
                     v = 0
                     st["r"][j] = lay.ref_delay - 1

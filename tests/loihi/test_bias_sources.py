@@ -21,17 +21,22 @@ from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 from snncc.targets.loihi.validation import validate_lowering
 
 
-def biased_graph(seed=0, refractory=2, d_in=(1, 0), d_rec=(1, 1), d_out=(1, 0), lif_bias=True, n_in=6, n_h=10, n_out=4):
+def biased_graph(seed=0, refractory=2, d_in=(1, 0), d_rec=(1, 1), d_out=(1, 0), lif_bias=True, n_in=6, n_h=10, n_out=4,
+                 per_neuron=False):
     """input -d-> w_in(b) -d-> hidden(current bias) <-> w_rec(b) ; hidden -d-> w_out(b) -d-> out -> readout.
 
     Each ``d_*`` is (delay into the Dense, delay out of it): a Dense bias starts at the second.
+    ``per_neuron``: the hidden layer draws its threshold and time constants per neuron.
     """
     rng = np.random.default_rng(seed)
     g = Graph(0.005, name="biased", metadata={"recording_length_s": 40 * 0.005})
     lif = dict(tau_syn=0.006, tau_mem=0.05, threshold=1.0, refractory=refractory)
+    hidden_lif = dict(lif, tau_syn=rng.uniform(0.004, 0.01, n_h), tau_mem=rng.uniform(0.03, 0.08, n_h),
+                      threshold=rng.uniform(0.8, 1.2, n_h)) if per_neuron else lif
     g.add("input", Input(width=n_in))
     g.add("w_in", Dense(weight=rng.normal(0, 0.7, (n_h, n_in)), bias=rng.normal(0.05, 0.1, n_h)))
-    g.add("hidden", LIF(n=n_h, bias=rng.normal(0.02, 0.05, n_h) if lif_bias else None, bias_placement="current", **lif))
+    g.add("hidden", LIF(n=n_h, bias=rng.normal(0.02, 0.05, n_h) if lif_bias else None, bias_placement="current",
+                        **hidden_lif))
     g.add("w_rec", Dense(weight=rng.normal(0, 0.2, (n_h, n_h)), bias=rng.normal(0.0, 0.05, n_h)))
     g.add("w_out", Dense(weight=rng.normal(0, 0.6, (n_out, n_h)), bias=rng.normal(0.1, 0.1, n_out)))
     g.add("out", LIF(n=n_out, **lif))
@@ -160,8 +165,8 @@ def test_reader_refuses_a_source_count_as_large_as_the_layer(tmp_path):
 @settings(max_examples=12, deadline=None)
 @given(seed=st.integers(0, 1000), refractory=st.integers(1, 3),
        d_in=st.tuples(st.integers(0, 2), st.integers(0, 2)), d_rec=st.tuples(st.integers(0, 2), st.integers(1, 2)),
-       d_out=st.tuples(st.integers(0, 2), st.integers(0, 2)), lif_bias=st.booleans())
-def test_any_delays_and_refractory_periods_lower_exactly(seed, refractory, d_in, d_rec, d_out, lif_bias):
+       d_out=st.tuples(st.integers(0, 2), st.integers(0, 2)), lif_bias=st.booleans(), per_neuron=st.booleans())
+def test_any_delays_and_refractory_periods_lower_exactly(seed, refractory, d_in, d_rec, d_out, lif_bias, per_neuron):
     """validate_lowering raises on any spike mismatch, so passing it is the exactness proof."""
-    _, rec = _lower_and_check(biased_graph(seed, refractory, d_in, d_rec, d_out, lif_bias))
+    _, rec = _lower_and_check(biased_graph(seed, refractory, d_in, d_rec, d_out, lif_bias, per_neuron=per_neuron))
     assert rec.timing_exact and rec.quantized_params_exact and rec.kernel_exact

@@ -59,6 +59,25 @@ def test_random_networks_with_per_synapse_delays_and_bias_round_trip(tmp_path):
         _assert_same(net, read_bundle(tmp_path / "r.net"))
 
 
+def test_per_neuron_registers_round_trip_and_are_checked(tmp_path):
+    net = random_network(1, profiles=True)
+    path = tmp_path / "p.net"
+    write_bundle(net, path)
+    back = read_bundle(path)
+    _assert_same(net, back)
+    assert any("one value per neuron" in note for note in back.metadata["netx_compat"])
+    with h5py.File(path, "r+") as f:
+        v = f["layer/1/neuron/vThMant"][()]
+        del f["layer/1/neuron/vThMant"]
+        f["layer/1/neuron/vThMant"] = v[:-1]
+    with pytest.raises(SnnccError, match="vThMant: per-neuron values must be a numeric array of 11"):
+        read_bundle(path)
+    net.layers[1].v_decay = np.full(11, 5000)
+    with pytest.raises(SnnccError, match="decays must lie in 0..4096"):
+        write_bundle(net, tmp_path / "q.net")
+    assert not (tmp_path / "q.net").exists()
+
+
 def test_per_synapse_exponents_are_checked_on_read_and_write(tmp_path):
     net = random_network(0, split_exponents=True)
     path = tmp_path / "s.net"

@@ -41,7 +41,8 @@ def test_compile_emulate_check(tmp_path, capsys, weights, th1_params):
                                  "--json", "--limit", "6"], capsys)
     assert code == 0, err
     rec = json.loads(stdout)
-    assert rec["samples"] == 6 and set(rec["accuracy"]) == {"float_trained", "ir_loihi_order", "ir_quantized", "emulator"}
+    assert rec["samples"] == 6 and set(rec["accuracy"]) == {"float_trained", "ir_reset_changed", "ir_loihi_order",
+                                                              "ir_quantized", "emulator"}
     assert rec["spike_agreement"]["loihi_order_vs_trained"]["hidden"] == 1.0   # exact timing: no order change
     code, stdout, err = run_cli(["check", weights, "--params", th1_params, "--data", data, "--limit", "4"], capsys)
     assert code == 0 and "Loihi emulator" in stdout, err

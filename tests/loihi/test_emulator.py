@@ -17,7 +17,8 @@ def _inputs(seed, batch=2, steps=40, width=7, p=0.3):
 @pytest.mark.parametrize("seed, kwargs", [
     (0, {}), (1, {"recurrent": False}), (2, {"per_synapse_delays": False}), (3, {"bias": False}),
     (4, {}), (5, {"big": True}), (6, {"big": True, "per_synapse_delays": False}), (7, {"split_exponents": True}),
-    (8, {"split_exponents": True, "recurrent": False}),
+    (8, {"split_exponents": True, "recurrent": False}), (9, {"profiles": True}),
+    (10, {"profiles": True, "big": True}),
 ])
 def test_emulator_matches_independent_model_state_for_state(seed, kwargs):
     net = random_network(seed, **kwargs)

@@ -131,5 +131,5 @@ def test_check_in_stream_mode_and_overflow_split():
     x, labels = _x(3, batch=8), np.random.default_rng(1).integers(0, 5, 8)
     rec = check_model(graph, x, labels, {"scale": "global", "mode": "stream", "gap": 100})
     assert rec.mode == "stream" and rec.samples == 8
-    assert set(rec.loss_points) == {"timing", "quantization", "integer_truncation", "overflow", "total"}
+    assert set(rec.loss_points) == {"reset", "timing", "quantization", "integer_truncation", "overflow", "total"}
     assert rec.overflow == {"q_wrap": 0, "u_wrap": 0, "v_clip": 0} and rec.loss_points["overflow"] == 0

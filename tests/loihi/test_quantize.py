@@ -137,3 +137,21 @@ def test_split_lowers_exactly_and_auto_prefers_it_on_outliers():
     errors = auto.quantization["calibration"]["errors"]
     split_name = next(k for k in errors if k.startswith("per-layer, split"))
     assert errors[split_name] < errors["per-layer"], errors
+
+
+def test_per_neuron_thresholds_and_decays_become_per_neuron_registers():
+    g = small_graph(seed=4)
+    rng = np.random.default_rng(0)
+    hidden = g.node("hidden")
+    hidden.threshold = rng.uniform(0.8, 1.2, hidden.n)
+    hidden.tau_mem = rng.choice([0.04, 0.06, 0.08], hidden.n)
+    q, rec = quantize_graph(g, "global")
+    lq = {layer.lif: layer for layer in rec.layers}
+    s = rec.w_scale
+    assert lq["hidden"].v_th_mant == [round(t * s) for t in hidden.threshold]
+    assert lq["hidden"].v_decay == [decay_register(g.dt, t) for t in hidden.tau_mem]
+    assert isinstance(lq["hidden"].i_decay, int) and isinstance(lq["out"].v_th_mant, int)   # shared: one profile
+    np.testing.assert_allclose(q.node("hidden").threshold, np.array(lq["hidden"].v_th_mant) / s)
+    art = target.lower(g, {"scale": "global"})
+    assert art.validation["quantized_params_exact"]
+    np.testing.assert_array_equal(art.network.layers[1].v_th_mant, lq["hidden"].v_th_mant)

@@ -8,6 +8,7 @@ import json
 
 import nir
 import numpy as np
+import pytest
 
 from nir_graphs import BrailleRSNN, pattern_inputs, run_cli, sparse_inputs, trained_braille_rsnn
 from snncc.frontends import LoadOptions, load_model
@@ -117,6 +118,24 @@ def test_subtract_reset_refused_for_loihi_unless_allowed(tmp_path, capsys):
     assert read_bundle(out).layers[1].n == 38
 
 
+def test_check_reports_what_the_reset_change_costs(tmp_path, capsys):
+    """snncc check --allow-reset-change: the subtract-reset model's own predictions are the labels, so the
+    'reset' loss is exactly how many decisions change when Loihi resets to zero instead."""
+    _, src, x = _braille(tmp_path)
+    x = x[:60]
+    labels = simulate(load_model(src, LoadOptions(reset="subtract")), x).prediction.numpy().astype(np.int64)
+    np.savez(tmp_path / "d.npz", inputs=x, labels=labels)
+    code, out, err = run_cli(["check", src, "--target", "loihi", "--data", tmp_path / "d.npz", "--reset", "subtract",
+                              "--allow-reset-change", "--json"], capsys)
+    assert code == 0, err
+    rec = json.loads(out)
+    zero = simulate(load_model(src, LoadOptions(reset="zero")), x).prediction.numpy()
+    assert rec["accuracy"]["float_trained"] == 1.0
+    assert rec["loss_points"]["reset"] == pytest.approx(100 * (1 - np.mean(zero == labels)))
+    assert rec["loss_points"]["reset"] > 0 and rec["loss_points"]["timing"] == 0
+    assert any("subtract -> zero" in note for note in rec["notes"])
+
+
 def test_braille_sized_with_affine_biases_runs_on_loihi_through_always_on_sources(tmp_path, capsys):
     """Affine biases enter the current: lowered as synapses from always-on sources, checked exactly at compile."""
     model, src, x = _braille(tmp_path, bias=True)
@@ -138,3 +157,34 @@ def test_braille_sized_with_affine_biases_runs_on_loihi_through_always_on_source
     agree, _, res = _agreement(src, net_path, x)
     np.testing.assert_array_equal(cli["prediction"], res.prediction)
     assert agree >= BIASED_AGREEMENT_BOUND, agree
+
+
+def test_per_neuron_parameters_become_compartment_profiles(tmp_path, capsys):
+    """Per-neuron alpha, beta and threshold (as Rockpool or a per-neuron snnTorch layer export them) run on
+    Loihi as one compartment profile per distinct value; the map keeps <= 8 vth / 32 cx profiles per core."""
+    rng = np.random.default_rng(3)
+    model = BrailleRSNN.random(rng, bias=True, scale=0.3, per_neuron=True, rec_std=0.4)
+    src = tmp_path / "pn.nir"
+    nir.write(str(src), model.to_nir())
+    x = sparse_inputs(rng, batch=SAMPLES, steps=STEPS, p=0.05).astype(np.uint8)
+    net_path = tmp_path / "pn.net"
+    code, out, err = _compile(src, net_path, capsys, "--json")
+    assert code == 0, err
+    report = json.loads(out)
+    assert report["validation"]["timing_exact"] and report["validation"]["quantized_params_exact"]
+    net = read_bundle(net_path)
+    hidden = net.layers[1]
+    lif = model.hidden.to_nir()
+    expected = [int(4096 * 1e-4 / tau) for tau in lif.tau_syn]          # Euler rule, neuron by neuron
+    np.testing.assert_array_equal(hidden.i_decay[:38], expected)
+    assert len(np.unique(hidden.v_th_mant)) > 8                        # more profiles than one core holds
+    for core in net.core_map["cores"]:   # counted here from the registers, not taken from the mapper
+        vth, cx = set(), set()
+        for part in core["layers"]:
+            lay = net.layers[part["index"]]
+            for j in range(part["start"], part["stop"]):
+                vth.add(int(np.broadcast_to(lay.v_th_mant, (lay.n,))[j]))
+                cx.add(tuple(int(np.broadcast_to(r, (lay.n,))[j]) for r in (lay.i_decay, lay.v_decay, lay.ref_delay)))
+        assert len(vth) <= 8 and len(cx) <= 32, core
+    agree, _, _ = _agreement(src, net_path, x)
+    assert agree >= 0.85, agree   # measured 0.89 on this near-chaotic random graph
