@@ -54,6 +54,30 @@ def _decay(x, keep):
     return (p + ((p >> 63) & 4095)) >> 12
 
 
+@njit(cache=True, inline="always")
+def _compartment(j, qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax, qh, qm, uh, um):
+    """Compartment j for one step; returns 1s where q wrapped, u wrapped, v clipped."""
+    q = qrow[j]
+    qrow[j] = 0
+    qw = ((q + qh) & qm) - qh
+    ur = _decay(u[j], i_keep) + qw
+    un = ((ur + uh) & um) - uh
+    vr = _decay(v[j], v_keep) + un + bias[j]
+    vn = min(max(vr, vmin), vmax)
+    clipped = np.int64(vn != vr)
+    r = ref[j]
+    refractory = r > 0
+    vn = 0 if refractory else vn
+    r = r - 1 if refractory else r
+    s = vn > vth
+    vn = 0 if s else vn
+    ref[j] = ref_delay - 1 if s else r
+    u[j] = un
+    v[j] = vn
+    fired[j] = s
+    return np.int64(qw != q), np.int64(un != ur), clipped
+
+
 @njit(cache=True)
 def _update(qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax, counts, qh, qm, uh, um):
     """One step of one layer's compartments (slices of the flat state); q is read and cleared.
@@ -62,26 +86,11 @@ def _update(qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, 
     cu = 0
     cv = 0
     for j in range(u.shape[0]):
-        q = qrow[j]
-        qrow[j] = 0
-        qw = ((q + qh) & qm) - qh
-        cq += np.int64(qw != q)
-        ur = _decay(u[j], i_keep) + qw
-        un = ((ur + uh) & um) - uh
-        cu += np.int64(un != ur)
-        vr = _decay(v[j], v_keep) + un + bias[j]
-        vn = min(max(vr, vmin), vmax)
-        cv += np.int64(vn != vr)
-        r = ref[j]
-        refractory = r > 0
-        vn = 0 if refractory else vn
-        r = r - 1 if refractory else r
-        s = vn > vth
-        vn = 0 if s else vn
-        ref[j] = ref_delay - 1 if s else r
-        u[j] = un
-        v[j] = vn
-        fired[j] = s
+        a, b, c = _compartment(j, qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax,
+                               qh, qm, uh, um)
+        cq += a
+        cu += b
+        cv += c
     counts[0] += cq
     counts[1] += cu
     counts[2] += cv
@@ -94,26 +103,11 @@ def _update_profiles(qrow, u, v, ref, fired, bias, cells, ref_delay, vmin, vmax,
     cu = 0
     cv = 0
     for j in range(u.shape[0]):
-        q = qrow[j]
-        qrow[j] = 0
-        qw = ((q + qh) & qm) - qh
-        cq += np.int64(qw != q)
-        ur = _decay(u[j], cells[0, j]) + qw
-        un = ((ur + uh) & um) - uh
-        cu += np.int64(un != ur)
-        vr = _decay(v[j], cells[1, j]) + un + bias[j]
-        vn = min(max(vr, vmin), vmax)
-        cv += np.int64(vn != vr)
-        r = ref[j]
-        refractory = r > 0
-        vn = 0 if refractory else vn
-        r = r - 1 if refractory else r
-        s = vn > cells[2, j]
-        vn = 0 if s else vn
-        ref[j] = ref_delay - 1 if s else r
-        u[j] = un
-        v[j] = vn
-        fired[j] = s
+        a, b, c = _compartment(j, qrow, u, v, ref, fired, bias, cells[0, j], cells[1, j], cells[2, j], ref_delay,
+                               vmin, vmax, qh, qm, uh, um)
+        cq += a
+        cu += b
+        cv += c
     counts[0] += cq
     counts[1] += cu
     counts[2] += cv
