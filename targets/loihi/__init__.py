@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.passes.quantize import samples_steps
@@ -183,7 +185,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     reference: dict[str, Any] = {}
 
     def measure(gq: Graph, rq) -> float:
-        """Mean over layers of the fraction of spike entries that differ from the float model."""
+        """Mean over layers of ``count_error``: per-neuron spike counts against the float model's."""
         from snncc.targets.loihi.emulator import emulate
 
         if "spikes" not in reference:
@@ -191,7 +193,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
         net = build_network(order, layers, rq, trec, steps + trec.output_shift, {})
         xp = pad(calib, lead_steps(trec.shifts, trec.output_shift))
         emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
-        return float(sum((emu[n] != reference["spikes"][n]).mean() for n in names) / len(names))
+        return float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
 
     quantized, qrec = scaling.choose(order, rule, measure, f"{CALIBRATION_BATCH} seeded random spike trains "
                                      f"(p={CALIBRATION_RATE}, seed 1), {steps} steps")
@@ -214,6 +216,16 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
     return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
                         deployed=None if deployed is graph else deployed)
+
+
+def count_error(emulated, reference) -> float:
+    """Mean |spike count difference| per neuron and sample, relative to the float model's mean count.
+
+    Counts, not spike-by-spike mismatch: in a recurrent network one moved spike shifts all later
+    ones, so spike mismatch saturates and stops telling candidates apart; counts are what the
+    readout uses."""
+    a, b = emulated.sum(axis=1, dtype=np.int64), reference.sum(axis=1, dtype=np.int64)
+    return float(np.abs(a - b).mean() / max(b.mean(), 1.0))
 
 
 def attach_core_map(network: LoihiNetwork) -> None:

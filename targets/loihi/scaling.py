@@ -5,7 +5,7 @@ scale="auto" keeps the paper's global rule unless a screen finds projections it 
     range used     max|W_k| * w_scale / 256 < 1/8   (a projection left with fewer than 5 bits)
     max|W| > 256                                     (w_scale would be 0)
 When flagged, candidates are measured by emulating calibration inputs and comparing every layer's
-spike trains with the float model (in the order Loihi runs): the global rule, per-layer scales,
+per-neuron spike counts with the float model's (in the order Loihi runs): the global rule, per-layer scales,
 and per-layer scales with split exponents on the projections that have outliers (the outliers keep
 the exponent that fits them, the bulk of the weights gets a finer one: two synapse formats). A
 candidate replaces the paper's rule only if it cuts the error by >= 25 %.
@@ -85,13 +85,13 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
     name, g, r, err = min(candidates, key=lambda c: c[3])
     if paper is not None and not (err <= IMPROVEMENT * paper and paper > 0):
         name, g, r, err = candidates[0]
-        why = (f"auto: kept the paper's global rule; no candidate cut its measured spike error ({paper:.4f}) "
+        why = (f"auto: kept the paper's global rule; no candidate cut its measured spike-count error ({paper:.4f}) "
                f"by {100 * (1 - IMPROVEMENT):.0f} %")
     else:
         why = (f"auto: {', '.join(f'{k}: {v}' for k, v in sc.flagged.items())}; chose '{name}' by measured "
-               f"spike-train error {err:.4f}" + (f" vs {paper:.4f} under the paper's global rule" if paper is not None
+               f"spike-count error {err:.4f}" + (f" vs {paper:.4f} under the paper's global rule" if paper is not None
                                                  else " (the global rule is impossible: max|W| > 256)"))
     r.reason = why
-    r.calibration = {"inputs": calibration, "metric": "fraction of spike entries differing from the float model, "
-                     "mean over layers", "errors": errors, "flagged": sc.flagged}
+    r.calibration = {"inputs": calibration, "metric": "mean |spike count difference| per neuron and sample relative "
+                     "to the float model's mean count, mean over layers", "errors": errors, "flagged": sc.flagged}
     return g, r
