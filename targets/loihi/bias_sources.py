@@ -20,21 +20,18 @@ from __future__ import annotations
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.passes.quantize import BIAS_MANT_MAX
 from snncc.passes.timing import MAX_EXTRA_DELAY
 from snncc.targets.loihi.network import LoihiLayer
 
-BIAS_MANT_MAX = 2**12 - 1
 
-
-def source_bias(pre: LoihiLayer, arithmetic: str) -> tuple[float, int]:
+def source_bias(pre: LoihiLayer) -> tuple[int, int]:
     """(mantissa, exponent) of a voltage bias that makes a compartment of ``pre`` fire every free step.
 
     Chip units: mant * 2**exp > vThMant * 2**6 (the highest of the layer's thresholds when they differ);
     the exponent is the layer's own when it already has biases, else 6 (the one netx assumes), else 7.
     """
-    v_th = int(np.max(pre.v_th_mant)) if arithmetic != "float" else float(np.max(pre.v_th_mant))
-    if arithmetic == "float":
-        return 2.0 * abs(v_th) * 64.0 + 1.0, 0
+    v_th = int(np.max(pre.v_th_mant))
     threshold = v_th * 64
     for exp in ([pre.bias_exp] if pre.bias is not None else [6, 7]):
         mant = (threshold >> exp) + 1
@@ -65,12 +62,11 @@ def _pad_square(a, k: int):
     return np.concatenate([a, np.zeros((a.shape[0], k), a.dtype)], axis=1)
 
 
-def _append_compartments(pre: LoihiLayer, k: int, arithmetic: str) -> None:
+def _append_compartments(pre: LoihiLayer, k: int) -> None:
     """``k`` always-on compartments at the end of ``pre``: no synapses in, a voltage bias above threshold."""
-    mant, exp = source_bias(pre, arithmetic)
-    dtype = np.float64 if arithmetic == "float" else np.int64
-    bias = np.zeros(pre.n, dtype) if pre.bias is None else np.asarray(pre.bias, dtype)
-    pre.bias = np.concatenate([bias, np.full(k, mant, dtype)])
+    mant, exp = source_bias(pre)
+    bias = np.zeros(pre.n, np.int64) if pre.bias is None else np.asarray(pre.bias, np.int64)
+    pre.bias = np.concatenate([bias, np.full(k, mant, np.int64)])
     pre.bias_exp = exp
     pre.weight = _pad_rows(pre.weight, k)
     pre.delay = _pad_rows(pre.delay, k)
@@ -87,7 +83,7 @@ def _append_compartments(pre: LoihiLayer, k: int, arithmetic: str) -> None:
 
 
 def attach(pre: LoihiLayer, post: LoihiLayer, shift: int, terms: list[tuple[int, np.ndarray]],
-           arithmetic: str = "int", exponents: list | None = None) -> None:
+           exponents: list | None = None) -> None:
     """Add bias-source columns for ``terms`` [(first IR step k, weight column (n,))] to ``post``.
 
     ``pre`` is the layer before ``post`` (the input layer for the first population); both are
@@ -117,7 +113,7 @@ def attach(pre: LoihiLayer, post: LoihiLayer, shift: int, terms: list[tuple[int,
         pre.n += k
         pre.always_on += k
     else:
-        _append_compartments(pre, k, arithmetic)
+        _append_compartments(pre, k)
     n_old = post.weight.shape[1]
     base_exp = np.broadcast_to(np.asarray(post.wgt_exp, np.int64), (post.n, n_old))
     new_exp = np.concatenate([base_exp] + exps, axis=1)

@@ -157,6 +157,10 @@ def test_braille_sized_with_affine_biases_runs_on_loihi_through_always_on_source
     agree, _, res = _agreement(src, net_path, x)
     np.testing.assert_array_equal(cli["prediction"], res.prediction)
     assert agree >= BIASED_AGREEMENT_BOUND, agree
+    # an input shorter than the model's length is run as given, with a warning that outputs fall outside it
+    np.save(tmp_path / "short.npy", x[:, :50])
+    code, stdout, err = run_cli(["emulate", net_path, "--input", tmp_path / "short.npy", "-o", tmp_path / "s.npz"], capsys)
+    assert code == 0 and "appear 2 step(s) late" in " ".join(err.split()) and "appended" not in stdout, err
 
 
 def test_per_neuron_parameters_become_compartment_profiles(tmp_path, capsys):
