@@ -161,7 +161,7 @@ class LayerQuant:
 
 @dataclass
 class QuantizationRecord:
-    rule: str                           # "global" | "per-layer"
+    rule: str                           # "global" | "per-layer" | "split" (per-layer, some projections split)
     reason: str
     w_scale: int | None                 # the network's scale under the global rule
     projections: list[ProjectionQuant] = field(default_factory=list)
@@ -213,12 +213,12 @@ def register_value(arr: np.ndarray):
     return int(arr[0]) if np.all(arr == arr[0]) else [int(a) for a in arr]
 
 
-def exponent_for(max_abs: float, scale: float, shrink: int = 0) -> int:
-    """Smallest wgtExp in [-6, 7] with max|W| * scale / 2**e <= 256, then ``shrink`` steps finer."""
+def exponent_for(max_abs: float, scale: float) -> int:
+    """Smallest wgtExp in [-6, 7] with max|W| * scale / 2**e <= 256."""
     if max_abs <= 0:
         return 0
     e = math.ceil(math.log2(max_abs * scale / 256.0) - 1e-12)
-    return int(min(max(e - shrink, WGT_EXP_MIN), WGT_EXP_MAX))
+    return int(min(max(e, WGT_EXP_MIN), WGT_EXP_MAX))
 
 
 def layer_scales(graph: Graph, rule: str) -> tuple[dict[str, float], int | None]:
@@ -243,16 +243,15 @@ def quantize_graph(
     graph: Graph,
     rule: str = "global",
     *,
-    exponents: dict[str, int] | None = None,
     split: set[str] | frozenset[str] = frozenset(),
     reason: str = "",
 ) -> tuple[Graph, QuantizationRecord]:
     """Quantize every projection and LIF of ``graph``; return (graph in quantized float units, record).
 
     ``rule``: "global" (the paper: one w_scale, wgtExp 0) or "per-layer" (each LIF its own
-    integer scale, each projection the smallest weight exponent that fits 8 bits). ``exponents``
-    overrides wgtExp per Dense (used by the calibrated scale search). Denses in ``split`` get two
-    exponents (``synapse_exponents``): outliers keep the coarse one, the bulk gets a finer one.
+    integer scale, each projection the smallest weight exponent that fits 8 bits). Denses in
+    ``split`` get two exponents (``synapse_exponents``): outliers keep the coarse one, the bulk a
+    finer one; the record's rule is then "split" if any projection was split.
     """
     if rule not in ("global", "per-layer"):
         raise SnnccError(f"scale rule must be one of {SCALE_RULES}", field="--scale")
@@ -263,10 +262,7 @@ def quantize_graph(
         w = graph.node(dense).weight
         s = scales[lif]
         max_abs = projection_max(graph, dense, lif)
-        if exponents and dense in exponents:
-            e = int(exponents[dense])
-        else:
-            e = 0 if rule == "global" else exponent_for(max_abs, s)
+        e = 0 if rule == "global" else exponent_for(max_abs, s)
         carried = current_biases(graph, lif) if bias_carrier(graph, lif) == dense else []
         pq = ProjectionQuant(dense=dense, target=lif, scale=s, wgt_exp=e, max_abs=max_abs, clipped=0, zeroed=0,
                              rms_error=0.0, range_used=float(max_abs * s / 2.0 ** e / 256.0))
@@ -298,6 +294,8 @@ def quantize_graph(
             raise SnnccError("a Dense bias needs a feed-forward projection into the population to carry it",
                              field=f"node '{dense}'.bias")
     record.clipped_total = sum(p.clipped for p in record.projections)
+    if any(p.wgt_exp_outliers is not None for p in record.projections):
+        record.rule = "split"
     for name, op in graph.items():
         if not isinstance(op, LIF):
             continue

@@ -25,21 +25,19 @@ from snncc.passes.timing import MAX_EXTRA_DELAY
 from snncc.targets.loihi.network import LoihiLayer
 
 
-def source_bias(pre: LoihiLayer) -> tuple[int, int]:
-    """(mantissa, exponent) of a voltage bias that makes a compartment of ``pre`` fire every free step.
+def source_bias(pre: LoihiLayer) -> tuple[int, int, int | None]:
+    """(mantissa, exponent, own vThMant or None) of a voltage bias that makes a compartment of ``pre``
+    fire at every free step: mant * 2**exp > vThMant * 2**6.
 
-    Chip units: mant * 2**exp > vThMant * 2**6 (the highest of the layer's thresholds when they differ);
-    the exponent is the layer's own when it already has biases, else 6 (the one netx assumes), else 7.
+    The exponent is the layer's own when it already has biases, else 6 (the one netx assumes).
+    The sources share the layer's highest threshold when the 13-bit mantissa reaches above it (no
+    extra compartment profile); otherwise they get their own threshold, vThMant 1 (one more profile).
     """
-    v_th = int(np.max(pre.v_th_mant))
-    threshold = v_th * 64
-    for exp in ([pre.bias_exp] if pre.bias is not None else [6, 7]):
-        mant = (threshold >> exp) + 1
-        if mant <= BIAS_MANT_MAX:
-            return mant, exp
-    raise SnnccError(f"vThMant {v_th} is too high for an always-on compartment (its voltage bias must exceed "
-                     "the threshold with a 13-bit mantissa) to carry the next layer's current bias",
-                     field=f"layer '{pre.name}'")
+    exp = int(pre.bias_exp) if pre.bias is not None else 6
+    mant = ((int(np.max(pre.v_th_mant)) * 64) >> exp) + 1
+    if mant <= BIAS_MANT_MAX:
+        return mant, exp, None
+    return (64 >> exp) + 1, exp, 1
 
 
 def _extend(value, k: int, fill):
@@ -64,7 +62,7 @@ def _pad_square(a, k: int):
 
 def _append_compartments(pre: LoihiLayer, k: int) -> None:
     """``k`` always-on compartments at the end of ``pre``: no synapses in, a voltage bias above threshold."""
-    mant, exp = source_bias(pre)
+    mant, exp, own_threshold = source_bias(pre)
     bias = np.zeros(pre.n, np.int64) if pre.bias is None else np.asarray(pre.bias, np.int64)
     pre.bias = np.concatenate([bias, np.full(k, mant, np.int64)])
     pre.bias_exp = exp
@@ -75,7 +73,9 @@ def _append_compartments(pre: LoihiLayer, k: int) -> None:
     pre.delay_rec = _pad_square(pre.delay_rec, k)
     pre.wgt_exp_rec = _pad_square(pre.wgt_exp_rec, k)
     # per-neuron registers: the sources reuse existing profiles (neuron 0's decays, the layer's top threshold)
-    pre.v_th_mant = _extend(pre.v_th_mant, k, np.max(pre.v_th_mant))
+    if own_threshold is not None:
+        pre.v_th_mant = np.broadcast_to(np.asarray(pre.v_th_mant, np.int64), (pre.n,)).copy()
+    pre.v_th_mant = _extend(pre.v_th_mant, k, np.max(pre.v_th_mant) if own_threshold is None else own_threshold)
     pre.i_decay = _extend(pre.i_decay, k, np.asarray(pre.i_decay).flat[0])
     pre.v_decay = _extend(pre.v_decay, k, np.asarray(pre.v_decay).flat[0])
     pre.n += k
@@ -102,6 +102,9 @@ def attach(pre: LoihiLayer, post: LoihiLayer, shift: int, terms: list[tuple[int,
         if first + repeats - 1 > MAX_EXTRA_DELAY:
             raise SnnccError(f"a current bias starting at IR step {start} needs a synaptic delay of "
                              f"{first + repeats - 1} steps; Loihi allows at most {MAX_EXTRA_DELAY}",
+                             field=f"layer '{post.name}'")
+        if exponents is None and np.ndim(post.wgt_exp):
+            raise SnnccError("a projection with per-synapse exponents needs the bias columns' exponents",
                              field=f"layer '{post.name}'")
         exp = post.wgt_exp if exponents is None else exponents[j]
         for p in range(repeats):

@@ -416,6 +416,9 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
                     meta[key] = value
         if "source_sha256" in s:
             meta["source_sha256"] = _text(s["source_sha256"])
+        shift = meta.get("output_shift", 0)
+        if not isinstance(shift, int) or isinstance(shift, bool) or not 0 <= shift < t_sample:
+            _fail(path, "/snncc/metadata", f"output_shift must be an integer in 0..{t_sample - 1}, got {shift!r}")
         names = meta.get("layer_names")
         if isinstance(names, list) and len(names) == len(layers):
             for lay, name in zip(layers, names):

@@ -40,6 +40,7 @@ class CheckRecord:
     overflow: dict[str, int]
     mode: str = "batch"
     notes: list[str] = field(default_factory=list)
+    reset_changed: bool = False                # --allow-reset-change replaced a subtract reset
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -48,7 +49,8 @@ class CheckRecord:
         a, l = self.accuracy, self.loss_points
         console.print(f"[bold]snncc check: {self.target}[/bold] on {self.samples} samples x {self.steps} steps "
                       f"(timing '{self.timing}', scale '{self.scale_rule}', {self.mode} mode)")
-        rows = [("(a) float model as trained", "float_trained"), ("(r) reset to zero instead, float", "ir_reset_changed"),
+        rows = [("(a) float model as trained", "float_trained")] + (
+            [("(r) reset to zero instead, float", "ir_reset_changed")] if self.reset_changed else []) + [
                 ("(b) IR in Loihi order, float", "ir_loihi_order"),
                 ("(c) IR with quantized parameters, float", "ir_quantized"), ("(d) Loihi emulator (bit-exact)", "emulator")]
         for label, key in rows:
@@ -99,13 +101,14 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     for start in range(0, n, CHUNK):
         x = x_all[start:start + CHUNK]
         p_a, s_a = _ir_run(lowered.trained, x, names)
-        p_r = p_a if lowered.deployed is None else _ir_run(lowered.deployed, x, names)[0]
         if lowered.order is lowered.trained:
             p_b, s_b = p_a, s_a
-        elif lowered.order is lowered.deployed:
-            p_b, s_b = p_r, _ir_run(lowered.order, x, names)[1]
         else:
             p_b, s_b = _ir_run(lowered.order, x, names)
+        if lowered.deployed is None:
+            p_r = p_a
+        else:
+            p_r = p_b if lowered.order is lowered.deployed else _ir_run(lowered.deployed, x, names)[0]
         p_c, s_c = _ir_run(lowered.quantized, x, names)
         if mode == "batch":
             res = emulate(net, pad(x, lead), record="all")
@@ -131,7 +134,7 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     if wide_needed:
         for x, m in emu_outputs:
             kw = {"mode": "stream", "gap": int(options.get("gap", 100))} if m == "stream" else {}
-            r = emulate(net, pad(x, shift), wide=True, **kw)
+            r = emulate(net, pad(x, lead), wide=True, **kw)
             counts = r.output_spikes[:, shift:shift + steps].sum(axis=1)
             preds["emulator_wide"].append(np.argmax(counts, axis=1))
     else:
@@ -162,5 +165,5 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
             "emulator_vs_quantized_ir": float(np.mean(p["emulator"] == p["ir_quantized"])),
             "loihi_order_vs_trained": float(np.mean(p["ir_loihi_order"] == p["float_trained"])),
         },
-        overflow=overflow, mode=mode, notes=notes,
+        overflow=overflow, mode=mode, notes=notes, reset_changed=lowered.deployed is not None,
     )

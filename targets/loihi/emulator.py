@@ -205,8 +205,8 @@ class _Program:
     ring: int                # ring buffer length (max total delay + 1)
 
 
-def _chip_weights(weight, exp: int, where: str) -> np.ndarray:
-    """w_chip = w * 2**(6 + wgtExp) as int64 (an integer only for wgtExp >= -6)."""
+def _chip_weights(weight, exp, where: str) -> np.ndarray:
+    """w_chip = w * 2**(6 + wgtExp) as int64 (an integer only for wgtExp >= -6); wgtExp an int or per synapse."""
     exp = np.asarray(exp, np.int64)
     if exp.size and exp.min() < -6:
         raise SnnccError("wgtExp below -6 gives fractional chip weights", field=where)

@@ -10,6 +10,8 @@ itself through ``weight_rec`` (n, n). Integer fields follow Loihi's registers:
     ref_delay: steps a neuron stays silent after a spike, including the spike step (1 = none)
     delay / delay_rec: extra synaptic delay in steps (0..62) on top of the one-step delivery;
     a scalar for the whole projection or an int array shaped like the weights
+    v_th_mant / i_decay / v_decay: an int for the layer, or an (n,) int array (a compartment
+    profile per neuron; the core map keeps at most 8 threshold / 32 compartment profiles a core)
     wgt_exp / wgt_exp_rec: an int, or an int array shaped like the weights when a projection
     uses two synapse formats (a fine exponent for the bulk, a coarse one for outliers)
     always_on: the layer's last ``always_on`` units are bias sources (``bias_sources.py``): input
@@ -39,9 +41,9 @@ class LoihiLayer:
     delay_rec: Any = 0
     bias: np.ndarray | None = None          # bias mantissa per neuron
     bias_exp: int = 6                       # netx reads bias with exponent 6
-    v_th_mant: int = 0
-    i_decay: int = 0
-    v_decay: int = 0
+    v_th_mant: Any = 0                      # int, or (n,) int array (per-neuron profiles)
+    i_decay: Any = 0
+    v_decay: Any = 0
     ref_delay: int = 1
     vmin: int = -(2**23 - 1)
     vmax: int = 2**23 - 1

@@ -140,6 +140,16 @@ def _max_delay(delay, csr) -> int:
     return int(d[coo.row, coo.col].max()) if coo.nnz else 0
 
 
+def _by_synapse_format(name: str, weight, exp):
+    """A projection as one part per weight exponent: on the chip each exponent is its own synapse
+    format, so synapses with different exponents sit in different synapse lists behind their own axons."""
+    if np.ndim(exp) == 0:
+        return [(name, weight)]
+    dense = weight.toarray() if hasattr(weight, "toarray") else np.asarray(weight)
+    exp = np.broadcast_to(np.asarray(exp), dense.shape)
+    return [(f"{name} (wgtExp {int(e)})", np.where(exp == e, dense, 0)) for e in np.unique(exp)]
+
+
 class NetworkModel:
     """Projections, global neuron ids and profile keys of a network, checked against the chip."""
 
@@ -157,9 +167,13 @@ class NetworkModel:
                 raise SnnccError(f"layer kind must be one of {LAYER_KINDS[1:]}", field=f"layer '{lay.name}'")
             if lay.weight is None:
                 raise SnnccError("a non-input layer needs a weight matrix", field=f"layer '{lay.name}'")
-            self._add(f"{self.layers[i - 1].name}->{lay.name}", i - 1, i, lay.weight, lay.delay)
-            if lay.weight_rec is not None:
-                self._add(f"{lay.name}->{lay.name} (recurrent)", i, i, lay.weight_rec, lay.delay_rec)
+            for name, src, weight, delay, exp in (
+                    (f"{self.layers[i - 1].name}->{lay.name}", i - 1, lay.weight, lay.delay, lay.wgt_exp),
+                    (f"{lay.name}->{lay.name} (recurrent)", i, lay.weight_rec, lay.delay_rec, lay.wgt_exp_rec)):
+                if weight is None:
+                    continue
+                for part, w in _by_synapse_format(name, weight, exp):
+                    self._add(part, src, i, w, delay)
         self.into = {i: [p for p in self.projections if p.dst == i] for i in range(1, len(self.layers))}
         self.checked: set[int] = set()
         self.usage_cache: dict = {}     # (layer, k equal slices) -> usage of each slice alone

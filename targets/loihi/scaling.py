@@ -52,6 +52,11 @@ def screen(graph: Graph) -> Screen:
 ErrorFn = Callable[[Graph, QuantizationRecord], float]
 
 
+def split_projections(record: QuantizationRecord) -> list[str]:
+    """The projections the record actually split (two exponents)."""
+    return sorted(p.dense for p in record.projections if p.wgt_exp_outliers is not None)
+
+
 def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple[Graph, QuantizationRecord]:
     """Quantize ``graph`` under ``rule``; for "auto", decide by the screen and by measured error."""
     if rule == "global":
@@ -63,35 +68,57 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
     sc = screen(graph)
     outliers = {d for d, why in sc.flagged.items() if why.startswith(OUTLIER_REASON)}
     if rule == "split":
-        return quantize_graph(graph, "per-layer", split=outliers, reason=(
-            f"requested: per-layer scales, split exponents on the projections with outliers {sorted(outliers)}"
-            if outliers else f"requested split, but no projection has outliers (max|W| > {OUTLIER_RATIO:.0f}x its "
-            "median): per-layer scales"))
+        g, r = quantize_graph(graph, "per-layer", split=outliers)
+        done = split_projections(r)
+        r.reason = (f"requested: per-layer scales, split exponents on {done}" if done else
+                    "requested split, but no projection has outliers that a finer exponent would help "
+                    f"(max|W| > {OUTLIER_RATIO:.0f}x its median): per-layer scales")
+        return g, r
     if sc.global_possible and not sc.flagged:
         return quantize_graph(graph, "global", reason="auto: the paper's global rule; no outlier weights (every "
                               f"max|W| <= {OUTLIER_RATIO:.0f}x its median, every projection uses >= 1/8 of the 8-bit range)")
     candidates: list[tuple[str, Graph, QuantizationRecord, float]] = []
+    refused: dict[str, str] = {}
+
+    def consider(name: str, make: Callable[[], tuple[Graph, QuantizationRecord]]) -> None:
+        """Quantize and measure a candidate; one that cannot be lowered (a register out of range) is left out."""
+        try:
+            g, r = make()
+            candidates.append((name, g, r, measure(g, r)))
+        except SnnccError as ex:
+            refused[name] = str(ex)
+
     if sc.global_possible:
-        g, r = quantize_graph(graph, "global")
-        candidates.append(("global", g, r, measure(g, r)))
-    g, r = quantize_graph(graph, "per-layer")
-    candidates.append(("per-layer", g, r, measure(g, r)))
+        consider("global", lambda: quantize_graph(graph, "global"))
+    consider("per-layer", lambda: quantize_graph(graph, "per-layer"))
     if outliers:
-        g, r = quantize_graph(graph, "per-layer", split=outliers)
-        if any(p.wgt_exp_outliers is not None for p in r.projections):
-            candidates.append((f"per-layer, split exponents on {sorted(outliers)}", g, r, measure(g, r)))
+        try:
+            split = quantize_graph(graph, "per-layer", split=outliers)
+        except SnnccError as ex:
+            refused["split"] = str(ex)
+        else:
+            if split_projections(split[1]):
+                consider(f"per-layer, split exponents on {split_projections(split[1])}", lambda: split)
+    if not candidates:
+        raise SnnccError(f"no scale rule can be lowered: {'; '.join(f'{k}: {v}' for k, v in refused.items())}",
+                         field="--scale")
     errors = {name: err for name, _, _, err in candidates}
     paper = errors.get("global")
     name, g, r, err = min(candidates, key=lambda c: c[3])
     if paper is not None and not (err <= IMPROVEMENT * paper and paper > 0):
-        name, g, r, err = candidates[0]
+        name, g, r, err = next(c for c in candidates if c[0] == "global")
         why = (f"auto: kept the paper's global rule; no candidate cut its measured spike-count error ({paper:.4f}) "
                f"by {100 * (1 - IMPROVEMENT):.0f} %")
     else:
+        versus = (f" vs {paper:.4f} under the paper's global rule" if paper is not None else
+                  " (the global rule is impossible: max|W| > 256)" if not sc.global_possible else
+                  " (the global rule cannot be lowered)")
         why = (f"auto: {', '.join(f'{k}: {v}' for k, v in sc.flagged.items())}; chose '{name}' by measured "
-               f"spike-count error {err:.4f}" + (f" vs {paper:.4f} under the paper's global rule" if paper is not None
-                                                 else " (the global rule is impossible: max|W| > 256)"))
+               f"spike-count error {err:.4f}{versus}")
+    if refused:
+        why += "; left out (cannot be lowered): " + "; ".join(f"{k}: {v}" for k, v in refused.items())
     r.reason = why
     r.calibration = {"inputs": calibration, "metric": "mean |spike count difference| per neuron and sample relative "
-                     "to the float model's mean count, mean over layers", "errors": errors, "flagged": sc.flagged}
+                     "to the float model's mean count, mean over layers", "errors": errors, "flagged": sc.flagged,
+                     "refused": refused}
     return g, r

@@ -89,15 +89,16 @@ def test_biased_network_lowers_exactly_and_sources_are_laid_out(refractory):
     assert 0 < res.spikes[1][..., :10].mean() < 0.5 and res.counts.sum() > 0   # the check compared real activity
 
 
+@pytest.mark.parametrize("layer, first_source", [(1, 6), (2, 10)])   # input axons; hidden compartments
 @pytest.mark.parametrize("off_by", [-1, 1])
-def test_the_compile_check_catches_a_bias_source_one_step_off(off_by):
+def test_the_compile_check_catches_a_bias_source_one_step_off(layer, first_source, off_by):
     """The exactness check has teeth: a bias arriving one step early or late is an error."""
     low = lower_model(biased_graph(), {"timing": "exact"})
-    out = low.network.layers[2]
-    d = np.array(np.broadcast_to(np.asarray(out.delay), out.weight.shape))
-    d[:, 10:] += off_by
-    out.delay = d
-    with pytest.raises(SnnccError, match="timing"):
+    target_layer = low.network.layers[layer]
+    d = np.array(np.broadcast_to(np.asarray(target_layer.delay), target_layer.weight.shape))
+    d[:, first_source:] = np.maximum(d[:, first_source:] + off_by, 0)
+    target_layer.delay = d
+    with pytest.raises(SnnccError, match="internal check failed"):
         validate_lowering(low.trained, low.order, low.quantized, low.network, low.layers,
                           low.timing_record.shifts, low.timing_record.output_shift, batch=3)
 
@@ -170,3 +171,53 @@ def test_any_delays_and_refractory_periods_lower_exactly(seed, refractory, d_in,
     """validate_lowering raises on any spike mismatch, so passing it is the exactness proof."""
     _, rec = _lower_and_check(biased_graph(seed, refractory, d_in, d_rec, d_out, lif_bias, per_neuron=per_neuron))
     assert rec.timing_exact and rec.quantized_params_exact and rec.kernel_exact
+
+
+def test_sources_after_a_voltage_biased_layer_get_their_own_threshold():
+    """A layer with its own small voltage bias (bias exponent 0) still hosts bias sources for the next
+    layer: they get vThMant 1 (one more compartment profile) instead of an impossible mantissa."""
+    g = biased_graph(refractory=1, lif_bias=False)
+    g.node("w_in").bias = None
+    g.node("w_rec").bias = None
+    g.node("hidden").bias, g.node("hidden").bias_placement = np.full(10, 0.01), "voltage"
+    low, rec = _lower_and_check(g, scale="global")
+    hidden = low.network.layers[1]
+    assert hidden.always_on == 1 and hidden.bias_exp == 0
+    assert np.asarray(hidden.v_th_mant)[-1] == 1 and np.all(np.asarray(hidden.v_th_mant)[:10] > 1)
+    assert hidden.bias[-1] * 2**hidden.bias_exp > 64 and rec.timing_exact and rec.quantized_params_exact
+
+
+def test_auto_scale_leaves_out_a_candidate_that_cannot_be_lowered():
+    """Per-layer scales on tiny weights give a threshold mantissa beyond 17 bits: auto says so and keeps
+    the rules that lower, instead of failing the compile."""
+    from snncc.targets.loihi import target
+
+    g = biased_graph(refractory=1)
+    for name in ("w_in", "w_rec"):
+        g.node(name).weight *= 1e-4 / np.abs(g.node(name).weight).max()
+        g.node(name).bias = None
+    g.node("hidden").bias = None
+    g.node("w_out").weight *= 200.0 / np.abs(g.node("w_out").weight).max()   # 1/8-range screen flags w_in, w_rec
+    art = target.lower(g, {"scale": "auto"})
+    q = art.quantization
+    assert "per-layer" in q["calibration"]["refused"] and "cannot be lowered" in q["reason"], q["reason"]
+    assert q["rule"] == "global" and art.validation["quantized_params_exact"]
+
+
+@pytest.mark.parametrize("bad", [[1], "x", 1.5, -1, 10_000])
+def test_bad_output_shift_in_bundle_metadata_is_one_line(tmp_path, bad):
+    import json
+
+    import h5py
+
+    low, _ = _lower_and_check(biased_graph())
+    path = tmp_path / "b.net"
+    write_bundle(low.network, path)
+    with h5py.File(path, "r+") as f:
+        meta = json.loads(f["snncc/metadata"][()][0].decode())
+        meta["output_shift"] = bad
+        del f["snncc/metadata"]
+        data = json.dumps(meta).encode()
+        f.create_dataset("snncc/metadata", data=np.array([data], dtype=f"S{len(data)}"))
+    with pytest.raises(SnnccError, match="output_shift must be an integer"):
+        read_bundle(path)

@@ -110,7 +110,7 @@ def test_auto_scale_handles_an_outlier_recurrent_matrix():
     assert q["calibration"] is not None and "global" in q["calibration"]["errors"]
     errors = q["calibration"]["errors"]
     chosen = min(errors.values())
-    assert q["rule"] == "per-layer" and chosen <= 0.75 * errors["global"], q["reason"]
+    assert q["rule"] == "split" and chosen <= 0.75 * errors["global"], q["reason"]
     assert "median" in q["reason"]
     plain = target.lower(small_graph(seed=8), {"scale": "auto"})
     assert plain.quantization["rule"] == "global" and "no outlier" in plain.quantization["reason"]
