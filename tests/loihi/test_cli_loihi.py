@@ -69,6 +69,18 @@ def test_compile_random_bytes_fails_cleanly(tmp_path, capsys):
     assert code == 2 and len(err.strip().splitlines()) == 1 and not (tmp_path / "x.net").exists()
 
 
+@pytest.mark.parametrize("option, value", [("--scale", "bogus"), ("--timing", "late")])
+def test_bad_scale_or_timing_is_one_line_and_writes_nothing(tmp_path, capsys, weights, th1_params, option, value):
+    out = tmp_path / "x.net"
+    code, _, err = run_cli(["compile", weights, "--params", th1_params, "--target", "loihi", "-o", out, option, value],
+                           capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and option in err and not out.exists(), err
+    data = tmp_path / "d.npz"
+    np.savez(data, inputs=np.zeros((2, 10, 48), np.uint8), labels=np.zeros(2, np.int64))
+    code, _, err = run_cli(["check", weights, "--params", th1_params, "--data", data, option, value], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and option in err, err
+
+
 def test_check_needs_a_target_with_check(tmp_path, capsys, weights, th1_params):
     data = tmp_path / "d.npz"
     np.savez(data, inputs=np.zeros((2, 10, 24), np.uint8), labels=np.zeros(2, np.int64))
