@@ -129,14 +129,19 @@ def _labels(letters: Sequence, f: str) -> np.ndarray:
                     dtype=np.int64)
 
 
+def _samples(path: str | os.PathLike, key: str) -> tuple[np.ndarray, Sequence, str]:
+    """(labels, per-sample ``key`` payloads, release) of a published pickle; no samples is an error."""
+    path = Path(path)
+    letters, payload, release = _records(_read_pickle(path), path, key)
+    if not letters:
+        raise SnnccError("no samples", file=str(path), field=key)
+    return _labels(letters, str(path)), payload, release
+
+
 def load_raw(path: str | os.PathLike) -> RawSet:
     """Read a published raw-frame file (either release); validated, labels 0..26."""
-    path = Path(path)
-    f = str(path)
-    letters, payload, release = _records(_read_pickle(path), path, "taxel_data")
-    if not letters:
-        raise SnnccError("no samples", file=f, field="taxel_data")
-    labels = _labels(letters, f)
+    f = str(Path(path))
+    labels, payload, release = _samples(path, "taxel_data")
     frames = []
     n_frames = None
     for i, td in enumerate(payload):
@@ -182,12 +187,8 @@ def _times(seq: Any, f: str, fld: str) -> np.ndarray:
 
 def load_events(path: str | os.PathLike) -> EventSet:
     """Read a published event file (either release): 12 taxels x [ON_times, OFF_times] per sample."""
-    path = Path(path)
-    f = str(path)
-    letters, payload, release = _records(_read_pickle(path), path, "events")
-    if not letters:
-        raise SnnccError("no samples", file=f, field="events")
-    labels = _labels(letters, f)
+    f = str(Path(path))
+    labels, payload, release = _samples(path, "events")
     s_l, tx_l, p_l, t_l = [], [], [], []
     for i, ev in enumerate(payload):
         fld = f"sample {i}: events"
@@ -208,7 +209,7 @@ def load_events(path: str | os.PathLike) -> EventSet:
             tx_l.append(np.full(t.size, k, np.int64))
     cat = lambda xs, dt: np.concatenate(xs).astype(dt) if xs else np.zeros(0, dt)  # noqa: E731
     events = Events(cat(s_l, np.int64), cat(tx_l, np.int64), cat(p_l, np.int8), cat(t_l, np.float64),
-                    n_samples=len(letters), n_taxels=N_TAXELS)
+                    n_samples=len(labels), n_taxels=N_TAXELS)
     return EventSet(events=events, labels=labels, source=f, release=release)
 
 

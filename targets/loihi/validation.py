@@ -100,6 +100,17 @@ def _same(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> str | None:
     return None
 
 
+def _check_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer], xp: np.ndarray, shifts: dict[str, int],
+                steps: int, expected: dict[str, np.ndarray], field: str, what: str) -> None:
+    """Run ``network`` with ``graph``'s float parameters (``float_twin``); any spike unlike ``expected`` is an error."""
+    with one_thread():
+        twin_net = float_twin(network, graph, layers)
+        twin = reference_run(twin_net, xp, arithmetic="float", record="all")
+    problem = _same(loihi_spikes(twin, twin_net, layers, shifts, steps), expected)
+    if problem:
+        raise SnnccError(f"internal check failed: {what} ({problem})", field=field)
+
+
 def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: LoihiNetwork, layers: list[ChainLayer],
                       shifts: dict[str, int], output_shift: int, *, batch: int = 4, steps: int | None = None,
                       rate: float = 0.05, seed: int = 0) -> ValidationRecord:
@@ -113,21 +124,11 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
     ir_quant = ir_spikes(quantized, x, names)
     record.trained_vs_loihi_order = agreement(ir_order, ir_trained)
 
-    with one_thread():
-        twin_net = float_twin(network, order, layers)
-        twin = reference_run(twin_net, xp, arithmetic="float", record="all")
-    problem = _same(loihi_spikes(twin, twin_net, layers, shifts, steps), ir_order)
-    if problem:
-        raise SnnccError(f"internal check failed: the lowered timing does not reproduce the IR in float ({problem})",
-                         field="timing")
+    _check_twin(network, order, layers, xp, shifts, steps, ir_order, "timing",
+                "the lowered timing does not reproduce the IR in float")
     record.timing_exact = True
-    with one_thread():
-        twin_q_net = float_twin(network, quantized, layers)
-        twin_q = reference_run(twin_q_net, xp, arithmetic="float", record="all")
-    problem = _same(loihi_spikes(twin_q, twin_q_net, layers, shifts, steps), ir_quant)
-    if problem:
-        raise SnnccError(f"internal check failed: quantized registers do not reproduce the quantized IR ({problem})",
-                         field="quantization")
+    _check_twin(network, quantized, layers, xp, shifts, steps, ir_quant, "quantization",
+                "quantized registers do not reproduce the quantized IR")
     record.quantized_params_exact = True
 
     fast = emulate(network, xp, record="all")

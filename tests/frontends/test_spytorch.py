@@ -11,40 +11,8 @@ from snncc.errors import SnnccError
 from snncc.frontends import LoadOptions, load_model
 from snncc.frontends.params import format_params, load_params, parse_params
 from snncc.ir import simulate
+from snncc_test_helpers import TH1_PARAMS, authors_loop
 
-TH1 = "scale 5\ntime_bin_size 5\nnb_input_copies 2\ntau_mem 0.06\ntau_ratio 10\nfwd_weight_scale 1\nweight_scale_factor 0.01\nreg_spikes 0.004\nreg_neurons 1e-6\n"
-
-
-def authors_loop(x, w_in, w_out, v_rec, alpha, beta):
-    """Their run_snn, written out independently: returns (hidden spikes, output spikes), (B, T, n)."""
-    batch, steps, _ = x.shape
-    h_in = torch.einsum("btc,cd->btd", x, w_in)
-    syn = torch.zeros(batch, w_in.shape[1], dtype=x.dtype)
-    mem = torch.zeros_like(syn)
-    out = torch.zeros_like(syn)
-    hidden = []
-    for t in range(steps):
-        h1 = h_in[:, t] + (out @ v_rec if v_rec is not None else 0)
-        mthr = mem - 1.0
-        out = (mthr > 0).to(x.dtype)
-        rst = out
-        new_syn = alpha * syn + h1
-        new_mem = (beta * mem + syn) * (1.0 - rst)
-        hidden.append(out)
-        mem, syn = new_mem, new_syn
-    hidden = torch.stack(hidden, dim=1)
-    h2 = torch.einsum("btc,cd->btd", hidden, w_out)
-    syn = torch.zeros(batch, w_out.shape[1], dtype=x.dtype)
-    mem = torch.zeros_like(syn)
-    outs = []
-    for t in range(steps):
-        mthr = mem - 1.0
-        out = (mthr > 0).to(x.dtype)
-        new_syn = alpha * syn + h2[:, t]
-        new_mem = (beta * mem + syn) * (1.0 - out)
-        outs.append(out)
-        mem, syn = new_mem, new_syn
-    return hidden, torch.stack(outs, dim=1)
 
 
 def weight_list(seed=0, n_in=48, n_h=60, n_out=28, recurrent=True):
@@ -56,18 +24,11 @@ def weight_list(seed=0, n_in=48, n_h=60, n_out=28, recurrent=True):
     return ws
 
 
-@pytest.fixture
-def params_file(tmp_path):
-    p = tmp_path / "parameters_th1.txt"
-    p.write_text(TH1)
-    return p
-
-
 @pytest.mark.parametrize("recurrent", [True, False])
-def test_ir_equals_the_authors_loop_spike_for_spike(tmp_path, params_file, recurrent):
+def test_ir_equals_the_authors_loop_spike_for_spike(tmp_path, th1_params, recurrent):
     ws = weight_list(recurrent=recurrent)
     torch.save(ws, tmp_path / "weights.pt")
-    g = load_model(tmp_path / "weights.pt", LoadOptions(params=params_file))
+    g = load_model(tmp_path / "weights.pt", LoadOptions(params=th1_params))
     assert g.metadata["update_order"] == "spytorch" and g.dt == 0.005
     assert g.node("hidden").refractory == 2 and g.node("hidden").reset == "zero"
     assert [g.delay("input", "w_in"), g.delay("hidden", "w_out")] == [2, 2]
@@ -79,7 +40,7 @@ def test_ir_equals_the_authors_loop_spike_for_spike(tmp_path, params_file, recur
     x = torch.as_tensor(np.tile(x24, (1, 1, 2)))  # the authors' inputs.tile((nb_input_copies,))
     alpha, beta = float(np.exp(-0.005 / 0.006)), float(np.exp(-0.005 / 0.06))
     w = [t.double() for t in ws]
-    hidden, outs = authors_loop(x, w[0], w[1], w[2] if recurrent else None, alpha, beta)
+    outs, hidden = authors_loop(x, w[0], w[1], w[2] if recurrent else None, alpha, beta)
     r = simulate(g, x, record="spikes")
     assert hidden.sum() > 100 and outs.sum() > 10  # the test exercises spiking, not silence
     assert torch.equal(r.spikes["hidden"], hidden)
@@ -102,28 +63,28 @@ def _retag_as_cuda(path):
     path.write_bytes(buf.getvalue())
 
 
-def test_cuda_tagged_weight_list_loads_on_the_cpu(tmp_path, params_file):
+def test_cuda_tagged_weight_list_loads_on_the_cpu(tmp_path, th1_params):
     ws = weight_list()
     p = tmp_path / "gpu_weights.pt"
     torch.save(ws, p)
     _retag_as_cuda(p)
     with pytest.raises(Exception):  # proves the tag took: without map_location it needs CUDA
         torch.load(p, weights_only=True)
-    g = load_model(p, LoadOptions(params=params_file))
+    g = load_model(p, LoadOptions(params=th1_params))
     np.testing.assert_array_equal(g.node("w_in").weight, ws[0].double().numpy().T)
 
 
-def test_params_file_rules(tmp_path):
-    p = parse_params(TH1)
+def test_th1_params_rules(tmp_path):
+    p = parse_params(TH1_PARAMS)
     assert p.dt == 0.005 and p.tau_syn == pytest.approx(0.006) and p.nb_input_copies == 2
     assert parse_params(format_params(p)) == p
     for text, match in [
-        (TH1.replace("tau_ratio 10\n", ""), "tau_ratio.*missing"),
-        (TH1 + "learning_rate 3\n", "learning_rate.*unknown key"),
-        (TH1.replace("tau_mem 0.06", "tau_mem -0.06"), "tau_mem.*positive"),
-        (TH1.replace("tau_mem 0.06", "tau_mem fast"), "tau_mem.*not a number"),
-        (TH1.replace("nb_input_copies 2", "nb_input_copies 2.5"), "whole number"),
-        (TH1 + "scale 3\n", "twice"),
+        (TH1_PARAMS.replace("tau_ratio 10\n", ""), "tau_ratio.*missing"),
+        (TH1_PARAMS + "learning_rate 3\n", "learning_rate.*unknown key"),
+        (TH1_PARAMS.replace("tau_mem 0.06", "tau_mem -0.06"), "tau_mem.*positive"),
+        (TH1_PARAMS.replace("tau_mem 0.06", "tau_mem fast"), "tau_mem.*not a number"),
+        (TH1_PARAMS.replace("nb_input_copies 2", "nb_input_copies 2.5"), "whole number"),
+        (TH1_PARAMS + "scale 3\n", "twice"),
     ]:
         f = tmp_path / "p.txt"
         f.write_text(text)
@@ -137,10 +98,10 @@ def test_params_file_rules(tmp_path):
     (lambda ws: [ws[0].clone().fill_(float("nan")), ws[1], ws[2]], "W_in.*NaN"),
     (lambda ws: [torch.zeros_like(w) for w in ws], "all weights are zero"),
 ])
-def test_bad_weight_lists(tmp_path, params_file, bad, match):
+def test_bad_weight_lists(tmp_path, th1_params, bad, match):
     torch.save(bad(weight_list()), tmp_path / "w.pt")
     with pytest.raises(SnnccError, match=match):
-        load_model(tmp_path / "w.pt", LoadOptions(params=params_file))
+        load_model(tmp_path / "w.pt", LoadOptions(params=th1_params))
 
 
 def test_weight_list_without_params_says_how(tmp_path):

@@ -102,26 +102,25 @@ class BrailleRSNN:
             y = v @ w.T
             return y if b is None else y + b
 
+        def step(layer, syn, mem, drive):
+            """One snnTorch Synaptic step: (syn, mem, spikes)."""
+            syn = layer.alpha * syn + drive
+            if reset == "zero-delayed":  # snnTorch's default: reset from the previous step's membrane
+                mem = (layer.beta * mem + syn) * (1 - (mem > layer.threshold))
+            else:
+                mem = layer.beta * mem + syn
+            spk = (mem > layer.threshold).astype(float)
+            if reset != "zero-delayed":
+                mem = mem * (1 - spk) if reset == "zero" else mem - spk * layer.threshold
+            return syn, mem, spk
+
         syn1, mem1, spk1 = np.zeros((B, n_h)), np.zeros((B, n_h)), np.zeros((B, n_h))
         syn2, mem2 = np.zeros((B, n_out)), np.zeros((B, n_out))
         hs, os = np.zeros((B, T, n_h)), np.zeros((B, T, n_out))
         for t in range(T):
-            syn1 = self.hidden.alpha * syn1 + lin(self.w1, self.b1, x[:, t]) + lin(self.w_rec, self.b_rec, spk1)
-            if reset == "zero-delayed":  # snnTorch's default: reset from the previous step's membrane
-                mem1 = (self.hidden.beta * mem1 + syn1) * (1 - (mem1 > self.hidden.threshold))
-            else:
-                mem1 = self.hidden.beta * mem1 + syn1
-            spk1 = (mem1 > self.hidden.threshold).astype(float)
-            if reset != "zero-delayed":
-                mem1 = mem1 * (1 - spk1) if reset == "zero" else mem1 - spk1 * self.hidden.threshold
-            syn2 = self.out.alpha * syn2 + lin(self.w2, self.b2, spk1)
-            if reset == "zero-delayed":
-                mem2 = (self.out.beta * mem2 + syn2) * (1 - (mem2 > self.out.threshold))
-            else:
-                mem2 = self.out.beta * mem2 + syn2
-            spk2 = (mem2 > self.out.threshold).astype(float)
-            if reset != "zero-delayed":
-                mem2 = mem2 * (1 - spk2) if reset == "zero" else mem2 - spk2 * self.out.threshold
+            syn1, mem1, spk1 = step(self.hidden, syn1, mem1,
+                                    lin(self.w1, self.b1, x[:, t]) + lin(self.w_rec, self.b_rec, spk1))
+            syn2, mem2, spk2 = step(self.out, syn2, mem2, lin(self.w2, self.b2, spk1))
             hs[:, t], os[:, t] = spk1, spk2
         return hs, os
 

@@ -7,6 +7,7 @@ import torch
 from snncc.models import SNNConfig, SpikingClassifier, count_trainable
 from snncc.models.surrogate import spike
 from snncc.training.trainer import build_model
+from snncc_test_helpers import authors_loop
 
 
 def test_parameter_counts_equal_the_papers():
@@ -17,38 +18,8 @@ def test_parameter_counts_equal_the_papers():
     assert count_trainable(build_model("ffsnn", input_copies=2)) == 48 * 450 + 450 * 28
 
 
-def authors_forward(x, w_in, w_out, v_rec, alpha, beta, scale, detach_reset=True):
-    """The paper's SpyTorch loop, written out step by step (independent of snncc.models)."""
-    batch, steps, _ = x.shape
-    n_h, n_o = w_out.shape
-    h1_from_input = torch.einsum("abc,cd->abd", x, w_in)
-    syn = x.new_zeros(batch, n_h)
-    mem = x.new_zeros(batch, n_h)
-    out = x.new_zeros(batch, n_h)
-    spk_rec = []
-    for t in range(steps):
-        h1 = h1_from_input[:, t] + (out @ v_rec if v_rec is not None else 0.0)
-        mthr = mem - 1.0
-        out = spike(mthr, scale)
-        rst = out.detach() if detach_reset else out
-        new_syn = alpha * syn + h1
-        new_mem = (beta * mem + syn) * (1.0 - rst)
-        spk_rec.append(out)
-        mem, syn = new_mem, new_syn
-    spk_rec = torch.stack(spk_rec, dim=1)
-    h2 = torch.einsum("abc,cd->abd", spk_rec, w_out)
-    flt = x.new_zeros(batch, n_o)
-    mem_o = x.new_zeros(batch, n_o)
-    s_out_rec = []
-    for t in range(steps):
-        mthr_out = mem_o - 1.0
-        s_out = spike(mthr_out, scale)
-        rst_out = s_out.detach() if detach_reset else s_out
-        new_flt = alpha * flt + h2[:, t]
-        new_mem_o = (beta * mem_o + flt) * (1.0 - rst_out)
-        s_out_rec.append(s_out)
-        mem_o, flt = new_mem_o, new_flt
-    return torch.stack(s_out_rec, dim=1), spk_rec
+def _surrogate(model):
+    return lambda v: spike(v, model.config.scale)
 
 
 def _small_rsnn(recurrent=True, seed=0):
@@ -68,8 +39,8 @@ def test_forward_equals_authors_loop_spike_for_spike(recurrent):
     model = _small_rsnn(recurrent)
     x = _inputs()
     s_out, s_hid = model(x)
-    ref_out, ref_hid = authors_forward(model.tile_inputs(x), model.w_in, model.w_out, model.v_rec,
-                                       model.alpha, model.beta, model.config.scale)
+    ref_out, ref_hid = authors_loop(model.tile_inputs(x), model.w_in, model.w_out, model.v_rec,
+                                    model.alpha, model.beta, _surrogate(model))
     assert s_hid.sum() > 50 and s_out.sum() > 5, "the test needs spiking activity in both layers"
     assert torch.equal(s_hid, ref_hid)
     assert torch.equal(s_out, ref_out)
@@ -87,9 +58,9 @@ def test_gradients_equal_authors_loop_and_the_reset_is_detached():
         return [p.grad.clone() for p in (model.w_in, model.w_out, model.v_rec)]
 
     ours = grads(lambda m: m(x))
-    authors = grads(lambda m: authors_forward(m.tile_inputs(x), m.w_in, m.w_out, m.v_rec, m.alpha, m.beta, m.config.scale))
-    attached = grads(lambda m: authors_forward(m.tile_inputs(x), m.w_in, m.w_out, m.v_rec, m.alpha, m.beta,
-                                               m.config.scale, detach_reset=False))
+    authors = grads(lambda m: authors_loop(m.tile_inputs(x), m.w_in, m.w_out, m.v_rec, m.alpha, m.beta, _surrogate(m)))
+    attached = grads(lambda m: authors_loop(m.tile_inputs(x), m.w_in, m.w_out, m.v_rec, m.alpha, m.beta,
+                                            _surrogate(m), detach_reset=False))
     for g_ours, g_auth in zip(ours, authors):
         assert torch.count_nonzero(g_ours) > 0
         torch.testing.assert_close(g_ours, g_auth, rtol=1e-10, atol=1e-12)
