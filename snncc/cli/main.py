@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sys
 
-import click
+import typer
 
 from snncc.cli.app import app
 from snncc.errors import SnnccError
@@ -29,6 +29,11 @@ from snncc.cli import (  # noqa: E402,F401  (imported for their registrations)
 )
 
 
+# typer >= 0.29 bundles its own click; older typer re-exports the real one. Either way its usage
+# errors derive from the ClickException found behind typer.BadParameter, so no click import.
+_CLICK_EXCEPTION = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
+
+
 def _say(line: str) -> None:
     print(line, file=sys.stderr)
 
@@ -47,12 +52,12 @@ def run(argv: list[str] | None = None) -> int:
             raise
         _say(f"snncc: error: {err.line()}")
         code = 2
-    except click.exceptions.Exit as ex:
+    except typer.Exit as ex:
         code = ex.exit_code
-    except click.exceptions.Abort:
+    except typer.Abort:
         _say("snncc: aborted")
         code = 130
-    except click.ClickException as ex:
+    except _CLICK_EXCEPTION as ex:
         if debug:
             raise
         _say(f"snncc: error: {ex.format_message()}")
