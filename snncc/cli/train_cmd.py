@@ -71,6 +71,7 @@ def train_command(
     overrides: Optional[List[str]] = typer.Option(None, "--set", help="Override a preset value, KEY=VALUE (e.g. tau_mem=0.05); repeatable."),
     params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file instead of the preset."),
     batch_size: int = typer.Option(128, "--batch-size", help="Batch size (paper: 128)."),
+    device: str = typer.Option("auto", "--device", help="Where to train: auto (CUDA when available, else CPU), cpu, cuda or cuda:N. Checkpoints are always saved on the CPU."),
     threads: int = typer.Option(1, "--threads", help="Torch CPU threads (the per-step loop gains little from more; 1 avoids contention)."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bars."),
     json_out: bool = typer.Option(False, "--json", help="Print the training record as JSON."),
@@ -84,7 +85,8 @@ def train_command(
     req = TrainRequest(kind=model.value, data=str(data), output=str(output), threshold=threshold, epochs=epochs,
                        subset=subset, seed=seed, order=order.value, val_fraction=val_fraction, batch_size=batch_size,
                        overrides=parse_overrides(overrides), params_file=str(params) if params else None,
-                       qat_from=str(qat_from) if qat_from else None, qat_epochs=qat_epochs)
+                       qat_from=str(qat_from) if qat_from else None, qat_epochs=qat_epochs,
+                       device=device)
     progress = _progress(quiet or json_out)  # started by the trainer once the data are loaded and checked
     result = finetune(req, progress) if req.qat_from else train(req, progress)
     if json_out:

@@ -15,6 +15,7 @@ from snncc.frontends.checkpoint import is_checkpoint, module_from_checkpoint, sa
 from snncc.frontends.params import PaperParams, load_params
 from snncc.frontends.torchfile import load_torch_file
 from snncc.models import SpikingClassifier, count_trainable
+from snncc.training.device import resolve_device
 from snncc.training.data import EVENT_KINDS, FRAME_DT_S, TrainingData, load_training_data, subset_indices
 from snncc.training.presets import OptimiserSettings, paper_preset, with_overrides
 from snncc.training.qat import loihi_quantization, quantized_forward
@@ -41,6 +42,7 @@ class TrainRequest:
     params_file: str | None = None
     qat_from: str | None = None
     qat_epochs: int = 3
+    device: str = "auto"
 
 
 @dataclass
@@ -159,14 +161,15 @@ def train(req: TrainRequest, progress=None, data: TrainingData | None = None) ->
         raise SnnccError(f"unknown model {req.kind!r} (known: {', '.join(KINDS)})", field="model")
     if req.epochs < 1:
         raise SnnccError("must be >= 1", field="--epochs")
+    device = resolve_device(req.device)
     hp = hyper_parameters(req)
     if data is None:
         data = load_training_data(req.data, req.kind, req.threshold, hp.time_bin_size)
     split, train_set, test_set, val_set = _prepare(req, data)
     model = _new_model(req, hp, data)
     settings = _settings(req, hp, req.epochs)
-    history = train_model(model, train_set, test_set, settings, val=val_set, progress=progress)
-    meta = _metadata(req, hp, data, split, history)
+    history = train_model(model, train_set, test_set, settings, val=val_set, progress=progress, device=device)
+    meta = _metadata(req, hp, data, split, history, {"trained_on": str(device)})
     save_checkpoint(model, req.output, meta)
     return TrainResult(req.kind, req.output, count_trainable(model), hp.as_dict(), asdict(settings), data.facts(),
                        split.summary(), history.summary(), [asdict(e) for e in history.epochs],
@@ -175,6 +178,7 @@ def train(req: TrainRequest, progress=None, data: TrainingData | None = None) ->
 
 def finetune(req: TrainRequest, progress=None, data: TrainingData | None = None) -> TrainResult:
     """Quantization-aware fine-tuning of a trained spiking checkpoint, on its own split."""
+    device = resolve_device(req.device)
     obj = load_torch_file(req.qat_from)
     if not is_checkpoint(obj):
         raise SnnccError("not an snncc checkpoint (train one with snncc train)", file=req.qat_from, field="format")
@@ -204,7 +208,7 @@ def finetune(req: TrainRequest, progress=None, data: TrainingData | None = None)
     settings = _settings(req, hp, req.qat_epochs)
     torch.manual_seed(req.seed)
     history = train_model(model, train_set, test_set, settings, val=val_set, forward=quantized_forward, progress=progress,
-                          keep_start=True)
+                          keep_start=True, device=device)
     after = {"float_test_accuracy": accuracy(model, *test_set),
              "quantized_test_accuracy": accuracy(model, *test_set, forward=quantized_forward),
              "quantization": asdict(loihi_quantization(model))}
@@ -215,7 +219,8 @@ def finetune(req: TrainRequest, progress=None, data: TrainingData | None = None)
                       "chip's per-step integer truncation of current and voltage is not modelled -- use snncc check "
                       "for the bit-exact emulator); best epoch 0 = no fine-tuned epoch beat the starting weights, "
                       "which were kept"}
-    meta = _metadata(req, hp, data, split, history, {"qat": record, "trained_by": "snncc train --qat-from"})
+    meta = _metadata(req, hp, data, split, history, {"qat": record, "trained_by": "snncc train --qat-from",
+                                                     "trained_on": str(device)})
     save_checkpoint(model, req.output, meta)
     return TrainResult(req.kind, req.output, count_trainable(model), hp.as_dict(), asdict(settings), data.facts(),
                        split.summary(), history.summary(), [asdict(e) for e in history.epochs], quantization=record,

@@ -93,8 +93,9 @@ def predictions_of(model: nn.Module, outputs) -> torch.Tensor:
 
 
 def as_input(model: nn.Module, x: torch.Tensor) -> torch.Tensor:
-    dtype = next(model.parameters()).dtype
-    return x.to(dtype)
+    """``x`` in the model's dtype, on the model's device (data sets stay on the CPU)."""
+    first = next(model.parameters())
+    return x.to(device=first.device, dtype=first.dtype, non_blocking=True)
 
 
 @torch.no_grad()
@@ -134,13 +135,18 @@ def train_model(
     progress=None,
     select: str | None = None,
     keep_start: bool = False,
+    device=None,
 ) -> History:
-    """Train ``model`` in place; at the end it holds the selected epoch's weights.
+    """Train ``model`` in place; at the end it holds the selected epoch's weights (back on the CPU).
 
     ``select`` is "test" (default without ``val``), "val" (default with it) or "last".
     ``keep_start``: the starting weights compete as epoch 0 (fine-tuning never returns worse
     weights, on the selection metric, than it was given). ``progress``: a ``rich.progress.Progress``.
+    ``device``: a ``torch.device`` to train on (default: where the model is); the data stay on the
+    CPU and each batch is moved to it.
     """
+    if device is not None:
+        model.to(device)
     x_train, y_train = train
     if select is None:
         select = "val" if val is not None and val[0].shape[0] > 0 else "test"
@@ -157,6 +163,7 @@ def train_model(
     finally:
         if progress is not None:
             progress.stop()
+        model.to("cpu")
     return history
 
 
@@ -178,7 +185,8 @@ def _epochs(model, x_train, y_train, test, val, settings, forward, progress, tas
         correct, hidden_spikes = 0, 0.0
         for start in range(0, n, settings.batch_size):
             idx = order[start:start + settings.batch_size]
-            xb, yb = as_input(model, x_train[idx]), y_train[idx]
+            xb = as_input(model, x_train[idx])
+            yb = y_train[idx].to(xb.device, non_blocking=True)
             outputs = forward(model, xb)
             parts = batch_loss(model, outputs, yb, settings)
             optimiser.zero_grad(set_to_none=True)

@@ -81,3 +81,19 @@ def test_fine_tuning_keeps_the_starting_weights_when_no_epoch_beats_them():
     assert history.epochs[0].test_accuracy < start_acc
     assert history.best_epoch == 0 and history.best_test_accuracy == start_acc
     assert all(torch.equal(start[k], v) for k, v in model.state_dict().items())
+
+
+def test_device_option_resolves_and_refuses_bad_names():
+    import torch
+
+    from snncc.errors import SnnccError
+    from snncc.training.device import resolve_device
+
+    assert resolve_device("cpu") == torch.device("cpu")
+    assert resolve_device("auto").type == ("cuda" if torch.cuda.is_available() else "cpu")
+    for bad in ("gpu", "cuda:x", "tpu:0"):
+        with pytest.raises(SnnccError, match="not a device"):
+            resolve_device(bad)
+    if not torch.cuda.is_available():
+        with pytest.raises(SnnccError, match="no CUDA device"):
+            resolve_device("cuda:0")
