@@ -16,8 +16,6 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from snncc.cli.app import app
 from snncc.cli.output import console, err_console, print_json
 from snncc.errors import SnnccError
-from snncc.frontends import LoadOptions, load_model
-from snncc.targets import get_target
 
 
 def load_check_data(path: Path, graph, limit: int | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -79,6 +77,9 @@ def check_command(
     json_out: bool = typer.Option(False, "--json", help="Print the record as JSON."),
 ) -> None:
     """Compare the float model as trained with the target, on data: accuracy, spike agreement, loss causes."""
+    from snncc.frontends import LoadOptions, load_model
+    from snncc.targets import get_target
+
     graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
     tgt = get_target(target)
     if not hasattr(tgt, "check"):

@@ -9,9 +9,7 @@ import typer
 
 from snncc.cli.app import app
 from snncc.cli.output import console, print_json
-from snncc.cli.render import print_graph_summary, print_import_notes
-from snncc.frontends import LoadOptions, load_model
-from snncc.targets import available_targets, get_target
+from snncc.targets import available_targets
 
 
 def compile_options(**kwargs) -> dict:
@@ -35,6 +33,10 @@ def compile_command(
     json_out: bool = typer.Option(False, "--json", help="Print the compile report as JSON."),
 ) -> None:
     """Compile a trained model for a target. Every artefact is checked against the IR reference."""
+    from snncc.cli.render import print_graph_summary, print_import_notes
+    from snncc.frontends import LoadOptions, load_model
+    from snncc.targets import get_target
+
     graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
     tgt = get_target(target)
     options = compile_options(timing=timing, scale=scale, allow_reset_change=allow_reset_change,

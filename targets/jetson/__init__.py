@@ -27,7 +27,7 @@ from snncc.frontends.params import RECORDING_LENGTH_S
 from snncc.ir.graph import Graph
 from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
 from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
-from snncc.targets.jetson.manifest import build_manifest, manifest_bytes
+from snncc.targets.jetson.manifest import build_manifest, manifest_bytes, replace_refusal
 from snncc.targets.jetson.plan import GraphPlan, plan_graph
 from snncc.targets.jetson.recipe import build_engine_script
 from snncc.targets.jetson.validate import single_thread, validate_export
@@ -73,11 +73,7 @@ class JetsonArtefact:
     notes: list[str] = field(default_factory=list)
 
     def write(self, path: str | os.PathLike) -> None:
-        dest = Path(path)
-        if dest.exists() and not dest.is_dir():
-            raise SnnccError("the Jetson artefact is a directory, and a file of that name exists", file=str(dest),
-                             field="--output")
-        with atomic_dir(dest) as tmp:
+        with atomic_dir(Path(path), replaceable=replace_refusal) as tmp:
             for name, data in self.files.items():
                 (tmp / name).write_bytes(data)
                 if name in EXECUTABLE:
