@@ -1,29 +1,12 @@
-"""snncc's compiler IR: nodes, graph, validation, serialisation and the reference simulator.
+"""snncc's compiler IR: nodes, graph, validation, serialisation and the reference simulator."""
 
-The names are resolved on first use, so ``import snncc.ir.graph`` (or a CLI that only parses
-options) does not pay for torch, which the reference simulator needs.
-"""
-
-from __future__ import annotations
-
-import importlib
-
-_HOMES = {
-    "Graph": "graph",
-    **{name: "nodes" for name in ("Node", "Input", "Dense", "LIF", "LSTM", "Readout", "Output")},
-    "load_graph": "serialize", "save_graph": "serialize",
-    "simulate": "simulate", "SimulationResult": "simulate",
-    "validate": "validate",
-}
+from snncc.ir.graph import Graph
+from snncc.ir.nodes import LIF, LSTM, Dense, Input, Node, Output, Readout
+from snncc.ir.serialize import load_graph, save_graph
+from snncc.ir.simulate import SimulationResult, simulate
+from snncc.ir.validate import validate
 
 __all__ = [
     "Graph", "Node", "Input", "Dense", "LIF", "LSTM", "Readout", "Output",
     "validate", "simulate", "SimulationResult", "save_graph", "load_graph",
 ]
-
-
-def __getattr__(name: str):
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'snncc.ir' has no attribute {name!r}")
-    return getattr(importlib.import_module(f"snncc.ir.{home}"), name)
