@@ -151,11 +151,18 @@ def frame_set(src: str | Path) -> EncodedSet:
 
 def write_with_split(out: str | Path, encoded: EncodedSet, split_test: float | None = None, seed: int = 0) -> list[str]:
     """Write ``out`` (and ``OUT_train``/``OUT_test`` for a stratified ``split_test``); the paths written."""
-    from snncc.data.dataset import save_dataset, stratified_split
+    from snncc.data.dataset import save_dataset
+    from snncc.data.split import stratified_split
 
     out = Path(out)
     inputs, labels, meta = encoded.inputs, encoded.labels, encoded.meta
-    split = stratified_split(labels, split_test, seed) if split_test is not None else None
+    split = None
+    if split_test is not None:
+        try:
+            parts = stratified_split(labels, seed=seed, test_fraction=split_test)
+        except SnnccError as err:
+            raise SnnccError(err.rule, field="--split-test") from None
+        split = (parts.train, parts.test)
     save_dataset(out, inputs, labels, meta)
     written = [str(out)]
     if split is not None:

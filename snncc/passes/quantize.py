@@ -30,6 +30,7 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
+from snncc.ir.timebase import recording_steps
 from snncc.ir.nodes import LIF, Dense
 from snncc.passes.current_bias import BiasTerm, current_biases, max_abs_bias, restore_biases
 
@@ -112,8 +113,7 @@ def samples_steps(graph: Graph, input_steps: int | None = None) -> tuple[int, st
     """tSample = ceil(T_record / dt) with T_record from metadata, else the input length (steps)."""
     t_record = graph.metadata.get("recording_length_s")
     if t_record is not None:
-        # the small epsilon keeps 1.35 / 0.005 = 270.00000000000006 from becoming 271
-        return int(math.ceil(float(t_record) / graph.dt - 1e-9)), f"ceil({t_record} s / {graph.dt} s)"
+        return recording_steps(t_record, graph.dt), f"ceil({t_record} s / {graph.dt} s)"
     if input_steps is not None:
         return int(input_steps), "the input length"
     raise SnnccError("tSample needs graph.metadata['recording_length_s'] or an input length", field="recording_length_s")

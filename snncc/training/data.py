@@ -49,11 +49,8 @@ class TrainingData:
 
 
 def _load_npz(path: Path) -> tuple[np.ndarray, np.ndarray, dict]:
-    try:
-        from snncc.data.dataset import load_dataset
-    except ImportError:
-        raise SnnccError("the Braille data-set loader (snncc.data.dataset) is not built yet", file=str(path),
-                         field="data") from None
+    from snncc.data.dataset import load_dataset
+
     return load_dataset(path)
 
 

@@ -25,6 +25,7 @@ from snncc.atomic import atomic_dir
 from snncc.errors import SnnccError
 from snncc.frontends.params import RECORDING_LENGTH_S
 from snncc.ir.graph import Graph
+from snncc.ir.timebase import recording_steps
 from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
 from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
 from snncc.targets.jetson.manifest import build_manifest, manifest_bytes, replace_refusal
@@ -54,7 +55,7 @@ def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> int:
         if length is None and plan.has_lif:
             raise SnnccError("the unrolled SNN needs a number of time steps: pass --time-steps "
                              "(the graph's metadata has no recording_length_s)", field="--time-steps")
-        steps = int(round(float(length if length is not None else RECORDING_LENGTH_S) / g.dt))
+        steps = recording_steps(length if length is not None else RECORDING_LENGTH_S, g.dt)
         if steps < 1:
             raise SnnccError(f"recording_length_s / dt gives {steps} time steps; pass --time-steps",
                              field="--time-steps")
