@@ -20,8 +20,18 @@ from snncc.frontends import LoadOptions, load_model
 from snncc.targets import get_target
 
 
-def load_check_data(path: Path, graph, limit: int | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
-    """(inputs, labels, meta) from a Braille data set file or a plain .npz with inputs and labels.
+def _inputs_only(path: Path) -> bool:
+    """True for a plain .npz with 'inputs' and no 'labels' (agreement without labels)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return "inputs" in z and "labels" not in z
+    except Exception:  # not an npz: load_check_data says what is wrong
+        return False
+
+
+def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = True) -> tuple[np.ndarray, np.ndarray, dict]:
+    """(inputs, labels, meta) from a Braille data set file or a plain .npz with inputs and labels
+    (``labels=False``: inputs only, labels returned as None).
 
     Inputs with ``base_inputs`` channels are tiled ``input_copies`` times (the authors' x.tile((k,))).
     """
@@ -32,7 +42,13 @@ def load_check_data(path: Path, graph, limit: int | None = None) -> tuple[np.nda
         load_dataset = None
     if not path.is_file():
         raise SnnccError("file does not exist", file=str(path), field="--data")
-    inputs = labels = None
+    inputs = None
+    if not labels:
+        with np.load(path, allow_pickle=False) as z:
+            inputs = np.asarray(z["inputs"])
+        if inputs.ndim != 3:
+            raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
+        return (inputs[:limit] if limit is not None else inputs), None, meta
     if load_dataset is not None:
         try:
             inputs, labels, meta = load_dataset(path)
@@ -67,7 +83,7 @@ def load_check_data(path: Path, graph, limit: int | None = None) -> tuple[np.nda
 def check_command(
     model: Path = typer.Argument(..., help="Model file (as for snncc compile)."),
     target: str = typer.Option("loihi", "--target", "-t", help="Target whose losses to measure."),
-    data: Path = typer.Option(..., "--data", help="Data set: a Braille .npz (snncc data) or any .npz with inputs (N,T,C) and labels (N,)."),
+    data: Optional[Path] = typer.Option(None, "--data", help="Data set: a Braille .npz (snncc data) or any .npz with inputs (N,T,C) and labels (N,); an .npz with inputs only, or no --data (seeded random spikes), measures agreement with the float graph instead."),
     params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file for a SpyTorch weight list."),
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
     reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR)."),
@@ -76,10 +92,24 @@ def check_command(
     allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: deploy a subtract-reset model with reset to zero."),
     stream: bool = typer.Option(False, "--stream", help="Loihi: the paper's protocol, one stream with 100 blank steps between samples."),
     limit: Optional[int] = typer.Option(None, "--limit", help="Use only the first N samples."),
+    density: float = typer.Option(0.08, "--density", help="Without labels: spike density of the seeded random inputs (40 samples x 256 steps; --limit sets the samples)."),
+    noise: float = typer.Option(0.01, "--noise", help="Without labels: multiplicative weight noise for the float graph's own sensitivity (the ceiling)."),
     json_out: bool = typer.Option(False, "--json", help="Print the record as JSON."),
 ) -> None:
     """Compare the float model as trained with the target, on data: accuracy, spike agreement, loss causes."""
     graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
+    unlabelled = data is None or _inputs_only(data)
+    if unlabelled:
+        if target != "loihi":
+            raise SnnccError("agreement without labels is measured for --target loihi", field="--target")
+        from snncc.targets.loihi.agreement import measure_agreement
+
+        x = None if data is None else load_check_data(data, graph, limit, labels=False)[0]
+        record = measure_agreement(graph, {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change,
+                                           "source": str(model), "data": None if data is None else str(data)},
+                                   x, samples=limit or 40, density=density, noise=noise)
+        print_json(record.as_dict()) if json_out else record.render_text(console)
+        return
     tgt = get_target(target)
     if not hasattr(tgt, "check"):
         raise SnnccError(f"target {target!r} has no check in this snncc", field="--target")
