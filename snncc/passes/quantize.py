@@ -9,8 +9,8 @@
     iDecay  = int(4096 * (1 - exp(-dt / tau_syn)))         exp discretisation ("euler": int(4096*dt/tau))
     vDecay  = int(4096 * (1 - exp(-dt / tau_mem)))
     tSample = ceil(T_record / dt)
-    fine:   s = min(1024 / max theta, 254 * 2**7 / max|W into the layer|)  (vThMant ~ 1024: a chip
-            threshold of 2**16 leaves 2**7 x threshold of headroom in u and v, 2**5 in q per step);
+    fine:   s = min(256 / max theta, 254 * 2**7 / max|W into the layer|)  (vThMant ~ 256: a chip
+            threshold of 2**14 leaves 2**9 x threshold of headroom in u and v, 2**7 in q per step);
             e per synapse = the smallest in [-6, 7] that fits (a float with an 8-bit mantissa:
             relative error <= 1/128 above 128 * 2**-6 chip units), decay registers rounded to nearest
 
@@ -44,7 +44,7 @@ WGT_EXP_MIN, WGT_EXP_MAX = -6, 7     # below -6 the chip weight w_q * 2**(6+e) s
 BIAS_MANT_MAX = 2**12 - 1            # Loihi 1: 13-bit signed bias mantissa
 BIAS_EXP_MAX = 7
 SCALE_RULES = ("global", "per-layer", "split", "fine", "auto")
-FINE_V_TH_MANT = 1024                # the fine rule's threshold mantissa (chip threshold 2**16)
+FINE_V_TH_MANT = 256                 # the fine rule's threshold mantissa (chip threshold 2**14)
 OUTLIER_RATIO = 20.0                 # |W| above 20x the median |W != 0| is an outlier
 
 
@@ -287,7 +287,7 @@ def quantize_graph(
 
     ``rule``: "global" (the paper: one w_scale, wgtExp 0), "per-layer" (each LIF its own
     integer scale, each projection the smallest weight exponent that fits 8 bits) or "fine" (each
-    LIF a scale that puts its threshold mantissa near 1024, each synapse its finest exponent,
+    LIF a scale that puts its threshold mantissa near 256, each synapse its finest exponent,
     decay registers rounded to nearest). Denses in
     ``split`` get two exponents (``synapse_exponents``): outliers keep the coarse one, the bulk a
     finer one; the record's rule is then "split" if any projection was split.

@@ -107,7 +107,7 @@ class AgreementRecord:
 
     def render_text(self, console) -> None:
         for line in self.lines():
-            console.print(line, markup=False, highlight=False)
+            console.print(line, markup=False, highlight=False, soft_wrap=True)
 
 
 def measure_agreement(graph: Graph, options: dict[str, Any], inputs: np.ndarray | None = None, *,

@@ -8,7 +8,7 @@ When flagged, candidates are measured by emulating calibration inputs and compar
 per-neuron spike counts with the float model's (in the order Loihi runs): the global rule, per-layer scales,
 per-layer scales with split exponents on the projections that have outliers (the outliers keep
 the exponent that fits them, the bulk of the weights gets a finer one: two synapse formats), and
-the fine rule (every synapse its own finest exponent, thresholds near 2**16 chip units, decay
+the fine rule (every synapse its own finest exponent, thresholds near 2**14 chip units, decay
 registers rounded to nearest: ``quantize.py``). The candidate with the smallest measured error
 wins (ties go to the one listed first, the simpler), so auto is never worse, on the calibration
 inputs, than any rule it tried.
@@ -51,7 +51,7 @@ def screen(graph: Graph) -> Screen:
     return Screen(flagged, possible)
 
 
-FINE_REASON = ("requested: fine (each synapse its finest weight exponent, threshold mantissa near 1024, "
+FINE_REASON = ("requested: fine (each synapse its finest weight exponent, threshold mantissa near 256, "
                "decay registers rounded to nearest)")
 ErrorFn = Callable[[Graph, QuantizationRecord], float]
 
