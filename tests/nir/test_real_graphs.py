@@ -100,6 +100,7 @@ def test_check_without_labels_prints_agreement_and_the_noise_ceiling(tmp_path, c
     assert "ceiling_argmax_agreement" in rec and "SYNTHETIC" in rec["inputs"]
     x = (np.random.default_rng(3).random((3, 40, 12)) < 0.1).astype(np.uint8)
     np.savez(tmp_path / "x.npz", inputs=x)
-    code, out, err = run_cli(["check", DATA / "braille_zero_2023.nir", "--dt", "1e-4", "--data", tmp_path / "x.npz"],
+    code, out, err = run_cli(["check", DATA / "braille_zero_2023.nir", "--dt", "1e-4", "--data", tmp_path / "x.npz",
+                              "--agreement"],
                              capsys)
     assert code == 0 and "argmax agreement" in out and "3 given spike trains of 40 steps" in out, err
