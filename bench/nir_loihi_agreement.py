@@ -30,7 +30,7 @@ bundle read back and emulated; argmax agreement and output-count correlation (Pe
 x classes) against the float graph on seeded random spike trains, with the float graph's own
 agreement under 1 % and 0.3 % multiplicative weight noise beside them (mean over 3 noise draws):
 
-    python bench/nir_loihi_agreement.py --real [--samples 40] [--steps 256] [--density 0.08] [--json]
+    python bench/nir_loihi_agreement.py --real [--samples 40] [--steps 256] [--density 0.08] [--input-seed 0] [--json]
 """
 
 from __future__ import annotations
@@ -131,7 +131,7 @@ def measure(seed: int, case: str, model: BrailleRSNN, x: np.ndarray, labels, wor
     return rows
 
 
-def real_graphs(samples: int, steps: int, density: float, workdir: Path) -> dict:
+def real_graphs(samples: int, steps: int, density: float, workdir: Path, seed: int = 0) -> dict:
     """Per real graph and rule: argmax agreement and count correlation of the emulated bundle with the float graph."""
     from snncc.frontends import LoadOptions
     from snncc.targets.loihi.agreement import count_correlation, perturbed, random_inputs
@@ -141,7 +141,7 @@ def real_graphs(samples: int, steps: int, density: float, workdir: Path) -> dict
         src = REAL_DIR / name
         reset = "zero" if extra else None      # the float reference: the same graph with reset to zero
         graph = load_model(src, LoadOptions(dt=1e-4, reset=reset))
-        x = random_inputs(samples, steps, graph.node(graph.of_kind(Input)[0]).width, density, 0)
+        x = random_inputs(samples, steps, graph.node(graph.of_kind(Input)[0]).width, density, seed)
         ref = simulate(graph, x, record="spikes")
         c_ref, p_ref = ref.readout.numpy(), ref.prediction.numpy()
         entry = {"ceiling": {}, "rules": {}}
@@ -186,12 +186,13 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--real", action="store_true", help="the NIR paper's trained Braille graphs (tests/data/nir)")
     ap.add_argument("--density", type=float, default=0.08, help="--real: spike density of the random inputs")
+    ap.add_argument("--input-seed", type=int, default=0, help="--real: seed of the random inputs")
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
     if args.real:
         with tempfile.TemporaryDirectory() as tmp:
-            real = real_graphs(args.samples, args.steps, args.density, Path(tmp))
-        record = {"samples": args.samples, "steps": args.steps, "density": args.density,
+            real = real_graphs(args.samples, args.steps, args.density, Path(tmp), args.input_seed)
+        record = {"samples": args.samples, "steps": args.steps, "density": args.density, "input_seed": args.input_seed,
                   "data": "SYNTHETIC inputs: seeded random spike trains; trained weights of the NIR paper", "graphs": real}
         if args.json:
             print(json.dumps(record, indent=2))

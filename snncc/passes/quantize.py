@@ -45,6 +45,7 @@ BIAS_MANT_MAX = 2**12 - 1            # Loihi 1: 13-bit signed bias mantissa
 BIAS_EXP_MAX = 7
 SCALE_RULES = ("global", "per-layer", "split", "fine", "auto")
 FINE_V_TH_MANT = 256                 # the fine rule's threshold mantissa (chip threshold 2**14)
+FINE_STEPS = (1.0, 1.125, 1.25, 1.375, 1.5, 1.625, 1.75, 1.875)   # scale multipliers auto measures (one octave)
 OUTLIER_RATIO = 20.0                 # |W| above 20x the median |W != 0| is an outlier
 
 
@@ -189,6 +190,7 @@ class QuantizationRecord:
     rule: str                           # "global" | "per-layer" | "split" (per-layer, some projections split) | "fine"
     reason: str
     w_scale: int | None                 # the network's scale under the global rule
+    fine_step: float | None = None      # fine: the multiplier of the layers' scales (FINE_STEPS)
     projections: list[ProjectionQuant] = field(default_factory=list)
     layers: list[LayerQuant] = field(default_factory=list)
     clipped_total: int = 0
@@ -246,7 +248,7 @@ def exponent_for(max_abs: float, scale: float) -> int:
     return int(min(max(e, WGT_EXP_MIN), WGT_EXP_MAX))
 
 
-def layer_scales(graph: Graph, rule: str) -> tuple[dict[str, float], int | None]:
+def layer_scales(graph: Graph, rule: str, fine_step: float = 1.0) -> tuple[dict[str, float], int | None]:
     """Per-LIF scale s: the paper's single w_scale, or floor(256 / max|W| into that layer)."""
     pairs = projections(graph)
     if not pairs:
@@ -262,7 +264,7 @@ def layer_scales(graph: Graph, rule: str) -> tuple[dict[str, float], int | None]
         for _, lif in pairs:
             op = graph.node(lif)
             top = float(np.max(op.threshold)) if np.all(np.isfinite(op.threshold)) else 1.0
-            s = FINE_V_TH_MANT / top if top > 0 else 1.0
+            s = FINE_V_TH_MANT * fine_step / top if top > 0 else 1.0
             m = max(maxima[d] for d, l in pairs if l == lif)
             if m > 0:
                 s = min(s, WEIGHT_MAX * 2.0 ** WGT_EXP_MAX / m)
@@ -282,13 +284,15 @@ def quantize_graph(
     *,
     split: set[str] | frozenset[str] = frozenset(),
     reason: str = "",
+    fine_step: float = 1.0,
 ) -> tuple[Graph, QuantizationRecord]:
     """Quantize every projection and LIF of ``graph``; return (graph in quantized float units, record).
 
     ``rule``: "global" (the paper: one w_scale, wgtExp 0), "per-layer" (each LIF its own
     integer scale, each projection the smallest weight exponent that fits 8 bits) or "fine" (each
     LIF a scale that puts its threshold mantissa near 256, each synapse its finest exponent,
-    decay registers rounded to nearest). Denses in
+    decay registers rounded to nearest; ``fine_step`` in [1, 2) multiplies those scales: within an
+    octave every scale keeps the same precision, but rounds each weight differently). Denses in
     ``split`` get two exponents (``synapse_exponents``): outliers keep the coarse one, the bulk a
     finer one; the record's rule is then "split" if any projection was split.
     """
@@ -296,8 +300,9 @@ def quantize_graph(
         raise SnnccError(f"scale rule must be one of {SCALE_RULES}", field="--scale")
     rounding = "nearest" if rule == "fine" else "truncate"
     g = graph.copy()
-    scales, w_scale = layer_scales(graph, rule)
-    record = QuantizationRecord(rule=rule, reason=reason, w_scale=w_scale)
+    scales, w_scale = layer_scales(graph, rule, fine_step)
+    record = QuantizationRecord(rule=rule, reason=reason, w_scale=w_scale,
+                                fine_step=float(fine_step) if rule == "fine" else None)
     for dense, lif in projections(graph):
         w = graph.node(dense).weight
         s = scales[lif]

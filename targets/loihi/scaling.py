@@ -9,7 +9,9 @@ per-neuron spike counts with the float model's (in the order Loihi runs): the gl
 per-layer scales with split exponents on the projections that have outliers (the outliers keep
 the exponent that fits them, the bulk of the weights gets a finer one: two synapse formats), and
 the fine rule (every synapse its own finest exponent, thresholds near 2**14 chip units, decay
-registers rounded to nearest: ``quantize.py``). The candidate with the smallest measured error
+registers rounded to nearest: ``quantize.py``) at the scales s * k, k in FINE_STEPS (one octave: the
+same precision, each weight rounded differently; which rounding errors cancel is measured, not
+assumed). The candidate with the smallest measured error
 wins (ties go to the one listed first, the simpler), so auto is never worse, on the calibration
 inputs, than any rule it tried.
 """
@@ -23,7 +25,8 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.passes.quantize import OUTLIER_RATIO, QuantizationRecord, projection_max, projections, quantize_graph
+from snncc.passes.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
+                                   quantize_graph)
 
 OUTLIER_REASON = "max|W| is"
 MIN_RANGE = 1.0 / 8.0
@@ -111,7 +114,8 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
         else:
             if split_projections(split[1]):
                 consider(f"per-layer, split exponents on {split_projections(split[1])}", lambda: split)
-    consider("fine", lambda: quantize_graph(graph, "fine"))
+    for step in FINE_STEPS:
+        consider("fine" if step == 1.0 else f"fine x{step:g}", lambda step=step: quantize_graph(graph, "fine", fine_step=step))
     if not candidates:
         raise SnnccError(f"no scale rule can be lowered: {'; '.join(f'{k}: {v}' for k, v in refused.items())}",
                          field="--scale")

@@ -69,8 +69,8 @@ def test_damaged_nir_file_is_still_one_line(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("name,argmax_bound,corr_bound", [
-    # measured at 20 samples x 256 steps, density 0.08, seed 0: auto (fine) 1.000 / 0.958 and 0.90 / 0.990;
-    # the paper's global rule 0.85 / 0.885 and 0.85 / 0.961
+    # bounds well below what was measured at 20 samples x 256 steps, density 0.08, seed 0 (auto picks a
+    # fine candidate: see the printed figures on failure); the paper's global rule: 0.85 / 0.885 and 0.85 / 0.961
     ("braille_zero_2023.nir", 0.95, 0.94),
     ("braille_noDelay_noBias_subtract.nir", 0.85, 0.98),
 ])
@@ -79,9 +79,9 @@ def test_trained_braille_graph_agrees_with_its_float_graph(name, argmax_bound, c
     kw = dict(samples=20, steps=256, density=0.08)
     rec = measure_agreement(g, {"scale": "auto", "allow_reset_change": True}, **kw)
     errors = rec.candidates
-    assert {"global", "per-layer", "fine"} <= set(errors), errors
-    assert rec.scale_rule == "fine" and errors["fine"] == min(errors.values()), rec.scale_reason
-    assert "chose 'fine'" in rec.scale_reason
+    assert {"global", "per-layer", "fine", "fine x1.5"} <= set(errors), errors
+    best = min(errors, key=errors.get)            # auto: never worse than a rule it tried
+    assert rec.scale_rule == "fine" and best.startswith("fine") and f"chose '{best}'" in rec.scale_reason, errors
     assert rec.argmax_agreement >= argmax_bound and rec.count_correlation >= corr_bound, rec.lines()
     assert not any(rec.overflow.values()), rec.overflow
     paper = measure_agreement(g, {"scale": "global", "allow_reset_change": True}, **kw)
