@@ -108,7 +108,10 @@ def check_command(
         record = measure_agreement(graph, {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change,
                                            "source": str(model), "data": None if data is None else str(data)},
                                    x, samples=limit or 40, density=density, noise=noise)
-        print_json(record.as_dict()) if json_out else record.render_text(console)
+        if json_out:
+            print_json(record.as_dict())
+        else:
+            record.render_text(console)
         return
     tgt = get_target(target)
     if not hasattr(tgt, "check"):

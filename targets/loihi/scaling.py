@@ -127,8 +127,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
               " (the global rule is impossible: max|W| > 256)" if not sc.global_possible else
               " (the global rule cannot be lowered)")
     why = (f"auto: {', '.join(f'{k}: {v}' for k, v in sc.flagged.items())}; chose '{name}' by measured "
-           f"spike-count error {err:.4f}{versus} (candidates: "
-           + ", ".join(f"{k} {v:.4f}" for k, v in errors.items()) + ")")
+           f"spike-count error {err:.4f}{versus}, the smallest of {len(errors)} candidates")
     if refused:
         why += "; left out (cannot be lowered): " + "; ".join(f"{k}: {v}" for k, v in refused.items())
     r.reason = why
