@@ -26,7 +26,7 @@ def compile_command(
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
     reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR): zero | subtract | zero-delayed (snnTorch's one-step-late zero reset)."),
     timing: str = typer.Option("exact", "--timing", help="Loihi: 'exact' lowers the IR's delays and refractory period; 'paper' reproduces the authors' export (refDelay 1, no delays)."),
-    scale: str = typer.Option("auto", "--scale", help="Loihi weight scale rule: 'global' (the paper's), 'per-layer', 'split' (per-layer, outlier weights in a second synapse format with a coarser exponent), or 'auto' (the paper's unless outliers make it lossy; then chosen by measured error)."),
+    scale: str = typer.Option("auto", "--scale", help="Loihi weight scale rule: 'global' (the paper's), 'per-layer', 'split' (per-layer, outlier weights in a second synapse format with a coarser exponent), 'fine' (each synapse its finest exponent), or 'auto' (the paper's unless outliers make it lossy; then the candidate with the smallest measured error)."),
     allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: accept compiling a subtract-reset model with reset to zero (snncc check reports the cost)."),
     jetpack: str = typer.Option("4.6", "--jetpack", help="Jetson: JetPack version of the board; selects the ONNX opset (4.6 -> 13, 5.x/6.0 -> 17, 6.1+ -> 20)."),
     time_steps: Optional[int] = typer.Option(None, "--time-steps", help="Jetson: time steps T of the unrolled sequence model (default: recording length / dt)."),
