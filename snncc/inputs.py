@@ -35,7 +35,7 @@ def check_batch(x, width: int | None = None, *, spikes: bool = True, source: str
         raise SnnccError("input contains NaN or Inf" + ("; spikes must be 0 or 1" if spikes else ""),
                          file=source, field=field)
     if spikes and not np.all((x == 0) | (x == 1)):
-        bad = x[(x != 0) & (x != 1)].reshape(-1)[0]
+        bad = x[(x != 0) & (x != 1)].reshape(-1)[0].item()
         raise SnnccError(f"input must be binary (0/1 spikes), found the value {bad!r}", file=source, field=field)
     return x
 
@@ -53,3 +53,17 @@ def check_labels(labels, n_samples: int, n_classes: int | None, *, source: str |
         raise SnnccError(f"label {bad} is outside the model's {n_classes} classes (0..{n_classes - 1})",
                          file=source, field=field)
     return y
+
+
+def model_classes(graph) -> int | None:
+    """How many classes a graph decides between: its single Output's width (None if it has several)."""
+    from snncc.ir.nodes import Output
+
+    outs = graph.of_kind(Output)
+    return graph.node(outs[0]).size if len(outs) == 1 else None
+
+
+def check_dataset(inputs, labels, graph, *, source: str | None = None) -> None:
+    """A labelled data set for ``graph``: N >= 1 samples of T >= 1 steps, labels within its classes."""
+    x = check_batch(inputs, spikes=False, source=source, field="inputs")
+    check_labels(labels, x.shape[0], model_classes(graph), source=source)

@@ -17,6 +17,7 @@ from snncc.cli.app import app
 from snncc.cli.output import console, err_console, print_json
 from snncc.errors import SnnccError
 from snncc.frontends import LoadOptions, load_model
+from snncc.inputs import check_dataset
 from snncc.targets import get_target
 
 
@@ -52,8 +53,7 @@ def load_check_data(path: Path, graph, limit: int | None = None) -> tuple[np.nda
     inputs, labels = np.asarray(inputs), np.asarray(labels)
     if inputs.ndim != 3:
         raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
-    if labels.ndim != 1 or labels.shape[0] != inputs.shape[0] or labels.dtype.kind not in "iu":
-        raise SnnccError(f"labels must be N = {inputs.shape[0]} integers", file=str(path), field="labels")
+    check_dataset(inputs, labels, graph, source=str(path))
     if limit is not None:
         inputs, labels = inputs[:limit], labels[:limit]
     k = int(graph.metadata.get("input_copies", 1) or 1)
@@ -71,8 +71,8 @@ def check_command(
     params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file for a SpyTorch weight list."),
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
     reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR)."),
-    timing: str = typer.Option("exact", "--timing", help="Loihi: 'exact' or 'paper' (the authors' export order)."),
-    scale: str = typer.Option("auto", "--scale", help="Loihi weight scale rule: global, per-layer, split or auto."),
+    timing: Optional[str] = typer.Option(None, "--timing", help="Loihi: 'exact' (default) or 'paper' (the authors' export order)."),
+    scale: Optional[str] = typer.Option(None, "--scale", help="Loihi weight scale rule: global, per-layer, split or auto (default)."),
     allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: deploy a subtract-reset model with reset to zero."),
     stream: bool = typer.Option(False, "--stream", help="Loihi: the paper's protocol, one stream with 100 blank steps between samples."),
     limit: Optional[int] = typer.Option(None, "--limit", help="Use only the first N samples."),
@@ -86,7 +86,8 @@ def check_command(
     if limit is not None and limit < 1:
         raise SnnccError("must be >= 1", field="--limit")
     inputs, labels, meta = load_check_data(data, graph, limit)
-    options = {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change, "source": str(model),
+    given = {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change or None, "stream": stream or None}
+    options = {**{k: v for k, v in given.items() if v is not None}, "source": str(model),
                "data": str(data), "mode": "stream" if stream else "batch",
                "synthetic": bool(isinstance(meta, dict) and meta.get("synthetic"))}
     with Progress(TextColumn("checking"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),

@@ -16,6 +16,7 @@ from snncc.atomic import atomic_path
 from snncc.cli.app import app
 from snncc.cli.output import console, print_json
 from snncc.errors import SnnccError
+from snncc.inputs import check_batch
 
 
 def load_array(path: Path) -> np.ndarray:
@@ -57,7 +58,7 @@ def run_command(
     from snncc.targets.jetson.runner import RunnerError
 
     runner = open_runner(artefact, backend)
-    x = load_array(input)
+    x = check_batch(load_array(input), spikes=runner.manifest["input"]["signal"] == "spikes", source=str(input))
     try:
         res = runner.stream(x) if stream else runner.run(x)
         used = runner.session("step" if stream else "sequence").backend

@@ -244,9 +244,13 @@ class LoihiTarget:
     name = "loihi"
     description = "Intel Loihi 1: HDF5 bundle (netx layout) checked by a bit-exact emulator"
     output_kind = "file"
+    accepts = ("timing", "scale", "allow_reset_change", "stream")
 
     def lower(self, graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
+        from snncc.targets import check_target_options
         from snncc.targets.loihi.validation import validate_lowering
+
+        check_target_options(self, options)
 
         lowered = lower_model(graph, options)
         notes: list[str] = []
@@ -262,8 +266,10 @@ class LoihiTarget:
                              timing=lowered.timing_record.as_dict(), validation=record.as_dict(), notes=notes)
 
     def check(self, graph: Graph, inputs, labels, options: dict[str, Any]):
+        from snncc.targets import check_target_options
         from snncc.targets.loihi.check import check_model
 
+        check_target_options(self, options)
         return check_model(graph, inputs, labels, options)
 
 

@@ -32,6 +32,7 @@ from snncc.limits import check_memory, check_time_steps
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 
 SNNCC_GROUP = "snncc"
+MAX_TEXT_BYTES = 64 * 2**20    # a text field (type, JSON record) of a bundle: one string of at most 64 MiB
 FORMAT_VERSION = 1
 
 
@@ -174,7 +175,10 @@ def _declared(ds: Any, path: str, field: str, max_elements: int | None = None) -
 
 def _text(ds: Any) -> str:
     if isinstance(ds, h5py.Dataset):
-        _declared(ds, None, ds.name or "string")
+        _declared(ds, None, ds.name or "string", max_elements=1)
+        if ds.size * ds.dtype.itemsize > MAX_TEXT_BYTES:
+            _fail(None, ds.name or "string", f"declares a {ds.dtype.itemsize:,}-byte string; text fields hold at most "
+                  f"{MAX_TEXT_BYTES:,} bytes")
     value = ds[()] if isinstance(ds, h5py.Dataset) else ds
     if isinstance(value, np.ndarray):
         value = value.reshape(-1)[0] if value.size else b""

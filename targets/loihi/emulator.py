@@ -26,6 +26,7 @@ from snncc.errors import SnnccError
 from snncc.limits import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, whole_number
 from snncc.targets.loihi.network import LoihiNetwork
 
+DEFAULT_GAP = 100                # blank steps between samples in stream mode (the paper's protocol)
 Q_BITS, U_BITS = 21, 23          # magnitude bits; plus a sign bit each
 RECORD_CHOICES = ("outputs", "all")
 MODES = ("batch", "stream")
@@ -261,14 +262,17 @@ class PreparedNetwork:
     @staticmethod
     def _check_stream(batch: int, steps: int, gap) -> None:
         """--gap: a whole number of blank steps, 0..MAX_TIME_STEPS, the whole stream within MAX_STREAM_STEPS."""
-        gap = whole_number(gap, field="--gap", minimum=0, maximum=MAX_TIME_STEPS)
+        gap = whole_number(gap, field="--gap", minimum=0)
+        if gap > MAX_TIME_STEPS:
+            raise SnnccError(f"{gap:,} blank steps exceed snncc's cap of {MAX_TIME_STEPS:,} steps "
+                             "(snncc.limits.MAX_TIME_STEPS)", field="--gap")
         total = batch * (steps + gap)
         if total > MAX_STREAM_STEPS:
             raise SnnccError(f"the stream of {batch} sample(s) x ({steps} steps + {gap} gap steps) = {total:,} steps "
                              f"exceeds snncc's cap of {MAX_STREAM_STEPS:,} (snncc.limits.MAX_STREAM_STEPS)",
                              field="--gap")
 
-    def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int = 100,
+    def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int | None = None,
             wide: bool = False) -> EmulationResult:
         from snncc.targets.loihi._kernel import run_flat
 
@@ -279,8 +283,12 @@ class PreparedNetwork:
         x = check_inputs(inputs, self.network.input_width)
         batch, steps, width = x.shape
         if mode == "batch":
+            if gap is not None:
+                raise SnnccError("applies only to stream mode (--stream, the paper's protocol); batch mode starts "
+                                 "every sample from zero state", field="--gap")
             self._check_size(batch * steps, record)
             return run_flat(self.flat, self.network.drive(x), record, wide)
+        gap = DEFAULT_GAP if gap is None else gap
         self._check_stream(batch, steps, gap)
         self._check_size(batch * (steps + gap), record)
         period = steps + gap
@@ -307,14 +315,14 @@ def emulate(
     *,
     record: str = "outputs",
     mode: str = "batch",
-    gap: int = 100,
+    gap: int | None = None,
     wide: bool = False,
 ) -> EmulationResult:
     """Run ``network`` bit-exactly on 0/1 ``inputs`` (T, C) or (B, T, C).
 
     ``inputs`` carry the model's channels; always-on bias axons (``bias_sources.py``) are added
     here, held at 1 on every step (gaps included). mode "batch": every sample starts from zero state. mode "stream": the paper's protocol, one
-    continuous run with ``gap`` blank steps after each sample; each sample's outputs are the
+    continuous run with ``gap`` blank steps (default 100) after each sample; each sample's outputs are the
     steps of its own window. record "all" keeps every layer's spikes, u and v. ``wide=True``
     (outputs only) removes the q/u wrap and the v clip, to measure what overflow costs.
     """
