@@ -17,7 +17,6 @@ from snncc.cli.app import app
 from snncc.cli.output import console, err_console, print_json
 from snncc.errors import SnnccError
 from snncc.frontends import LoadOptions, load_model
-from snncc.inputs import check_dataset
 from snncc.targets import get_target
 
 
@@ -53,6 +52,8 @@ def load_check_data(path: Path, graph, limit: int | None = None) -> tuple[np.nda
     inputs, labels = np.asarray(inputs), np.asarray(labels)
     if inputs.ndim != 3:
         raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
+    from snncc.inputs import check_dataset
+
     check_dataset(inputs, labels, graph, source=str(path))
     if limit is not None:
         inputs, labels = inputs[:limit], labels[:limit]

@@ -85,6 +85,11 @@ def report_command(
     else:
         if not 0.0 <= rate <= 1.0 or samples < 1:
             raise SnnccError("need 0 <= --rate <= 1 and --samples >= 1", field="--rate/--samples")
+        from snncc.limits import check_memory
+
+        check_memory(8 * samples * network.t_sample * network.input_width,
+                     f"{samples:,} random samples of {network.t_sample} steps x {network.input_width} channels",
+                     field="--samples")
         rng = np.random.default_rng(seed)
         x = (rng.random((samples, network.t_sample, network.input_width)) < rate).astype(np.uint8)
         source = "<random>"

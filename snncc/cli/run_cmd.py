@@ -16,7 +16,6 @@ from snncc.atomic import atomic_path
 from snncc.cli.app import app
 from snncc.cli.output import console, print_json
 from snncc.errors import SnnccError
-from snncc.inputs import check_batch
 
 
 def load_array(path: Path) -> np.ndarray:
@@ -55,6 +54,7 @@ def run_command(
     json_out: bool = typer.Option(False, "--json", help="Print the result summary as JSON."),
 ) -> None:
     """Run a Jetson artefact on inputs: the whole-sequence model, or the step model with --stream."""
+    from snncc.inputs import check_batch
     from snncc.targets.jetson.runner import RunnerError
 
     runner = open_runner(artefact, backend)

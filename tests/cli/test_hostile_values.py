@@ -276,3 +276,5 @@ def test_other_verbs_refuse_options_that_do_not_apply(files, tmp_path, capsys):
     refused(capsys, ["map", files / "m.net", "--timing", "paper"], needle="--timing: does not apply to a Loihi bundle")
     refused(capsys, ["report", files / "m.net", "--energy", "--input", files / "x.npy", "--seed", "3"],
             needle="--seed: applies only to random inputs")
+    refused(capsys, ["report", files / "m.net", "--energy", "--samples", str(10**9)],
+            needle="--samples: 1,000,000,000 random samples of")
