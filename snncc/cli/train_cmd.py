@@ -6,15 +6,12 @@ from enum import Enum
 from pathlib import Path
 from typing import List, Optional
 
-import torch
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from snncc.cli.app import app
 from snncc.cli.output import console, err_console, print_json
 from snncc.errors import SnnccError
-from snncc.training.pipeline import TrainRequest, TrainResult, finetune, train
-from snncc.training.presets import parse_overrides
 
 
 class ModelKind(str, Enum):
@@ -34,7 +31,7 @@ def _progress(quiet: bool) -> Progress:
                     TimeRemainingColumn(), console=err_console, disable=quiet, transient=False)
 
 
-def render_result(result: TrainResult) -> None:
+def render_result(result) -> None:
     h = result.history
     console.print(f"[bold]{result.kind}[/bold]: {result.parameters:,} trainable parameters; "
                   f"{result.data['samples']} samples of {result.data['encoding']} ({result.data['steps']} steps x "
@@ -77,6 +74,11 @@ def train_command(
     json_out: bool = typer.Option(False, "--json", help="Print the training record as JSON."),
 ) -> None:
     """Train one of the paper's models with its per-threshold preset and write a checkpoint."""
+    import torch
+
+    from snncc.training.pipeline import TrainRequest, finetune, train
+    from snncc.training.presets import parse_overrides
+
     if threads < 1:
         raise SnnccError("must be >= 1", field="--threads")
     if batch_size < 1:

@@ -577,13 +577,21 @@ def load(path: Path, options: Any) -> Graph:
 
     refuse_options(options, ("dt", "reset"), "a NIR graph", path)
     check_declared_sizes(path)
+    legacy_notes: list[str] = []
     try:
         nir_graph = nir.read(str(path), type_check=False)
     except Exception as ex:  # the nir/h5py readers raise assorted types on damaged files
+        from snncc.frontends.nir_legacy import read_legacy
+
         detail = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
-        raise SnnccError(f"not a readable NIR graph ({detail})", file=str(path), field="format") from None
+        try:
+            nir_graph, legacy_notes = read_legacy(path)   # an older NIR file whose meaning is unambiguous
+        except SnnccError:
+            raise SnnccError(f"not a readable NIR graph ({detail})", file=str(path), field="format") from None
     try:
-        return graph_from_nir(nir_graph, dt=options.dt, reset=options.reset, source=str(path))
+        g = graph_from_nir(nir_graph, dt=options.dt, reset=options.reset, source=str(path))
+        g.metadata["import_notes"] = legacy_notes + list(g.metadata.get("import_notes", []))
+        return g
     except (ValueError, TypeError, AttributeError, KeyError, IndexError) as ex:  # malformed node fields
         detail = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
         raise SnnccError(f"malformed NIR graph ({type(ex).__name__}: {detail})", file=str(path), field="graph") from None

@@ -19,7 +19,7 @@ from snncc.training.device import resolve_device
 from snncc.training.data import EVENT_KINDS, FRAME_DT_S, TrainingData, load_training_data, subset_indices
 from snncc.training.presets import OptimiserSettings, paper_preset, with_overrides
 from snncc.training.qat import loihi_quantization, quantized_forward
-from snncc.training.split import Split, stratified_split
+from snncc.data.split import Split, stratified_split
 from snncc.training.trainer import History, TrainSettings, accuracy, build_model, train_model
 
 KINDS = ("rsnn", "ffsnn", "lstm", "elstm")

@@ -3,7 +3,7 @@
 ``target.lower(graph, options)`` returns a ``LoihiArtefact`` that has already been checked
 against the IR reference (``validation.py``); ``target.check(...)`` measures the accuracy lost
 on a data set (``check.py``). Options: timing ("exact" | "paper"), scale ("auto" | "global" |
-"per-layer" | "split"), allow_reset_change (bool), source (model path).
+"per-layer" | "split" | "fine"), allow_reset_change (bool), source (model path).
 """
 
 from __future__ import annotations
@@ -60,6 +60,7 @@ class LoihiArtefact:
                 for i, lay in enumerate(net.layers)
             ],
             "scale_rule": q["rule"], "scale_reason": q["reason"], "w_scale": q["w_scale"],
+            "scale_candidates": (q.get("calibration") or {}).get("errors", {}),
             "weights_clipped": q["clipped_total"],
             "timing": self.timing["mode"], "timing_changes": self.timing["changes"],
             "validation": self.validation,
@@ -73,6 +74,9 @@ class LoihiArtefact:
         console.print(f"[bold]Loihi bundle[/bold]: tSample {s['t_sample']}, timing '{s['timing']}', "
                       f"scale rule '{s['scale_rule']}'" + (f", w_scale {s['w_scale']}" if s["w_scale"] else ""))
         console.print(f"  scale: {s['scale_reason']}")
+        if s["scale_candidates"]:
+            console.print("  scale candidates, measured spike-count error on the calibration inputs (lower is better): "
+                          + ", ".join(f"{k} {v:.4f}" for k, v in s["scale_candidates"].items()))
         for lay in s["layers"]:
             sources = lay["bias_sources"]
             if lay["index"] == 0:
@@ -161,8 +165,8 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     from snncc.targets.loihi import scaling
     from snncc.targets.loihi.validation import ir_spikes, lead_steps, loihi_spikes, pad, random_spikes
 
-    timing_mode = options.get("timing", "exact")
-    rule = options.get("scale", "auto")
+    timing_mode = options.get("timing") or "exact"
+    rule = options.get("scale") or "auto"
     layers = chain(graph)
     deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
     order, trec = lower_timing(deployed, timing_mode)

@@ -19,6 +19,7 @@ it reads: one SnnccError line naming the file, the HDF5 path and the rule.
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 from typing import Any
@@ -26,7 +27,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from snncc.atomic import atomic_path
+from snncc.atomic import write_bytes_atomic
 from snncc.errors import SnnccError
 from snncc.limits import check_memory, check_time_steps
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
@@ -111,50 +112,53 @@ def _exponent_field(group: h5py.Group, key: str, exp) -> None:
 def write_bundle(network: LoihiNetwork, path: str | Path, extra: dict[str, Any] | None = None) -> None:
     """Write ``network`` to ``path`` atomically; ``extra`` adds JSON records under /snncc."""
     check_network(network, str(path))
-    with atomic_path(path) as tmp:
-        with h5py.File(tmp, "w", libver="earliest", track_order=False) as f:
-            sim = f.create_group("simulation")
-            _scalar(sim, "Ts", 1, np.int64)
-            _scalar(sim, "tSample", network.t_sample, np.int64)
-            layers = f.create_group("layer")
-            for i, lay in enumerate(network.layers):
-                g = layers.create_group(str(i))
-                _string(g, "type", lay.kind)
-                if lay.always_on:
-                    _scalar(g, "alwaysOn", lay.always_on, np.int64)
-                if i == 0:
-                    _array(g, "shape", [1, 1, lay.n], np.int64)
-                    continue
-                _array(g, "shape", [lay.n, 1, 1], np.int64)
-                _array(g, "weight", lay.weight, np.int16)
-                if np.any(np.asarray(lay.delay) != 0):
-                    _array(g, "delay", _delay_array(lay.delay, lay.weight.shape), np.uint8)
-                if lay.weight_rec is not None:
-                    _array(g, "weight_rec", lay.weight_rec, np.int16)
-                    if np.any(np.asarray(lay.delay_rec) != 0):
-                        _array(g, "delay_rec", _delay_array(lay.delay_rec, lay.weight_rec.shape), np.uint8)
-                if lay.bias is not None:
-                    _array(g, "bias", lay.bias, np.int32)
-                nrn = g.create_group("neuron")
-                _string(nrn, "type", "LOIHI")
-                for key, value in (("vThMant", lay.v_th_mant), ("iDecay", lay.i_decay), ("vDecay", lay.v_decay),
-                                   ("refDelay", lay.ref_delay)):
-                    (_array if np.ndim(value) else _scalar)(nrn, key, value, np.int64)
-                _exponent_field(nrn, "wgtExp", lay.wgt_exp)
-                if lay.weight_rec is not None:
-                    _exponent_field(nrn, "wgtExpRec", lay.wgt_exp_rec)
-                if lay.bias is not None:
-                    _scalar(nrn, "biasExp", lay.bias_exp, np.int64)
-            s = f.create_group(SNNCC_GROUP)
-            _string(s, "version", _version())
-            _scalar(s, "format", FORMAT_VERSION, np.int64)
-            _string(s, "source_sha256", str(network.metadata.get("source_sha256", "")))
-            _string(s, "metadata", _json(network.metadata))
-            _string(s, "netx_compat", _json(netx_compat(network)))
-            if network.core_map is not None:
-                _string(s, "core_map", _json(network.core_map))
-            for key, value in sorted((extra or {}).items()):
-                _string(s, key, _json(value))
+    # Built in memory, then written as plain bytes: HDF5 writing straight to a file crashes the
+    # process (SIGSEGV) when the disk fills, where a plain write fails cleanly with ENOSPC.
+    buf = io.BytesIO()
+    with h5py.File(buf, "w", libver="earliest", track_order=False) as f:
+        sim = f.create_group("simulation")
+        _scalar(sim, "Ts", 1, np.int64)
+        _scalar(sim, "tSample", network.t_sample, np.int64)
+        layers = f.create_group("layer")
+        for i, lay in enumerate(network.layers):
+            g = layers.create_group(str(i))
+            _string(g, "type", lay.kind)
+            if lay.always_on:
+                _scalar(g, "alwaysOn", lay.always_on, np.int64)
+            if i == 0:
+                _array(g, "shape", [1, 1, lay.n], np.int64)
+                continue
+            _array(g, "shape", [lay.n, 1, 1], np.int64)
+            _array(g, "weight", lay.weight, np.int16)
+            if np.any(np.asarray(lay.delay) != 0):
+                _array(g, "delay", _delay_array(lay.delay, lay.weight.shape), np.uint8)
+            if lay.weight_rec is not None:
+                _array(g, "weight_rec", lay.weight_rec, np.int16)
+                if np.any(np.asarray(lay.delay_rec) != 0):
+                    _array(g, "delay_rec", _delay_array(lay.delay_rec, lay.weight_rec.shape), np.uint8)
+            if lay.bias is not None:
+                _array(g, "bias", lay.bias, np.int32)
+            nrn = g.create_group("neuron")
+            _string(nrn, "type", "LOIHI")
+            for key, value in (("vThMant", lay.v_th_mant), ("iDecay", lay.i_decay), ("vDecay", lay.v_decay),
+                               ("refDelay", lay.ref_delay)):
+                (_array if np.ndim(value) else _scalar)(nrn, key, value, np.int64)
+            _exponent_field(nrn, "wgtExp", lay.wgt_exp)
+            if lay.weight_rec is not None:
+                _exponent_field(nrn, "wgtExpRec", lay.wgt_exp_rec)
+            if lay.bias is not None:
+                _scalar(nrn, "biasExp", lay.bias_exp, np.int64)
+        s = f.create_group(SNNCC_GROUP)
+        _string(s, "version", _version())
+        _scalar(s, "format", FORMAT_VERSION, np.int64)
+        _string(s, "source_sha256", str(network.metadata.get("source_sha256", "")))
+        _string(s, "metadata", _json(network.metadata))
+        _string(s, "netx_compat", _json(netx_compat(network)))
+        if network.core_map is not None:
+            _string(s, "core_map", _json(network.core_map))
+        for key, value in sorted((extra or {}).items()):
+            _string(s, key, _json(value))
+    write_bytes_atomic(path, buf.getvalue())
 
 
 # -- reading ---------------------------------------------------------------------------------------
