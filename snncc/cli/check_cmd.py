@@ -61,8 +61,9 @@ def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = 
     inputs, labels = np.asarray(inputs), np.asarray(labels)
     if inputs.ndim != 3:
         raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
-    if labels.ndim != 1 or labels.shape[0] != inputs.shape[0] or labels.dtype.kind not in "iu":
-        raise SnnccError(f"labels must be N = {inputs.shape[0]} integers", file=str(path), field="labels")
+    from snncc.inputs import check_dataset
+
+    check_dataset(inputs, labels, graph, source=str(path))
     if limit is not None:
         inputs, labels = inputs[:limit], labels[:limit]
     return _tiled(inputs, graph), labels, meta
@@ -85,8 +86,8 @@ def check_command(
     params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file for a SpyTorch weight list."),
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
     reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR)."),
-    timing: str = typer.Option("exact", "--timing", help="Loihi: 'exact' or 'paper' (the authors' export order)."),
-    scale: str = typer.Option("auto", "--scale", help="Loihi weight scale rule: global, per-layer, split or auto."),
+    timing: Optional[str] = typer.Option(None, "--timing", help="Loihi: 'exact' (default) or 'paper' (the authors' export order)."),
+    scale: Optional[str] = typer.Option(None, "--scale", help="Loihi weight scale rule: global, per-layer, split or auto (default)."),
     allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: deploy a subtract-reset model with reset to zero."),
     stream: bool = typer.Option(False, "--stream", help="Loihi: the paper's protocol, one stream with 100 blank steps between samples."),
     limit: Optional[int] = typer.Option(None, "--limit", help="Use only the first N samples."),
@@ -100,14 +101,15 @@ def check_command(
     from snncc.targets import get_target
 
     graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
+    given = {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change or None, "stream": stream or None}
+    given = {k: v for k, v in given.items() if v is not None}   # only what the user gave (targets refuse the rest)
     if data is None or agreement:
         if target != "loihi":
             raise SnnccError("agreement without labels is measured for --target loihi", field="--target")
         from snncc.targets.loihi.agreement import measure_agreement
 
         x = None if data is None else load_check_data(data, graph, limit, labels=False)[0]
-        record = measure_agreement(graph, {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change,
-                                           "source": str(model), "data": None if data is None else str(data)},
+        record = measure_agreement(graph, {**given, "source": str(model), "data": None if data is None else str(data)},
                                    x, samples=limit or 40, density=density, noise=noise)
         if json_out:
             print_json(record.as_dict())
@@ -120,7 +122,7 @@ def check_command(
     if limit is not None and limit < 1:
         raise SnnccError("must be >= 1", field="--limit")
     inputs, labels, meta = load_check_data(data, graph, limit)
-    options = {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change, "source": str(model),
+    options = {**given, "source": str(model),
                "data": str(data), "mode": "stream" if stream else "batch",
                "synthetic": bool(isinstance(meta, dict) and meta.get("synthetic"))}
     with Progress(TextColumn("checking"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),

@@ -25,10 +25,10 @@ def compile_command(
     params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file (key value per line) for a SpyTorch weight list."),
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
     reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR): zero | subtract | zero-delayed (snnTorch's one-step-late zero reset)."),
-    timing: str = typer.Option("exact", "--timing", help="Loihi: 'exact' lowers the IR's delays and refractory period; 'paper' reproduces the authors' export (refDelay 1, no delays)."),
-    scale: str = typer.Option("auto", "--scale", help="Loihi weight scale rule: 'global' (the paper's), 'per-layer', 'split' (per-layer, outlier weights in a second synapse format with a coarser exponent), 'fine' (each synapse its finest exponent), or 'auto' (the paper's unless outliers make it lossy; then the candidate with the smallest measured error)."),
+    timing: Optional[str] = typer.Option(None, "--timing", help="Loihi: 'exact' (default) lowers the IR's delays and refractory period; 'paper' reproduces the authors' export (refDelay 1, no delays)."),
+    scale: Optional[str] = typer.Option(None, "--scale", help="Loihi weight scale rule: 'global' (the paper's), 'per-layer', 'split' (per-layer, outlier weights in a second synapse format with a coarser exponent), 'fine' (each synapse its finest exponent), or 'auto' (default: the paper's unless outliers make it lossy; then the candidate with the smallest measured error)."),
     allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: accept compiling a subtract-reset model with reset to zero (snncc check reports the cost)."),
-    jetpack: str = typer.Option("4.6", "--jetpack", help="Jetson: JetPack version of the board; selects the ONNX opset (4.6 -> 13, 5.x/6.0 -> 17, 6.1+ -> 20)."),
+    jetpack: Optional[str] = typer.Option(None, "--jetpack", help="Jetson: JetPack version of the board (default 4.6); selects the ONNX opset (4.6 -> 13, 5.x/6.0 -> 17, 6.1/6.2 -> 20)."),
     time_steps: Optional[int] = typer.Option(None, "--time-steps", help="Jetson: time steps T of the unrolled sequence model (default: recording length / dt)."),
     json_out: bool = typer.Option(False, "--json", help="Print the compile report as JSON."),
 ) -> None:
@@ -39,7 +39,7 @@ def compile_command(
 
     graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
     tgt = get_target(target)
-    options = compile_options(timing=timing, scale=scale, allow_reset_change=allow_reset_change,
+    options = compile_options(timing=timing, scale=scale, allow_reset_change=allow_reset_change or None,
                               jetpack=jetpack, source=str(model), time_steps=time_steps)
     artefact = tgt.lower(graph, options)
     artefact.write(output)

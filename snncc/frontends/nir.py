@@ -57,6 +57,7 @@ from typing import Any
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.limits import check_real
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, RESETS, Dense, Input, Output, Readout
 
@@ -140,6 +141,7 @@ def _arr(node: Any, attr: str, name: str) -> np.ndarray:
     value = getattr(node, attr, None)
     if value is None:
         raise SnnccError(f"missing parameter {attr}", field=f"node '{name}'.{attr}")
+    check_real(value, field=f"node '{name}'.{attr}")
     arr = np.asarray(value, dtype=np.float64).reshape(-1)
     if not np.all(np.isfinite(arr)) and attr not in ("v_threshold", "threshold"):
         raise SnnccError("contains NaN or Inf", field=f"node '{name}'.{attr}")
@@ -304,6 +306,9 @@ class _Builder:
                 width = int(np.prod(np.asarray(node.output_type["output"]).reshape(-1)))
                 self.ops[name] = Output(width=width)
             elif kind in ("Affine", "Linear"):
+                check_real(node.weight, field=f"node '{name}'.weight")
+                if kind == "Affine" and node.bias is not None:
+                    check_real(node.bias, field=f"node '{name}'.bias")
                 w = np.asarray(node.weight, dtype=np.float64)
                 if w.ndim != 2:
                     raise SnnccError(f"weight must be 2-D (out, in), got shape {w.shape}", field=f"node '{name}'.weight")
@@ -544,10 +549,34 @@ def graph_from_nir(nir_graph: Any, dt: float | None = None, reset: str | None = 
     return g
 
 
+def check_declared_sizes(path: Path) -> None:
+    """Refuse a NIR file whose HDF5 datasets declare more bytes than fit in memory, before nir.read
+    allocates them (a small file can declare a huge dataset that is never written)."""
+    import h5py
+
+    from snncc.limits import check_memory
+
+    try:
+        f = h5py.File(path, "r")
+    except (OSError, RuntimeError, ValueError):
+        return   # nir.read reports what the file is not
+    with f:
+        sizes: list[tuple[str, int]] = []
+        f.visititems(lambda key, obj: sizes.append((key, int(obj.size) * obj.dtype.itemsize))
+                     if isinstance(obj, h5py.Dataset) else None)
+    for key, n_bytes in sizes:
+        check_memory(n_bytes, f"the declared dataset /{key}", file=str(path), field=f"/{key}")
+    check_memory(sum(n for _, n in sizes), "the file's declared datasets together", file=str(path), field="/")
+
+
 def load(path: Path, options: Any) -> Graph:
     """Frontend entry for ``.nir`` files (``load_model`` validates the result)."""
     import nir
 
+    from snncc.frontends import refuse_options
+
+    refuse_options(options, ("dt", "reset"), "a NIR graph", path)
+    check_declared_sizes(path)
     legacy_notes: list[str] = []
     try:
         nir_graph = nir.read(str(path), type_check=False)

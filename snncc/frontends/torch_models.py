@@ -16,12 +16,18 @@ from snncc.ir.graph import Graph
 
 
 def from_object(obj: Any, path: Path, options) -> Graph:
+    from snncc.frontends import refuse_options
+
     if isinstance(obj, torch.nn.Module):
+        refuse_options(options, (), "an snncc model, whose architecture states dt and reset", path)
         return graph_from_module(obj)
     if is_checkpoint(obj):
+        refuse_options(options, (), "an snncc checkpoint, whose architecture record states dt and reset", path)
         module = module_from_checkpoint(obj, source=str(path))
         return graph_from_module(module, metadata={**model_metadata(obj), "source_format": "snncc-checkpoint"})
     if is_weight_list(obj):
+        refuse_options(options, ("params",), "a SpyTorch weight list, whose parameters file (--params) states dt "
+                       "and whose reset is the authors' (to zero)", path)
         return load_weight_list(obj, path, options.params)
     if isinstance(obj, dict) and all(isinstance(v, torch.Tensor) for v in obj.values()):
         raise SnnccError("a bare state dict has no architecture record; save an snncc checkpoint "

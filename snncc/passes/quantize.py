@@ -255,7 +255,9 @@ def layer_scales(graph: Graph, rule: str, fine_step: float = 1.0) -> tuple[dict[
         raise SnnccError("the graph has no Dense -> LIF projection to quantize", field="graph")
     maxima = {dense: projection_max(graph, dense, lif) for dense, lif in pairs}
     if all(m == 0 for m in maxima.values()):
-        raise SnnccError("all weights are zero: w_scale = 256 / max|W| is undefined", field="weights")
+        # 256 / max|W| is undefined; every scale stores zeros exactly, so take the smallest (1):
+        # an all-zero network is legal, and every loader accepts it with a note
+        return {lif: 1.0 for _, lif in pairs}, (1 if rule == "global" else None)
     if rule == "global":
         w_scale = weight_scale(max(maxima.values()))
         return {lif: float(w_scale) for _, lif in pairs}, w_scale

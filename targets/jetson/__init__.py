@@ -141,8 +141,12 @@ class JetsonTarget:
     name = "jetson"
     description = "NVIDIA Jetson: ONNX (sequence + streaming step) + TensorRT recipe, validated in ONNX Runtime"
     output_kind = "directory"
+    accepts = ("jetpack", "time_steps")
 
     def lower(self, graph: Graph, options: dict[str, Any]) -> JetsonArtefact:
+        from snncc.targets import check_target_options
+
+        check_target_options(self, options)
         options = dict(options or {})
         plan = plan_graph(graph.copy())
         steps = resolve_steps(plan, options)
@@ -167,6 +171,9 @@ class JetsonTarget:
 
     def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, options: dict[str, Any]) -> JetsonCheckRecord:
         """IR reference vs the ONNX Runtime artefact on a data set (see ``check.check_artefact``)."""
+        from snncc.targets import check_target_options
+
+        check_target_options(self, options)
         options = dict(options or {})
         progress = options.pop("progress", None)
         x = np.asarray(inputs)

@@ -165,8 +165,8 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     from snncc.targets.loihi import scaling
     from snncc.targets.loihi.validation import ir_spikes, lead_steps, loihi_spikes, pad, random_spikes
 
-    timing_mode = options.get("timing", "exact")
-    rule = options.get("scale", "auto")
+    timing_mode = options.get("timing") or "exact"
+    rule = options.get("scale") or "auto"
     layers = chain(graph)
     deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
     order, trec = lower_timing(deployed, timing_mode)
@@ -248,9 +248,13 @@ class LoihiTarget:
     name = "loihi"
     description = "Intel Loihi 1: HDF5 bundle (netx layout) checked by a bit-exact emulator"
     output_kind = "file"
+    accepts = ("timing", "scale", "allow_reset_change", "stream")
 
     def lower(self, graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
+        from snncc.targets import check_target_options
         from snncc.targets.loihi.validation import validate_lowering
+
+        check_target_options(self, options)
 
         lowered = lower_model(graph, options)
         notes: list[str] = []
@@ -266,8 +270,10 @@ class LoihiTarget:
                              timing=lowered.timing_record.as_dict(), validation=record.as_dict(), notes=notes)
 
     def check(self, graph: Graph, inputs, labels, options: dict[str, Any]):
+        from snncc.targets import check_target_options
         from snncc.targets.loihi.check import check_model
 
+        check_target_options(self, options)
         return check_model(graph, inputs, labels, options)
 
 

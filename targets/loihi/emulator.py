@@ -23,8 +23,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.limits import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, whole_number
 from snncc.targets.loihi.network import LoihiNetwork
 
+DEFAULT_GAP = 100                # blank steps between samples in stream mode (the paper's protocol)
 Q_BITS, U_BITS = 21, 23          # magnitude bits; plus a sign bit each
 RECORD_CHOICES = ("outputs", "all")
 MODES = ("batch", "stream")
@@ -55,22 +57,11 @@ def decay(x: np.ndarray, register) -> np.ndarray:
 
 # -- input checks ---------------------------------------------------------------------------------
 def check_inputs(inputs, width: int, source: str | None = None) -> np.ndarray:
-    """(T, C) or (B, T, C) 0/1 data (bool, ints or floats) -> (B, T, C) uint8, or a one-line error."""
-    x = np.asarray(inputs)
-    if x.ndim == 2:
-        x = x[None]
-    if x.ndim != 3:
-        raise SnnccError(f"input must have shape (T, C) or (B, T, C), got {x.shape}", file=source, field="input")
-    if x.dtype.kind not in "biuf":
-        raise SnnccError(f"input must be numeric 0/1 values, got dtype {x.dtype}", file=source, field="input")
-    if x.shape[2] != width:
-        raise SnnccError(f"input has {x.shape[2]} channels, the bundle's input layer has {width}",
-                         file=source, field="input")
-    if x.dtype.kind == "f" and not np.all(np.isfinite(x)):
-        raise SnnccError("input contains NaN or Inf; spikes must be 0 or 1", file=source, field="input")
-    if x.size and not np.all((x == 0) | (x == 1)):
-        raise SnnccError("input must be binary (0/1 spikes)", file=source, field="input")
-    return x.astype(np.uint8)
+    """(T, C) or (B, T, C) 0/1 data (bool, ints or floats) -> (B, T, C) uint8, or a one-line error
+    (the rules of ``snncc.inputs.check_batch``, shared with ``snncc run``)."""
+    from snncc.inputs import check_batch
+
+    return check_batch(inputs, width, spikes=True, source=source).astype(np.uint8)
 
 
 def _prediction(counts: np.ndarray) -> np.ndarray:
@@ -261,7 +252,27 @@ class PreparedNetwork:
         self.network = network
         self.flat = Flat(_program(network))
 
-    def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int = 100,
+    def _check_size(self, total_steps: int, record: str) -> None:
+        """What the run records must fit in memory: 1 byte per spike, 8 per recorded u and v."""
+        units = sum(lay.n for lay in self.network.layers)
+        per_step = self.network.layers[-1].n + (units * 17 if record == "all" else 0) + units * 16
+        check_memory(total_steps * per_step, f"emulating {total_steps:,} steps of {units:,} units (record {record!r})",
+                     field="input")
+
+    @staticmethod
+    def _check_stream(batch: int, steps: int, gap) -> None:
+        """--gap: a whole number of blank steps, 0..MAX_TIME_STEPS, the whole stream within MAX_STREAM_STEPS."""
+        gap = whole_number(gap, field="--gap", minimum=0)
+        if gap > MAX_TIME_STEPS:
+            raise SnnccError(f"{gap:,} blank steps exceed snncc's cap of {MAX_TIME_STEPS:,} steps "
+                             "(snncc.limits.MAX_TIME_STEPS)", field="--gap")
+        total = batch * (steps + gap)
+        if total > MAX_STREAM_STEPS:
+            raise SnnccError(f"the stream of {batch} sample(s) x ({steps} steps + {gap} gap steps) = {total:,} steps "
+                             f"exceeds snncc's cap of {MAX_STREAM_STEPS:,} (snncc.limits.MAX_STREAM_STEPS)",
+                             field="--gap")
+
+    def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int | None = None,
             wide: bool = False) -> EmulationResult:
         from snncc.targets.loihi._kernel import run_flat
 
@@ -270,11 +281,16 @@ class PreparedNetwork:
         if mode not in MODES:
             raise SnnccError(f"mode must be one of {MODES}", field="mode")
         x = check_inputs(inputs, self.network.input_width)
-        if mode == "batch":
-            return run_flat(self.flat, self.network.drive(x), record, wide)
-        if gap < 0:
-            raise SnnccError("gap must be >= 0 steps", field="gap")
         batch, steps, width = x.shape
+        if mode == "batch":
+            if gap is not None:
+                raise SnnccError("applies only to stream mode (--stream, the paper's protocol); batch mode starts "
+                                 "every sample from zero state", field="--gap")
+            self._check_size(batch * steps, record)
+            return run_flat(self.flat, self.network.drive(x), record, wide)
+        gap = DEFAULT_GAP if gap is None else gap
+        self._check_stream(batch, steps, gap)
+        self._check_size(batch * (steps + gap), record)
         period = steps + gap
         stream = np.zeros((1, batch * period, width), np.uint8)
         for b in range(batch):
@@ -299,14 +315,14 @@ def emulate(
     *,
     record: str = "outputs",
     mode: str = "batch",
-    gap: int = 100,
+    gap: int | None = None,
     wide: bool = False,
 ) -> EmulationResult:
     """Run ``network`` bit-exactly on 0/1 ``inputs`` (T, C) or (B, T, C).
 
     ``inputs`` carry the model's channels; always-on bias axons (``bias_sources.py``) are added
     here, held at 1 on every step (gaps included). mode "batch": every sample starts from zero state. mode "stream": the paper's protocol, one
-    continuous run with ``gap`` blank steps after each sample; each sample's outputs are the
+    continuous run with ``gap`` blank steps (default 100) after each sample; each sample's outputs are the
     steps of its own window. record "all" keeps every layer's spikes, u and v. ``wide=True``
     (outputs only) removes the q/u wrap and the v clip, to measure what overflow costs.
     """
