@@ -8,8 +8,10 @@ output of step t - d (zeros before t = 0). Node equations are those in ``snncc.i
           s = V > theta;  V <- 0 | V - theta where s;  refractory counter <- r - 1 where s
     LSTM: PyTorch's cell, gate order i, f, g, o
 
-Parts of the graph fed only by inputs through Dense nodes (no state) are computed for the
-whole sequence at once before the time loop.
+    Dense: y = W x (+b);  Conv: PyTorch's convNd on the C-order flattened map (``snncc.ir.conv``)
+
+Parts of the graph fed only by inputs through linear nodes (Dense, Conv; no state) are computed
+for the whole sequence at once before the time loop.
 """
 
 from __future__ import annotations
@@ -22,7 +24,8 @@ import torch
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
+from snncc.ir.conv import conv_apply
+from snncc.ir.nodes import LIF, LINEAR, LSTM, Conv, Dense, Input, Output, Readout
 
 RECORD_CHOICES = ("outputs", "spikes", "all")
 
@@ -65,9 +68,9 @@ def _schedule(g: Graph) -> list[str]:
 
 
 def _static_nodes(g: Graph) -> set[str]:
-    """Nodes whose output depends only on inputs through stateless Dense maps."""
+    """Nodes whose output depends only on inputs through stateless linear maps."""
     static: set[str] = set()
-    for name in nx.topological_sort(g.nx.subgraph([n for n, op in g.items() if isinstance(op, (Input, Dense))])):
+    for name in nx.topological_sort(g.nx.subgraph([n for n, op in g.items() if isinstance(op, (Input,) + LINEAR)])):
         op = g.node(name)
         if isinstance(op, Input) or all(p in static for p in g.predecessors(name)):
             static.add(name)
@@ -91,7 +94,7 @@ class _Runner:
         self.static = _static_nodes(g)
         self.t_ = {}  # torch copies of parameters
         for name, op in g.items():
-            if isinstance(op, Dense):
+            if isinstance(op, LINEAR):
                 self.t_[name] = (
                     torch.as_tensor(op.weight, dtype=dtype),
                     None if op.bias is None else torch.as_tensor(op.bias, dtype=dtype),
@@ -113,6 +116,15 @@ class _Runner:
                     torch.as_tensor(b, dtype=dtype),
                 )
 
+    def linear(self, name: str, x: torch.Tensor) -> torch.Tensor:
+        """A Dense or Conv node applied to (..., in) -> (..., out)."""
+        op = self.g.node(name)
+        w, b = self.t_[name]
+        if isinstance(op, Conv):
+            return conv_apply(op, x, w, b)
+        y = x @ w.T
+        return y if b is None else y + b
+
     def run(self, inputs: dict[str, torch.Tensor]) -> SimulationResult:
         g = self.g
         batch, steps = next(iter(inputs.values())).shape[:2]
@@ -125,9 +137,7 @@ class _Runner:
                 full[name] = inputs[name]
             else:
                 (src,) = g.predecessors(name)
-                w, b = self.t_[name]
-                y = _shift(full[src], g.delay(src, name)) @ w.T
-                full[name] = y if b is None else y + b
+                full[name] = self.linear(name, _shift(full[src], g.delay(src, name)))
 
         dynamic = [n for n in self.order if n not in self.static]
         # per-step histories of dynamic nodes' outputs: hist[(node, port)][t]
@@ -146,7 +156,7 @@ class _Runner:
                 z = torch.zeros(batch, op.hidden_size, dtype=self.dtype)
                 state[name] = {"h": z, "c": z.clone()}
             static_preds = [p for p in g.predecessors(name) if p in self.static]
-            if static_preds and isinstance(op, (LIF, Readout, Output, Dense, LSTM)):
+            if static_preds and isinstance(op, (LIF, Readout, Output, LSTM) + LINEAR):
                 static_drive[name] = sum(_shift(full[p], g.delay(p, name)) for p in static_preds)
 
         want_state = self.record == "all"
@@ -173,10 +183,8 @@ class _Runner:
         for t in range(steps):
             for name in dynamic:
                 op = g.node(name)
-                if isinstance(op, Dense):
-                    w, b = self.t_[name]
-                    y = drive(name, t, op.in_size) @ w.T
-                    out = {"spikes": y if b is None else y + b}
+                if isinstance(op, LINEAR):
+                    out = {"spikes": self.linear(name, drive(name, t, op.in_size))}
                 elif isinstance(op, LIF):
                     alpha, beta, theta, bias = self.t_[name]
                     st = state[name]

@@ -16,6 +16,7 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
+from snncc.passes.fold_linear import fold_linear
 from snncc.passes.quantize import samples_steps
 from snncc.passes.timing import lower_timing
 from snncc.targets.loihi.bundle import netx_compat, write_bundle
@@ -154,6 +155,7 @@ class LoweredModel:
     quant_record: Any
     timing_record: Any
     deployed: Graph | None = None   # ``trained`` with only the reset change (None: same as ``trained``)
+    notes: list[str] = field(default_factory=list)
 
 
 def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
@@ -163,6 +165,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
 
     timing_mode = options.get("timing", "exact")
     rule = options.get("scale", "auto")
+    graph, fold = fold_linear(graph)     # Conv -> connection matrix; linear chains -> one projection
     layers = chain(graph)
     deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
     order, trec = lower_timing(deployed, timing_mode)
@@ -215,7 +218,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     }
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
     return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
-                        deployed=None if deployed is graph else deployed)
+                        deployed=None if deployed is graph else deployed, notes=fold.notes())
 
 
 def count_error(emulated, reference) -> float:
@@ -249,7 +252,7 @@ class LoihiTarget:
         from snncc.targets.loihi.validation import validate_lowering
 
         lowered = lower_model(graph, options)
-        notes: list[str] = []
+        notes: list[str] = list(lowered.notes)
         attach_core_map(lowered.network)
         record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
                                    lowered.timing_record.shifts, lowered.timing_record.output_shift,
