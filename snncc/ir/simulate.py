@@ -77,6 +77,22 @@ def _static_nodes(g: Graph) -> set[str]:
     return static
 
 
+SPARSE_MIN_SIZE = 1 << 20      # Dense weights this large and at most a quarter nonzero run as sparse
+SPARSE_MAX_DENSITY = 0.25      # products (same sums, another summation order)
+
+
+def _weight_tensor(op, dtype: torch.dtype) -> torch.Tensor:
+    w = torch.as_tensor(op.weight, dtype=dtype)
+    if isinstance(op, Dense) and w.numel() >= SPARSE_MIN_SIZE and \
+            int(torch.count_nonzero(w)) <= SPARSE_MAX_DENSITY * w.numel():
+        import warnings
+
+        with warnings.catch_warnings():   # torch calls its sparse CSR support beta; products are plain
+            warnings.simplefilter("ignore", UserWarning)
+            return w.to_sparse_csr()
+    return w
+
+
 def _shift(x: torch.Tensor, d: int) -> torch.Tensor:
     """x[:, t - d] along time, zeros for t < d."""
     if d == 0:
@@ -96,7 +112,7 @@ class _Runner:
         for name, op in g.items():
             if isinstance(op, LINEAR):
                 self.t_[name] = (
-                    torch.as_tensor(op.weight, dtype=dtype),
+                    _weight_tensor(op, dtype),
                     None if op.bias is None else torch.as_tensor(op.bias, dtype=dtype),
                 )
             elif isinstance(op, LIF):
@@ -122,7 +138,11 @@ class _Runner:
         w, b = self.t_[name]
         if isinstance(op, Conv):
             return conv_apply(op, x, w, b)
-        y = x @ w.T
+        if w.layout == torch.sparse_csr:    # y^T = W x^T, W sparse (a folded convolution)
+            flat = x.reshape(-1, x.shape[-1])
+            y = (w @ flat.T).T.reshape(tuple(x.shape[:-1]) + (w.shape[0],))
+        else:
+            y = x @ w.T
         return y if b is None else y + b
 
     def run(self, inputs: dict[str, torch.Tensor]) -> SimulationResult:

@@ -3,7 +3,8 @@
 ``target.lower(graph, options)`` returns a ``LoihiArtefact`` that has already been checked
 against the IR reference (``validation.py``); ``target.check(...)`` measures the accuracy lost
 on a data set (``check.py``). Options: timing ("exact" | "paper"), scale ("auto" | "global" |
-"per-layer" | "split"), allow_reset_change (bool), source (model path).
+"per-layer" | "split"), allow_reset_change (bool), source (model path), time_steps (tSample when
+the model states no recording length; --time-steps).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from snncc.passes.fold_linear import fold_linear
 from snncc.passes.quantize import samples_steps
 from snncc.passes.timing import lower_timing
 from snncc.targets.loihi.bundle import netx_compat, write_bundle
+from snncc.targets.loihi.chip_units import in_chip_units
 from snncc.targets.loihi.lowering import build_network, chain, lif_params_check
 from snncc.targets.loihi.network import LoihiNetwork
 from snncc.targets.loihi.partition import map_network
@@ -175,6 +177,10 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     steps = options.get("t_sample")
     if steps is not None:
         t_rule = "the input length"
+    elif options.get("time_steps") is not None:
+        steps, t_rule = options["time_steps"], "--time-steps"
+        if int(steps) != steps or steps < 1:
+            raise SnnccError(f"time steps must be a whole number >= 1, got {steps}", field="--time-steps")
     else:
         try:
             steps, t_rule = samples_steps(graph)
@@ -200,6 +206,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
 
     quantized, qrec = scaling.choose(order, rule, measure, f"{CALIBRATION_BATCH} seeded random spike trains "
                                      f"(p={CALIBRATION_RATE}, seed 1), {steps} steps")
+    quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
     meta = {
         "source_sha256": graph.metadata.get("source_sha256", ""),
         "source_file": graph.metadata.get("source_file", options.get("source", "")),

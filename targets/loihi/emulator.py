@@ -88,8 +88,23 @@ def _by_delay(weight: np.ndarray, delay) -> list[tuple[int, np.ndarray]]:
     Sums of integer chip weights over 0/1 spikes stay far below 2**53, so a float64 matrix
     product (BLAS) gives the exact integer q; it is converted back to int64 below.
     """
+    if np.ndim(delay) == 0 or np.asarray(delay).size == 1:
+        return [(int(np.asarray(delay).reshape(-1)[0]), _matrix_t(np.asarray(weight)))]
     d = _as_delay(delay, weight.shape)
-    return [(int(v), np.where(d == v, weight, 0).astype(np.float64).T.copy()) for v in np.unique(d)]
+    return [(int(v), _matrix_t(np.where(d == v, weight, 0))) for v in np.unique(d)]
+
+
+SPARSE_MIN_SIZE = 1 << 20      # weight matrices this large and at most SPARSE_MAX_DENSITY full are
+SPARSE_MAX_DENSITY = 0.25      # multiplied as sparse matrices (the same exact integer sums, less work)
+
+
+def _matrix_t(w: np.ndarray):
+    """w.T as float64: dense, or scipy CSR for a large, mostly-zero matrix (a folded convolution)."""
+    if w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size:
+        import scipy.sparse as sp
+
+        return sp.csr_matrix(w.T.astype(np.float64))
+    return w.astype(np.float64).T.copy()
 
 
 def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndarray]], zero: np.ndarray) -> np.ndarray:
@@ -98,7 +113,7 @@ def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndar
     for d, w_t in parts:
         src = t - 1 - d
         if src >= 0:
-            part = history[src].astype(np.float64) @ w_t
+            part = np.asarray(history[src].astype(np.float64) @ w_t)
             total = total + (part if zero.dtype.kind == "f" else np.rint(part).astype(np.int64))
     return total
 
