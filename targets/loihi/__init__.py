@@ -258,18 +258,39 @@ class LoihiTarget:
     def lower(self, graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
         from snncc.targets.loihi.validation import validate_lowering
 
+        from snncc.targets.loihi.relays import needs_relays, relay_agreement, relay_network
+        from snncc.targets.loihi.validation import lead_steps, pad, random_spikes
+
         lowered = lower_model(graph, options)
         notes: list[str] = list(lowered.notes)
-        attach_core_map(lowered.network)
+        network, plan = lowered.network, None
+        if needs_relays(lowered.network):
+            network, plan = relay_network(lowered.network)   # the mapper's relays: the bundle holds them
+        else:
+            attach_core_map(lowered.network)
         record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
                                    lowered.timing_record.shifts, lowered.timing_record.output_shift,
                                    batch=VALIDATION_BATCH)
-        notes.append(f"tSample {lowered.network.t_sample}: {lowered.network.metadata['t_sample_rule']}")
-        if lowered.timing_record.output_shift:
-            notes.append(f"outputs appear {lowered.timing_record.output_shift} step(s) later than in the IR; tSample "
+        validation = record.as_dict()
+        if plan is not None:
+            trec = lowered.timing_record
+            x = random_spikes(VALIDATION_BATCH, lowered.network.t_sample - trec.output_shift,
+                              lowered.network.input_width, 0.05, seed=0)
+            validation["relays"] = relay_agreement(lowered.network, network, plan,
+                                                   pad(x, lead_steps(trec.shifts, trec.output_shift)))
+            notes += plan.notes()
+            notes.append("relayed vs the same bundle without relays (itself checked against the IR above): spike "
+                         "agreement " + ", ".join(f"{k} {100 * v:.2f}%" for k, v in
+                                                  validation["relays"]["spike_agreement"].items())
+                         + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
+                         + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
+        notes.append(f"tSample {network.t_sample}: {lowered.network.metadata['t_sample_rule']}"
+                     + (f" + {plan.total_shift} relay step(s)" if plan is not None and plan.total_shift else ""))
+        if network.metadata.get("output_shift"):
+            notes.append(f"outputs appear {network.metadata['output_shift']} step(s) later than in the IR; tSample "
                          "includes them")
-        return LoihiArtefact(network=lowered.network, quantization=lowered.quant_record.as_dict(),
-                             timing=lowered.timing_record.as_dict(), validation=record.as_dict(), notes=notes)
+        return LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
+                             timing=lowered.timing_record.as_dict(), validation=validation, notes=notes)
 
     def check(self, graph: Graph, inputs, labels, options: dict[str, Any]):
         from snncc.targets.loihi.check import check_model
