@@ -89,3 +89,50 @@ def test_conv_graph_round_trips_through_the_ir_file(tmp_path):
     assert (back.in_shape, back.stride, back.padding, back.dilation, back.groups) == (
         op.in_shape, op.stride, op.padding, op.dilation, op.groups)
     assert np.array_equal(back.weight, op.weight) and np.array_equal(back.bias, op.bias)
+
+
+def test_folding_linear_chains_keeps_the_graph_meaning():
+    from snncc.ir import LIF, Dense, Readout
+    from snncc.passes.fold_linear import fold_linear
+
+    rng = np.random.default_rng(2)
+    g = Graph(dt=1e-3)
+    g.add("x", Input(width=2 * 6 * 6))
+    g.add("c1", Conv(weight=rng.normal(0.3, 0.5, (4, 2, 3, 3)), in_shape=(2, 6, 6), padding=(1, 1),
+                     bias=rng.normal(0, 0.1, 4)))
+    g.add("pool", Conv(weight=np.ones((4, 1, 2, 2)), in_shape=(4, 6, 6), stride=(2, 2), groups=4))
+    g.add("fc", Dense(weight=rng.normal(0.2, 0.4, (5, 36)), bias=np.zeros(5)))
+    g.add("n", LIF(n=5, tau_syn=5e-3, tau_mem=2e-2, threshold=1.0))
+    g.add("readout", Readout(width=5))
+    g.add("y", Output(width=5))
+    for a, b, d in [("x", "c1", 2), ("c1", "pool", 0), ("pool", "fc", 0), ("fc", "n", 1), ("n", "readout", 0),
+                    ("readout", "y", 0)]:
+        g.connect(a, b, delay=d)
+    folded, rec = fold_linear(validate(g))
+    assert rec.convs == ["c1", "pool"] and rec.merged == ["c1+pool", "pool+fc"] and rec.zero_biases == ["fc"]
+    assert [n for n in folded] == ["x", "fc", "n", "readout", "y"] and folded.delay("x", "fc") == 2
+    x = (rng.random((3, 30, 72)) < 0.3).astype(np.float64)
+    a, b = simulate(g, x, record="all"), simulate(validate(folded), x, record="all")
+    np.testing.assert_allclose(a.voltage["n"].numpy(), b.voltage["n"].numpy(), atol=1e-9)
+    assert a.spikes["n"].sum() > 0 and np.array_equal(a.spikes["n"].numpy(), b.spikes["n"].numpy())
+    assert fold_linear(folded)[0] is folded          # nothing left to fold: the graph itself
+
+
+def test_nir_conv1d_and_string_padding_load_with_their_meaning():
+    import nir
+
+    from snncc.frontends.nir import graph_from_nir
+
+    rng = np.random.default_rng(4)
+    w = rng.normal(size=(3, 2, 3))
+    nodes = {"input": nir.Input(np.array([2, 9])),
+             "c": nir.Conv1d(input_shape=9, weight=w, stride=1, padding="same", dilation=2, groups=1,
+                             bias=rng.normal(size=3)),
+             "output": nir.Output(np.array([3, 9]))}
+    g = graph_from_nir(nir.NIRGraph(nodes=nodes, edges=[("input", "c"), ("c", "output")], type_check=False), dt=1.0)
+    op = g.node("c")
+    assert op.in_shape == (2, 9) and op.padding == (2,) and op.out_shape == (3, 9)
+    x = rng.normal(size=(4, 18))
+    want = F.conv1d(torch.tensor(x.reshape(4, 2, 9)), torch.tensor(w), torch.tensor(nodes["c"].bias), padding=2,
+                    dilation=2).reshape(4, -1).numpy()
+    np.testing.assert_allclose(simulate(g, x[None]).output.numpy()[0], want, atol=1e-12)
