@@ -136,3 +136,19 @@ def test_nir_conv1d_and_string_padding_load_with_their_meaning():
     want = F.conv1d(torch.tensor(x.reshape(4, 2, 9)), torch.tensor(w), torch.tensor(nodes["c"].bias), padding=2,
                     dilation=2).reshape(4, -1).numpy()
     np.testing.assert_allclose(simulate(g, x[None]).output.numpy()[0], want, atol=1e-12)
+
+
+def test_nir_neuron_gain_folds_into_the_conv_kernel_per_channel():
+    import nir
+
+    from snncc.frontends.nir import graph_from_nir
+
+    w = np.random.default_rng(5).normal(size=(2, 1, 3, 3))
+    r = np.ones((2, 4, 4)) * np.array([0.5, 2.0])[:, None, None]       # one resistance per output channel
+    nodes = {"input": nir.Input(np.array([1, 6, 6])),
+             "c": nir.Conv2d(input_shape=(6, 6), weight=w, stride=1, padding=0, dilation=1, groups=1, bias=np.zeros(2)),
+             "n": nir.IF(r=r, v_threshold=np.ones((2, 4, 4))), "output": nir.Output(np.array([2, 4, 4]))}
+    g = graph_from_nir(nir.NIRGraph(nodes=nodes, edges=[("input", "c"), ("c", "n"), ("n", "output")],
+                                    type_check=False), dt=1.0)
+    assert g.of_kind(Conv) == ["c"] and len(list(g)) == 5                # no extra gain node
+    np.testing.assert_array_equal(g.node("c").weight, w * np.array([0.5, 2.0])[:, None, None, None])
