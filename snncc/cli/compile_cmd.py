@@ -29,7 +29,7 @@ def compile_command(
     scale: Optional[str] = typer.Option(None, "--scale", help="Loihi weight scale rule: 'global' (the paper's), 'per-layer', 'split' (per-layer, outlier weights in a second synapse format with a coarser exponent), 'fine' (each synapse its finest exponent), or 'auto' (default: the paper's unless outliers make it lossy; then the candidate with the smallest measured error)."),
     allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: accept compiling a subtract-reset model with reset to zero (snncc check reports the cost)."),
     jetpack: Optional[str] = typer.Option(None, "--jetpack", help="Jetson: JetPack version of the board (default 4.6); selects the ONNX opset (4.6 -> 13, 5.x/6.0 -> 17, 6.1/6.2 -> 20)."),
-    time_steps: Optional[int] = typer.Option(None, "--time-steps", help="Jetson: time steps T of the unrolled sequence model (default: recording length / dt)."),
+    time_steps: Optional[int] = typer.Option(None, "--time-steps", help="Time steps per sample (default: recording length / dt). Jetson: T of the unrolled sequence model; Loihi: tSample."),
     json_out: bool = typer.Option(False, "--json", help="Print the compile report as JSON."),
 ) -> None:
     """Compile a trained model for a target. Every artefact is checked against the IR reference."""

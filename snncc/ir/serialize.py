@@ -76,7 +76,7 @@ def graph_from_record(record: dict[str, Any], arrays: dict[str, np.ndarray]) -> 
                 check_real(value, field=f"node {entry.get('name')!r}.{key}")
         try:
             op = cls(**kwargs)
-        except TypeError as ex:
+        except (TypeError, ValueError) as ex:
             raise SnnccError(f"fields do not match a {cls.kind} node ({ex})", field=f"node {entry.get('name')!r}") from None
         g.add(entry["name"], op)
     for e in record["edges"]:

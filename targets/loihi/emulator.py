@@ -79,8 +79,23 @@ def _by_delay(weight: np.ndarray, delay) -> list[tuple[int, np.ndarray]]:
     Sums of integer chip weights over 0/1 spikes stay far below 2**53, so a float64 matrix
     product (BLAS) gives the exact integer q; it is converted back to int64 below.
     """
+    if np.ndim(delay) == 0 or np.asarray(delay).size == 1:
+        return [(int(np.asarray(delay).reshape(-1)[0]), _matrix_t(np.asarray(weight)))]
     d = _as_delay(delay, weight.shape)
-    return [(int(v), np.where(d == v, weight, 0).astype(np.float64).T.copy()) for v in np.unique(d)]
+    return [(int(v), _matrix_t(np.where(d == v, weight, 0))) for v in np.unique(d)]
+
+
+SPARSE_MIN_SIZE = 1 << 20      # weight matrices this large and at most SPARSE_MAX_DENSITY full are
+SPARSE_MAX_DENSITY = 0.25      # multiplied as sparse matrices (the same exact integer sums, less work)
+
+
+def _matrix_t(w: np.ndarray):
+    """w.T as float64: dense, or scipy CSR for a large, mostly-zero matrix (a folded convolution)."""
+    if w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size:
+        import scipy.sparse as sp
+
+        return sp.csr_matrix(w.T.astype(np.float64))
+    return w.astype(np.float64).T.copy()
 
 
 def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndarray]], zero: np.ndarray) -> np.ndarray:
@@ -89,7 +104,7 @@ def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndar
     for d, w_t in parts:
         src = t - 1 - d
         if src >= 0:
-            part = history[src].astype(np.float64) @ w_t
+            part = np.asarray(history[src].astype(np.float64) @ w_t)
             total = total + (part if zero.dtype.kind == "f" else np.rint(part).astype(np.int64))
     return total
 
@@ -183,8 +198,9 @@ class _Program:
 
     n: np.ndarray            # (L+1,) neurons per layer, layer 0 = inputs
     noff: np.ndarray         # (L+1,) offset of each layer in the flat neuron arrays
-    wt: list                 # per layer: feed-forward weights transposed (n_pre, n) int64, chip units
-    dt_: list                # per layer: per-synapse delays transposed (n_pre, n) int64
+    wt: list                 # per layer: feed-forward weights transposed (n_pre, n) int64, chip units,
+                             # or a SparseBlock (large mostly-zero projections: only their synapses)
+    dt_: list                # per layer: per-synapse delays transposed (n_pre, n) int64 (None when sparse)
     wr: list                 # recurrent (n, n) transposed, or a (0, 0) array
     dr: list
     params: np.ndarray       # (L+1, 7) int64 per layer: 4096 - iDecay, 4096 - vDecay, vThMant * 2**6 (when
@@ -204,6 +220,60 @@ def _chip_weights(weight, exp, where: str) -> np.ndarray:
     return np.asarray(weight, np.int64) << (6 + exp)
 
 
+@dataclass
+class SparseBlock:
+    """A projection's synapses grouped by source neuron (what the chip stores per input axon):
+    synapses ptr[k]..ptr[k+1]-1 of source k go to ``post`` with chip weight ``w`` and delay ``delay``."""
+
+    n_pre: int
+    n_post: int
+    ptr: np.ndarray          # (n_pre + 1,) int64
+    post: np.ndarray         # (nnz,) int64
+    w: np.ndarray            # (nnz,) int64, chip units
+    delay: np.ndarray        # (nnz,) int64
+
+    def abs_in(self) -> np.ndarray:
+        """sum |w| over the synapses into each post neuron."""
+        return np.bincount(self.post, weights=np.abs(self.w).astype(np.float64), minlength=self.n_post)
+
+
+def _sparse_eligible(weight) -> bool:
+    w = np.asarray(weight)
+    return w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size
+
+
+def _sparse_block(weight, exp, delay, where: str) -> SparseBlock:
+    """The nonzero synapses of ``weight`` (n_post, n_pre) as a SparseBlock, chip units."""
+    w = np.asarray(weight)
+    post, pre = np.nonzero(w)
+    order = np.lexsort((post, pre))
+    post, pre = post[order].astype(np.int64), pre[order].astype(np.int64)
+    e = np.asarray(exp, np.int64)
+    e = e if e.ndim == 0 else e[post, pre]
+    if np.size(e) and np.min(e) < -6:
+        raise SnnccError("wgtExp below -6 gives fractional chip weights", field=where)
+    chip = w[post, pre].astype(np.int64) << (6 + e)
+    d = np.asarray(delay, np.int64)
+    d = np.full(post.size, int(d.reshape(-1)[0]) if d.size else 0, np.int64) if d.size <= 1 else d[post, pre]
+    ptr = np.searchsorted(pre, np.arange(w.shape[1] + 1)).astype(np.int64)
+    return SparseBlock(int(w.shape[1]), int(w.shape[0]), ptr, post, np.ascontiguousarray(chip), d)
+
+
+def _block(weight, exp, delay, where: str):
+    """(weights, delays) of one projection for the kernel: dense transposed, or a SparseBlock and None."""
+    if _sparse_eligible(weight):
+        return _sparse_block(weight, exp, delay, where), None
+    w = _chip_weights(weight, exp, where)
+    d = _as_delay(delay, w.shape)
+    return np.ascontiguousarray(w.T), np.ascontiguousarray(d.T)
+
+
+def _max_delay(w, d) -> int:
+    if isinstance(w, SparseBlock):
+        return int(w.delay.max(initial=0))
+    return int(d.max(initial=0))
+
+
 def _program(network: LoihiNetwork) -> _Program:
     layers = network.layers
     n = np.array([lay.n for lay in layers], np.int64)
@@ -215,17 +285,15 @@ def _program(network: LoihiNetwork) -> _Program:
     bias = np.zeros(int(n.sum()), np.int64)
     max_delay = 0
     for i, lay in enumerate(layers[1:], start=1):
-        w = _chip_weights(lay.weight, lay.wgt_exp, f"/layer/{i}/neuron/wgtExp")
-        d = _as_delay(lay.delay, w.shape)
-        wt.append(np.ascontiguousarray(w.T))
-        dts.append(np.ascontiguousarray(d.T))
-        max_delay = max(max_delay, int(d.max(initial=0)))
+        w, d = _block(lay.weight, lay.wgt_exp, lay.delay, f"/layer/{i}/neuron/wgtExp")
+        wt.append(w)
+        dts.append(d)
+        max_delay = max(max_delay, _max_delay(w, d))
         if lay.weight_rec is not None:
-            r = _chip_weights(lay.weight_rec, lay.wgt_exp_rec, f"/layer/{i}/neuron/wgtExpRec")
-            drr = _as_delay(lay.delay_rec, r.shape)
-            wr.append(np.ascontiguousarray(r.T))
-            dr.append(np.ascontiguousarray(drr.T))
-            max_delay = max(max_delay, int(drr.max(initial=0)))
+            r, drr = _block(lay.weight_rec, lay.wgt_exp_rec, lay.delay_rec, f"/layer/{i}/neuron/wgtExpRec")
+            wr.append(r)
+            dr.append(drr)
+            max_delay = max(max_delay, _max_delay(r, drr))
         else:
             wr.append(empty)
             dr.append(empty)

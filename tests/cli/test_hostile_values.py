@@ -254,7 +254,7 @@ def test_load_options_refused_on_other_formats(files, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("target, extra, needle", [
-    ("loihi", ["--time-steps", "5"], "--time-steps: does not apply to --target loihi"),
+    ("ir", ["--time-steps", "5"], "--time-steps: does not apply to --target ir"),
     ("loihi", ["--jetpack", "5.1"], "--jetpack: does not apply to --target loihi"),
     ("jetson", ["--timing", "paper"], "--timing: does not apply to --target jetson"),
     ("jetson", ["--allow-reset-change"], "--allow-reset-change: does not apply to --target jetson"),
