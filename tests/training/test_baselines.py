@@ -131,3 +131,23 @@ def test_residual_networks_export_and_agree(kind, tmp_path):
     assert art.manifest["opset"] == 17 and v["prediction_agreement"] == 1.0 and v["max_abs_delta_score"] < 1e-3
     art.write(tmp_path / "a")
     assert sorted(p.name for p in (tmp_path / "a").iterdir()) == ["build_engine.sh", "manifest.json", "model.onnx", "run.py"]
+
+
+def test_bench_times_baselines_beside_an_lstm_in_one_run(tmp_path, capsys):
+    from snncc.frontends import graph_from_object
+    from snncc.models import LSTMClassifier
+    from snncc.targets.jetson import target
+    from snncc.targets.jetson.buffered import lower_buffered
+
+    torch.manual_seed(0)
+    lstm = LSTMClassifier(n_inputs=12, n_hidden=8, n_outputs=27)
+    target.lower(graph_from_object(lstm), {"time_steps": 12}).write(tmp_path / "lstm")
+    lower_buffered(BufferedClassifier(kind="tcnn", n_steps=12), {}, {}).write(tmp_path / "tcnn")
+    args = ["bench", str(tmp_path / "lstm"), str(tmp_path / "tcnn"), "--samples", "3", "--repeats", "1",
+            "--warmup-passes", "0", "--timed-passes", "1"]
+    assert run([*args, "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert [m["kind"] for m in record["models"]] == ["lstm", "tcnn"]
+    assert record["models"][0]["ratio_to_reference"] == 1.0 and record["models"][1]["median_ms"] > 0
+    assert run([*args, "--stream"]) == 2
+    assert "no step variant" in capsys.readouterr().err
