@@ -121,7 +121,10 @@ def _new_model(req: TrainRequest, hp: PaperParams, data: TrainingData) -> torch.
         return build_model(req.kind, n_inputs=channels, n_steps=int(data.inputs.shape[1]),
                            n_outputs=max(n_classes, 27), dt=FRAME_DT_S)
     dt = hp.dt if req.kind == "elstm" else FRAME_DT_S
-    return build_model(req.kind, n_inputs=channels, n_outputs=max(n_classes, 27), dt=dt)
+    model = build_model(req.kind, n_inputs=channels, n_outputs=max(n_classes, 27), dt=dt)
+    if req.kind == "elstm":
+        model.init_for_events(int(data.inputs.shape[1]))   # see snncc.models.lstm: why the default does not learn
+    return model
 
 
 def batch_size_of(req: TrainRequest) -> int:
