@@ -42,7 +42,6 @@ class TrainSettings:
     optimiser: str = "adamax"              # "adamax" (the paper's SNNs/LSTMs) | "adam" (the time-series family)
     loss: str = "cross_entropy"            # | "mse_sigmoid" (Time-CNN: MSE of sigmoid outputs vs one-hot)
     plateau: tuple | None = None           # ReduceLROnPlateau on the training loss: (factor, patience, min_lr)
-    grad_clip: float | None = None         # max gradient norm (None: no clipping)
 
 
 @dataclass
@@ -209,8 +208,6 @@ def _epochs(model, x_train, y_train, test, val, settings, forward, progress, tas
             parts = batch_loss(model, outputs, yb, settings)
             optimiser.zero_grad(set_to_none=True)
             parts.total.backward()
-            if settings.grad_clip is not None:
-                torch.nn.utils.clip_grad_norm_(model.parameters(), settings.grad_clip)
             optimiser.step()
             total_loss += float(parts.total.detach()) * idx.numel()
             total_nll += parts.nll * idx.numel()
