@@ -38,7 +38,9 @@ def ttc_command(
     if output is not None:
         write_text_atomic(output, json.dumps(payload, indent=2) + "\n")
     if figure is not None:
-        plot_accuracy_vs_fraction(records, figure, title="accuracy vs share of the signal seen")
+        synthetic = any("SYNTHETIC" in r.data for r in records)
+        plot_accuracy_vs_fraction(records, figure, title="accuracy vs share of the signal seen"
+                                  + (" (SYNTHETIC data)" if synthetic else ""))
     if json_out:
         print_json(payload)
         return

@@ -89,16 +89,21 @@ def test_train_compile_and_onnx_agree(kind, frames_set, tmp_path, capsys):
 
 def test_family_schedule_and_seeding(frames_set, tmp_path):
     from snncc.training.data import load_training_data
+    from snncc.training.pipeline import optimiser_record
 
-    data = load_training_data(frames_set, "resnet", 1, 5)
+    rec = optimiser_record(TrainRequest(kind="inception", data="", output=""), 300)
+    assert (rec["optimiser"], rec["lr"], rec["batch_size"], rec["plateau"]) == ("adam", 1e-3, 64, (0.5, 50, 1e-4))
+    rec = optimiser_record(TrainRequest(kind="encoder", data="", output="", lr=1e-4, batch_size=8), 300)
+    assert (rec["lr"], rec["batch_size"], rec["plateau"]) == (1e-4, 8, None)
+    assert optimiser_record(TrainRequest(kind="tcnn", data="", output=""), 1)["loss"] == "mse_sigmoid"
+    data = load_training_data(frames_set, "tcnn", 1, 5)
     runs = []
     for i in range(2):
         out = tmp_path / f"r{i}.pt"
-        res = train(TrainRequest(kind="inception", data=str(frames_set), output=str(out), epochs=1,
-                                 seed=3, device="cpu"), data=data)
+        res = train(TrainRequest(kind="tcnn", data=str(frames_set), output=str(out), epochs=2, seed=3, device="cpu"),
+                    data=data)
         runs.append(torch.load(out, weights_only=True)["state_dict"])
-        assert res.optimiser["optimiser"] == "adam" and res.optimiser["plateau"] == (0.5, 50, 1e-4)
-        assert res.optimiser["batch_size"] == 64
+        assert res.optimiser["optimiser"] == "adam" and res.optimiser["batch_size"] == 16
     assert all(torch.equal(runs[0][k], runs[1][k]) for k in runs[0])
 
 
