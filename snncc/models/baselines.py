@@ -2,7 +2,8 @@
 
 Written after the descriptions of the Keras family the authors used (Ismail Fawaz et al.,
 "dl-4-tsc" / InceptionTime): Keras 'same' padding (extra pad on the right for even kernels),
-Keras BatchNormalization defaults (eps 1e-3, momentum 0.99), softmax/sigmoid left to the loss.
+Keras' BatchNorm epsilon (1e-3; momentum torch's 0.1, as Keras' 0.99 needs very long runs to
+settle), softmax/sigmoid left to the loss.
 Input (B, T, C) frames as the LSTM takes them (12 taxels, T = 54 frames of 25 ms), output class
 scores (B, n_outputs); the data are buffered: the whole sample is needed before a prediction.
 
