@@ -35,15 +35,18 @@ def compile_command(
     """Compile a trained model for a target. Every artefact is checked against the IR reference."""
     from snncc.cli.render import print_graph_summary, print_import_notes
     from snncc.frontends import LoadOptions, load_model
+    from snncc.frontends.buffered import compile_buffered  # buffered classifiers have no IR graph
     from snncc.targets import get_target
 
-    graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
-    tgt = get_target(target)
     options = compile_options(timing=timing, scale=scale, allow_reset_change=allow_reset_change or None,
                               jetpack=jetpack, source=str(model), time_steps=time_steps)
-    artefact = tgt.lower(graph, options)
+    artefact, graph = compile_buffered(model, target, options), None
+    if artefact is None:
+        graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
+        artefact = get_target(target).lower(graph, options)
     artefact.write(output)
-    print_import_notes(graph)
+    if graph is not None:
+        print_import_notes(graph)
     summary = artefact.summary()
     if json_out:
         print_json({"target": target, "output": str(output), **summary})

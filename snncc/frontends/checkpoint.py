@@ -18,12 +18,30 @@ from snncc.errors import SnnccError
 from snncc.limits import check_memory, check_real, positive_number, whole_number
 from snncc.models import LSTMClassifier, LSTMConfig, SNNConfig, SpikingClassifier
 from snncc.models.snn import UPDATE_ORDERS
+from snncc.models.baselines import BASELINE_KINDS, BaselineConfig, BufferedClassifier
 
 FORMAT = "snncc-checkpoint"
 # training bookkeeping that stays in the checkpoint and never travels into graphs or artefacts
 TRAINING_ONLY_METADATA = ("split_assignment",)
 VERSION = 1
-KINDS = ("rsnn", "ffsnn", "lstm", "elstm")
+KINDS = ("rsnn", "ffsnn", "lstm", "elstm") + BASELINE_KINDS
+# sizes a buffered classifier's record may ask for (checked before anything is allocated): the
+# largest (Encoder, 2048 steps, 256 classes) stays under 40 M parameters
+BASELINE_BOUNDS = {"n_inputs": (1, 256), "n_steps": (9, 2048), "n_outputs": (2, 256), "longest_kernel": (4, 128)}
+
+
+def _checked_baseline(arch: dict, source: str) -> BaselineConfig:
+    """A buffered classifier's config from its record, each size a whole number within bounds."""
+    for key, (lo, hi) in BASELINE_BOUNDS.items():
+        if key in arch:
+            value = arch[key]
+            if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+                raise SnnccError(f"must be a whole number in [{lo}, {hi}], got {value!r}", file=source,
+                                 field=f"architecture.{key}")
+    dt = arch.get("dt", 0.025)
+    if isinstance(dt, bool) or not isinstance(dt, (int, float)) or not 0 < dt <= 1:
+        raise SnnccError(f"must be a number in (0, 1] seconds, got {dt!r}", file=source, field="architecture.dt")
+    return BaselineConfig(**arch)
 
 
 def is_checkpoint(obj: Any) -> bool:
@@ -94,10 +112,13 @@ def module_from_checkpoint(obj: dict[str, Any], source: str = "<checkpoint>") ->
     kind = arch.pop("kind", None)
     if kind not in KINDS:
         raise SnnccError(f"unknown model kind {kind!r} (known: {', '.join(KINDS)})", file=source, field="architecture.kind")
-    check_architecture(kind, arch, source)
+    if kind not in BASELINE_KINDS:   # a buffered classifier's record is bounded by _checked_baseline
+        check_architecture(kind, arch, source)
     try:
-        if kind in ("rsnn", "ffsnn"):
-            module: torch.nn.Module = SpikingClassifier(SNNConfig(**arch))
+        if kind in BASELINE_KINDS:
+            module: torch.nn.Module = BufferedClassifier(_checked_baseline({"kind": kind, **arch}, source))
+        elif kind in ("rsnn", "ffsnn"):
+            module = SpikingClassifier(SNNConfig(**arch))
         else:
             module = LSTMClassifier(LSTMConfig(**arch))
     except (TypeError, ValueError) as ex:

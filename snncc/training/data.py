@@ -89,8 +89,8 @@ def load_training_data(path: str | Path, kind: str, threshold: int, time_bin_siz
             raise SnnccError(f"events binned at {data_bin} ms but the preset uses time_bin_size {time_bin_size:g} ms; "
                              f"re-encode or pass --set time_bin_size={data_bin}", file=str(path), field="meta.time_bin_size_ms")
     elif channels != 12:
-        raise SnnccError(f"lstm needs frames (12 taxels); this set has {channels} channels "
-                         "(use elstm for events)", file=str(path), field="inputs")
+        raise SnnccError(f"{kind} needs frames (12 taxels); this set has {channels} channels "
+                         "(use elstm, rsnn or ffsnn for events)", file=str(path), field="inputs")
     x = torch.from_numpy(np.ascontiguousarray(inputs))
     if kind not in EVENT_KINDS:
         x = x.to(torch.float32)
