@@ -19,7 +19,8 @@ import sys
 import time
 from pathlib import Path
 
-VERBS = ("compile", "inspect", "emulate", "check", "map", "report", "export", "run", "data", "train", "bench")
+VERBS = ("compile", "inspect", "emulate", "check", "map", "report", "export", "run", "data", "train", "bench",
+         "analyse")
 GOAL_HELP_S = 0.5
 
 

@@ -9,7 +9,8 @@ Rules every snncc writer follows (files through :func:`atomic_path`, directories
 * a destination that resolves (after symlinks) to an input of the running command, or a directory
   that contains one, is refused (:func:`protecting` declares the inputs);
 * ``.``/``..``, the current directory or one of its parents, and an existing directory named as a
-  file output are refused;
+  file output are refused; an existing device or pipe (``-o /dev/null``) is written through, never
+  replaced;
 * an existing directory is replaced only if the caller recognises it as its own earlier output
   (``replaceable``); the swap is one atomic ``renameat2(RENAME_EXCHANGE)`` where the kernel has it,
   so a kill at any moment leaves either the old or the new directory complete at the path;
@@ -28,6 +29,7 @@ import hashlib
 import os
 import re
 import shutil
+import stat
 import tempfile
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
@@ -116,6 +118,14 @@ def clean_leftovers(dest: Path) -> None:
         _remove(entry)
 
 
+def _is_device_or_pipe(path: Path) -> bool:
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISBLK(mode) or stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
+
+
 def _prepare(dest: Path, directory: bool) -> None:
     check_destination(dest, directory=directory)
     if not directory and dest.is_dir():
@@ -130,6 +140,14 @@ def _prepare(dest: Path, directory: bool) -> None:
 def atomic_path(dest: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``dest``; rename it to ``dest`` if the block succeeds."""
     dest = Path(dest)
+    if _is_device_or_pipe(dest):   # e.g. -o /dev/null: write through it, never replace the node
+        check_destination(dest)
+        with tempfile.TemporaryDirectory(prefix="snncc-") as scratch:
+            tmp_path = Path(scratch) / dest.name
+            yield tmp_path
+            with open(tmp_path, "rb") as src, open(dest, "wb") as out:
+                shutil.copyfileobj(src, out)
+        return
     _prepare(dest, directory=False)
     fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.{os.getpid()}.", suffix=".part", dir=dest.parent)
     os.close(fd)

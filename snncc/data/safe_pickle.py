@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from snncc.errors import SnnccError
+from snncc.limits import check_memory
 
 _NUMPY = {
     (mod, name)
@@ -80,4 +81,7 @@ def load_published_pickle(path: str | Path) -> Any:
         raise SnnccError("file not found", file=str(path))
     if path.is_dir():
         raise SnnccError("expected a .pkl file, got a directory", file=str(path))
+    if not path.is_file():
+        raise SnnccError("is not a regular file (a device or pipe); give a .pkl file", file=str(path))
+    check_memory(2 * path.stat().st_size, "reading this pickle", file=str(path), field="size")
     return restricted_loads(path.read_bytes(), str(path))

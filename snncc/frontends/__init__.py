@@ -80,6 +80,9 @@ def load_model(path: str | Path, options: LoadOptions | None = None) -> Graph:
     options = options or LoadOptions()
     if not path.exists():
         raise SnnccError("file does not exist", file=str(path), field="path")
+    if not path.is_file():
+        raise SnnccError("is not a regular file (a directory, device or pipe); give a model file", file=str(path),
+                         field="path")
     suffix = path.suffix.lower()
     spec = _LOADERS.get(suffix, _LOADERS[".pt"])
     try:

@@ -39,8 +39,10 @@ REFUSED = ("refused: the file's pickle needs arbitrary Python objects (loaded wi
 def load_torch_file(path: str | Path) -> Any:
     """The object stored in ``path``, loaded with weights_only=True onto the CPU."""
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise SnnccError("file does not exist", file=str(path), field="path")
+    if not path.is_file():
+        raise SnnccError("is not a regular file (a directory, device or pipe)", file=str(path), field="path")
     if path.stat().st_size == 0:
         raise SnnccError("file is empty", file=str(path), field="contents")
     try:

@@ -190,3 +190,17 @@ def test_existing_directory_without_replaceable_rule_is_refused(tmp_path):
     with pytest.raises(SnnccError, match="not replaceable"):
         with atomic_dir(dest):
             pass
+
+
+def test_devices_as_inputs_are_refused_and_as_outputs_written_through(tmp_path, small_rsnn_checkpoint, capsys):
+    """/dev/zero as an input never hangs or fills memory; -o /dev/null never replaces the device node."""
+    for args in (["compile", "/dev/zero", "-t", "ir", "-o", tmp_path / "x.snnir"],
+                 ["data", "encode", "/dev/zero", "-t", "1", "-o", tmp_path / "e.npz"]):
+        code, _, err = run_cli(args, capsys)
+        assert "not a regular file" in one_error_line(code, err)
+    before = os.stat("/dev/null")
+    code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "ir", "-o", "/dev/null"], capsys)
+    assert code == 0, err
+    after = os.stat("/dev/null")
+    assert (after.st_mode, after.st_rdev, after.st_ino) == (before.st_mode, before.st_rdev, before.st_ino)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rsnn.pt"]

@@ -7,7 +7,8 @@ import subprocess
 import sys
 
 HEAVY = ("torch", "sklearn", "scipy", "pandas", "onnx", "onnxruntime", "matplotlib", "numba", "optuna")
-VERBS = ("compile", "inspect", "emulate", "check", "map", "report", "export", "run", "data", "train", "bench")
+VERBS = ("compile", "inspect", "emulate", "check", "map", "report", "export", "run", "data", "train", "bench",
+         "analyse")
 
 PROBE = """
 import contextlib, io, json, sys
