@@ -1,14 +1,36 @@
 """The emulator's compiled kernel: the rules of ``emulator.py`` in numba, event-driven.
 
-A spike of neuron k at step t adds its row of chip weights into a ring buffer slot
-(t + 1 + delay) of the layer it projects to, so the work per step is (neuron updates) +
-(spikes x fan-out), as on the chip. Samples of a batch run in parallel (``prange``).
+Per sample and step t, layer by layer:
+
+1. one fused, vectorised pass over the layer's compartments reads and clears ring slot t of
+   accumulated q, applies the update of ``emulator.py`` and marks the neurons that fire;
+2. each spike of neuron k adds its row of weights into the ring slot ``t + 1 + delay`` of every
+   layer it projects to (itself when recurrent, the next layer), so the work per step is
+   (compartment updates) + (spikes x fan-out), as on the chip.
+
+Exactness of the narrow types (checked when the program is flattened, never assumed):
+
+* weights are stored as ``w_chip >> shift`` (``shift``: the trailing zero bits common to every
+  chip weight into a layer, so the shift loses nothing) in the narrowest of int8 .. int64 that
+  holds them; q accumulates in the narrowest type in which sum_i |w_chip[j, i] >> shift| over
+  all synapses into any neuron fits. A ring slot holds at most one delivery per synapse, so no
+  partial sum overflows, and q = acc << shift exactly.
+* u, v, refractory counters are int32 when every layer's [vmin, vmax] fits 32 bits (u is wrapped
+  to 24 bits, v clipped): arithmetic is done in int64 and stored back exactly; else int64 (the
+  overflow-free ``wide`` run).
+
+A batch is split into chunks of samples run on a few Python threads (the kernel releases the
+GIL; plain ``njit`` functions cache reliably and load fast, unlike a ``parallel=True`` kernel);
+each chunk allocates its state once and reuses it for every sample and step.
 """
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
-from numba import njit, prange
+from numba import config, njit, types
+from numba.extending import overload
 
 from snncc.errors import SnnccError
 
@@ -18,199 +40,278 @@ INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 
 
 @njit(cache=True)
-def _scatter(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform):
-    """Add pre neuron k's weights (row k of a transposed block starting at ``base``) into the ring."""
-    row = base + k * n_post
+def _add_row(buf, dst, w, src, m):
+    """buf[dst:dst+m] += w[src:src+m] (one spike's weights into one ring slot; vectorised)."""
+    out = buf[dst:dst + m]
+    row = w[src:src + m]
+    for j in range(m):
+        out[j] += row[j]
+
+
+@njit(cache=True)
+def _add_row_delays(buf, t, ring, total, post_off, w, d, src, m):
+    """A spike's weights with a delay per synapse: each goes to ring slot (t + 1 + delay) mod ring."""
+    for j in range(m):
+        slot = (t + 1 + d[src + j]) % ring
+        buf[slot * total + post_off + j] += w[src + j]
+
+
+@njit(cache=True)
+def _deliver(buf, t, ring, total, k, post_off, m, w, d, base, uniform):
+    """Pre neuron k fired at step t: add row k of the transposed block at ``base`` into the ring."""
+    src = base + k * m
     if uniform >= 0:
-        slot = (t + 1 + uniform) % ring
-        dst = buf[slot, post_off:post_off + n_post]
-        dst += wflat[row:row + n_post]
+        _add_row(buf, ((t + 1 + uniform) % ring) * total + post_off, w, src, m)
     else:
-        for j in range(n_post):
-            slot = (t + 1 + dflat[row + j]) % ring
-            buf[slot, post_off + j] += wflat[row + j]
+        _add_row_delays(buf, t, ring, total, post_off, w, d, src, m)
 
 
-@njit(cache=True, parallel=True)
-def _run(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-         out_spikes, all_s, all_u, all_v, ovf, wraps):
-    for b in prange(x.shape[0]):
-        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-                out_spikes, all_s, all_u, all_v, ovf, wraps)
+def _decay(x, keep, keep_f):
+    """sign(x) * ((|x| * keep) >> 12), the chip's truncating decay; ``keep_f`` = keep / 4096."""
+    p = int(x) * int(keep)
+    return -((-p) >> 12) if p < 0 else p >> 12
 
 
-@njit(cache=True)
-def _run_serial(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-                out_spikes, all_s, all_u, all_v, ovf, wraps):
-    for b in range(x.shape[0]):
-        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-                out_spikes, all_s, all_u, all_v, ovf, wraps)
+@overload(_decay)
+def _decay_kernel(x, keep, keep_f):
+    """32-bit state: trunc(x * keep_f) in float64, exact because |x * keep| < 2**43 < 2**53 and
+    keep_f = keep * 2**-12 scales by a power of two (4 lanes without a 64-bit multiply).
+    64-bit state: the integer product, rounded toward zero by adding 4095 to negative products."""
+    if isinstance(x, types.Integer) and x.bitwidth <= 32:
+        def decay_f64(x, keep, keep_f):
+            return np.int64(np.float64(x) * keep_f)
+        return decay_f64
 
-
-@njit(cache=True, inline="always")
-def _decay(x, keep):
-    """sign(x) * ((|x| * keep) >> 12) without branches: round the product toward zero."""
-    p = x * keep
-    return (p + ((p >> 63) & 4095)) >> 12
-
-
-@njit(cache=True, inline="always")
-def _compartment(j, qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax, qh, qm, uh, um):
-    """Compartment j for one step; returns 1s where q wrapped, u wrapped, v clipped."""
-    q = qrow[j]
-    qrow[j] = 0
-    qw = ((q + qh) & qm) - qh
-    ur = _decay(u[j], i_keep) + qw
-    un = ((ur + uh) & um) - uh
-    vr = _decay(v[j], v_keep) + un + bias[j]
-    vn = min(max(vr, vmin), vmax)
-    clipped = np.int64(vn != vr)
-    r = ref[j]
-    refractory = r > 0
-    vn = 0 if refractory else vn
-    r = r - 1 if refractory else r
-    s = vn > vth
-    vn = 0 if s else vn
-    ref[j] = ref_delay - 1 if s else r
-    u[j] = un
-    v[j] = vn
-    fired[j] = s
-    return np.int64(qw != q), np.int64(un != ur), clipped
+    def decay_int(x, keep, keep_f):
+        p = np.int64(x) * keep
+        return (p + ((p >> 63) & 4095)) >> 12
+    return decay_int
 
 
 @njit(cache=True)
-def _update(qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax, counts, qh, qm, uh, um):
-    """One step of one layer's compartments (slices of the flat state); q is read and cleared.
-    One compartment profile for the whole layer (scalars: the fast, common case)."""
+def _update(buf, base, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias, ref_delay, vmin, vmax,
+            shift, qh, qm, uh, um, fired, counts):
+    """One step of compartments lo..lo+m-1; q is read from (and cleared in) buf[base:base+m].
+
+    Writes fired[0:m] (0/1), adds the q-wrap / u-wrap / v-clip counts, returns the spike count.
+    The decays are ``_decay`` (exact float64 product for 32-bit state, integer product otherwise).
+    """
     cq = 0
     cu = 0
     cv = 0
-    for j in range(u.shape[0]):
-        a, b, c = _compartment(j, qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax,
-                               qh, qm, uh, um)
-        cq += a
-        cu += b
-        cv += c
+    nf = 0
+    qs = buf[base:base + m]
+    us, vs, rs = u[lo:lo + m], v[lo:lo + m], ref[lo:lo + m]
+    ku, kv, th, bs = keep_u[lo:lo + m], keep_v[lo:lo + m], vth[lo:lo + m], bias[lo:lo + m]
+    kuf, kvf = keep_uf[lo:lo + m], keep_vf[lo:lo + m]
+    for j in range(m):
+        q = np.int64(qs[j]) << shift
+        qs[j] = 0
+        qw = ((q + qh) & qm) - qh
+        ur = _decay(us[j], ku[j], kuf[j]) + qw
+        un = ((ur + uh) & um) - uh
+        vr = _decay(vs[j], kv[j], kvf[j]) + un + bs[j]
+        vn = min(max(vr, vmin), vmax)
+        cq += qw != q
+        cu += un != ur
+        cv += vn != vr
+        r = np.int64(rs[j])
+        refractory = r > 0
+        vn = 0 if refractory else vn
+        r = r - 1 if refractory else r
+        s = vn > th[j]
+        vn = 0 if s else vn
+        rs[j] = ref_delay - 1 if s else r
+        us[j] = un
+        vs[j] = vn
+        fired[j] = s
+        nf += s
     counts[0] += cq
     counts[1] += cu
     counts[2] += cv
+    return nf
+
+
+# byte i of a 64-bit word of 0/1 bytes -> bit i of (word * _PACK) >> 56 (no carries reach bits 56..63)
+_PACK = np.uint64(0x0102040810204080)
+_SHIFT56 = np.uint64(56)
+_BITS = np.array([[q for q in range(8) if mask >> q & 1] + [0] * (8 - bin(mask).count("1"))
+                  for mask in range(256)], np.int32)           # positions of the set bits of each byte value
+_COUNT = np.array([bin(mask).count("1") for mask in range(256)], np.int64)
 
 
 @njit(cache=True)
-def _update_profiles(qrow, u, v, ref, fired, bias, cells, ref_delay, vmin, vmax, counts, qh, qm, uh, um):
-    """``_update`` with a profile per compartment: ``cells`` (3, n) = 4096 - iDecay, 4096 - vDecay, vThMant * 2**6."""
-    cq = 0
-    cu = 0
-    cv = 0
-    for j in range(u.shape[0]):
-        a, b, c = _compartment(j, qrow, u, v, ref, fired, bias, cells[0, j], cells[1, j], cells[2, j], ref_delay,
-                               vmin, vmax, qh, qm, uh, um)
-        cq += a
-        cu += b
-        cv += c
-    counts[0] += cq
-    counts[1] += cu
-    counts[2] += cv
+def _spike_list(fired, m, spk):
+    """Indices of the 0/1 bytes fired[0:m] that are 1, into spk (length >= m + 8); returns how many.
+
+    Branch-free: 8 neurons at a time, their bytes packed into a bit mask that indexes a table of
+    set-bit positions (spikes are rare and scattered, so per-byte branches mispredict)."""
+    m8 = (m + 7) & ~7
+    fired[m:m8] = 0
+    words = fired[:m8].view(np.uint64)
+    c = 0
+    for wi in range(m8 >> 3):
+        mask = (words[wi] * _PACK) >> _SHIFT56
+        base = wi << 3
+        for q in range(8):
+            spk[c + q] = base + _BITS[mask, q]
+        c += _COUNT[mask]
+    return c
 
 
 @njit(cache=True)
-def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-            out_spikes, all_s, all_u, all_v, ovf, wraps):
-    """One sample from zero state: the chip's rules, step by step, layer by layer."""
+def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
+            ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts):
+    """One sample from zero state (buffers reset here): the chip's rules, step by step, layer by layer.
+
+    ``lay`` (L+1, 4) int64 per layer: ref_delay, vmin, vmax, weight shift.
+    """
     steps, width = x.shape[1], x.shape[2]
     n_layers = n.shape[0]
-    total = noff[n_layers - 1] + n[n_layers - 1]
     last = n_layers - 1
-    buf = np.zeros((ring, total), wflat.dtype)
-    u = np.zeros(total, np.int64)
-    v = np.zeros(total, np.int64)
-    ref = np.zeros(total, np.int64)
-    fired = np.zeros(total, np.uint8)
-    counts = np.zeros(3, np.int64)
+    total = noff[last] + n[last]
+    buf[:] = 0
+    u[:] = 0
+    v[:] = 0
+    ref[:] = 0
+    counts[:] = 0
+    qh, qm, uh, um = wraps[0], wraps[1], wraps[2], wraps[3]
     for t in range(steps):
-        slot = t % ring
         # input axons: this step's input spikes reach layer 1 one step (+ delay) later
         for k in range(width):
             if x[b, t, k]:
                 if record_all:
                     all_s[b, t, k] = 1
-                _scatter(buf, ring, t, k, n[1], noff[1], wflat, dflat, woff[1], duni[1])
+                _deliver(buf, t, ring, total, k, noff[1], n[1], wflat, dflat, woff[1], duni[1])
+        base = (t % ring) * total
         for i in range(1, n_layers):
             lo = noff[i]
-            hi = lo + n[i]
-            if params[i, 6]:
-                _update(buf[slot, lo:hi], u[lo:hi], v[lo:hi], ref[lo:hi], fired[lo:hi], bias[lo:hi],
-                        params[i, 0], params[i, 1], params[i, 2], params[i, 3],
-                        params[i, 4], params[i, 5], counts, wraps[0], wraps[1], wraps[2], wraps[3])
-            else:
-                _update_profiles(buf[slot, lo:hi], u[lo:hi], v[lo:hi], ref[lo:hi], fired[lo:hi], bias[lo:hi],
-                                 cells[:, lo:hi], params[i, 3], params[i, 4], params[i, 5], counts,
-                                 wraps[0], wraps[1], wraps[2], wraps[3])
+            m = n[i]
+            nf = _update(buf, base + lo, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias, lay[i, 0],
+                         lay[i, 1], lay[i, 2], lay[i, 3], qh, qm, uh, um, fired, counts)
             if record_all:
-                for j in range(lo, hi):
-                    all_s[b, t, j] = fired[j]
-                    all_u[b, t, j] = u[j]
-                    all_v[b, t, j] = v[j]
-            # deliver this layer's spikes: to itself (recurrent) and to the next layer
-            for k in range(n[i]):
-                if fired[lo + k]:
-                    if i == last:
-                        out_spikes[b, t, k] = 1
-                    if roff[i] >= 0:
-                        _scatter(buf, ring, t, k, n[i], lo, wflat, dflat, roff[i], druni[i])
-                    if i < last:
-                        _scatter(buf, ring, t, k, n[i + 1], noff[i + 1], wflat, dflat, woff[i + 1], duni[i + 1])
+                for j in range(m):
+                    all_s[b, t, lo + j] = fired[j]
+                    all_u[b, t, lo + j] = u[lo + j]
+                    all_v[b, t, lo + j] = v[lo + j]
+            if nf == 0:
+                continue
+            # ring positions this step's spikes go to (uniform delays), computed once per step
+            rec_dst = ((t + 1 + druni[i]) % ring) * total + lo
+            nxt_dst = 0
+            nxt_m = 0
+            if i < last:
+                nxt_dst = ((t + 1 + duni[i + 1]) % ring) * total + noff[i + 1]
+                nxt_m = n[i + 1]
+            nspk = _spike_list(fired, m, spk)
+            if i == last:
+                for c in range(nspk):
+                    out_spikes[b, t, spk[c]] = 1
+            if roff[i] >= 0:                # to itself (recurrent)
+                for c in range(nspk):
+                    if druni[i] >= 0:
+                        _add_row(buf, rec_dst, wflat, roff[i] + spk[c] * m, m)
+                    else:
+                        _add_row_delays(buf, t, ring, total, lo, wflat, dflat, roff[i] + spk[c] * m, m)
+            if i < last:                    # to the next layer
+                for c in range(nspk):
+                    if duni[i + 1] >= 0:
+                        _add_row(buf, nxt_dst, wflat, woff[i + 1] + spk[c] * nxt_m, nxt_m)
+                    else:
+                        _add_row_delays(buf, t, ring, total, noff[i + 1], wflat, dflat, woff[i + 1] + spk[c] * nxt_m,
+                                        nxt_m)
     ovf[b, 0] = counts[0]
     ovf[b, 1] = counts[1]
     ovf[b, 2] = counts[2]
 
 
-def _fits_int32(prog) -> bool:
-    """True when sum_i |w_chip[j, i]| over all synapses into any neuron stays below 2**31."""
-    total = np.zeros(int(prog.n.sum()), np.int64)
-    for i in range(1, len(prog.n)):
-        lo, hi = int(prog.noff[i]), int(prog.noff[i] + prog.n[i])
-        total[lo:hi] += np.abs(prog.wt[i]).sum(axis=0)
-        if prog.wr[i].size:
-            total[lo:hi] += np.abs(prog.wr[i]).sum(axis=0)
-    return bool(total.max(initial=0) < 2**31)
+@njit(cache=True, nogil=True)
+def _chunk(lo_b, hi_b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, keep_v, keep_uf, keep_vf, vth,
+           bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, acc_proto, state_proto):
+    """Samples lo_b..hi_b-1 one after another, with state allocated once for the chunk.
+
+    Runs without the GIL: ``run_flat`` runs chunks of a batch on several Python threads."""
+    total = noff[-1] + n[-1]
+    buf = np.zeros(ring * total, acc_proto.dtype)
+    u = np.zeros(total, state_proto.dtype)
+    v = np.zeros(total, state_proto.dtype)
+    ref = np.zeros(total, np.int32)
+    fired = np.zeros(((n.max() + 7) & ~7) + 8, np.uint8)
+    spk = np.zeros(fired.shape[0] + 8, np.int32)
+    counts = np.zeros(3, np.int64)
+    for b in range(lo_b, hi_b):
+        _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
+                ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts)
 
 
 def _uniform(d: np.ndarray) -> int:
     return int(d.flat[0]) if d.size and np.all(d == d.flat[0]) else (-1 if d.size else 0)
 
 
+def _common_shift(blocks: list[np.ndarray]) -> int:
+    """The trailing zero bits shared by every non-zero chip weight of ``blocks`` (0 when all are zero)."""
+    acc = 0
+    for w in blocks:
+        if w.size:
+            acc |= int(np.bitwise_or.reduce(np.abs(w).ravel()))
+    if acc == 0:
+        return 0
+    return (acc & -acc).bit_length() - 1
+
+
+def narrowest_int(bound: int):
+    """The narrowest signed integer type (int8 .. int64) that holds every value in [-bound, bound]."""
+    for dtype in (np.int8, np.int16, np.int32):
+        if bound <= np.iinfo(dtype).max:
+            return dtype
+    return np.int64
+
+
 class Flat:
-    """A program flattened once into the kernel's arrays (weights in one int32/int64 vector)."""
+    """A program flattened once into the kernel's arrays.
+
+    Weights of every block (layer i's feed-forward, then its recurrent) are stored transposed
+    (row k = pre neuron k's fan-out) in one vector, divided by 2**shift of their layer, in the
+    narrowest type that holds them; q accumulates in the narrowest type that holds the largest
+    per-neuron sum of |w| (``narrowest_int``).
+    """
 
     def __init__(self, prog):
         self.prog = prog
         layers = len(prog.n)
-        blocks_w, blocks_d = [], []
         woff = np.full(layers, -1, np.int64)
         roff = np.full(layers, -1, np.int64)
         duni = np.zeros(layers, np.int64)
         druni = np.zeros(layers, np.int64)
-        pos = 0
+        shift = np.zeros(layers, np.int64)
+        bound = 0
+        scaled_w, blocks_d = [], []
         for i in range(1, layers):
-            woff[i] = pos
-            blocks_w.append(prog.wt[i].ravel())
-            blocks_d.append(prog.dt_[i].ravel())
+            blocks = [prog.wt[i]] + ([prog.wr[i]] if prog.wr[i].size else [])
+            shift[i] = _common_shift(blocks)
+            fan_in_abs = sum(np.abs(w >> shift[i]).sum(axis=0) for w in blocks)
+            bound = max(bound, int(np.max(fan_in_abs, initial=0)))
+            scaled_w.append(blocks[0] >> shift[i])
+            woff[i] = sum(w.size for w in scaled_w[:-1])
+            blocks_d.append(prog.dt_[i])
             duni[i] = _uniform(prog.dt_[i])
-            pos += prog.wt[i].size
             if prog.wr[i].size:
-                roff[i] = pos
-                blocks_w.append(prog.wr[i].ravel())
-                blocks_d.append(prog.dr[i].ravel())
+                scaled_w.append(prog.wr[i] >> shift[i])
+                roff[i] = sum(w.size for w in scaled_w[:-1])
+                blocks_d.append(prog.dr[i])
                 druni[i] = _uniform(prog.dr[i])
-                pos += prog.wr[i].size
-        wflat = np.ascontiguousarray(np.concatenate(blocks_w) if blocks_w else np.zeros(0, np.int64), dtype=np.int64)
-        if _fits_int32(prog):
-            # every q a step can deliver fits 32 bits: accumulate in int32 (twice the SIMD width)
-            wflat = wflat.astype(np.int32)
-        dflat = np.ascontiguousarray(np.concatenate(blocks_d) if blocks_d else np.zeros(0, np.int64), dtype=np.int64)
-        self.wflat, self.dflat, self.woff, self.roff, self.duni, self.druni = wflat, dflat, woff, roff, duni, druni
-        self.cells = np.ascontiguousarray(np.stack([prog.keep_u, prog.keep_v, prog.vth]), dtype=np.int64)
+        flat_w = np.concatenate([w.ravel() for w in scaled_w]) if scaled_w else np.zeros(0, np.int64)
+        self.acc_dtype = narrowest_int(bound)
+        self.wflat = np.ascontiguousarray(flat_w, dtype=narrowest_int(int(np.abs(flat_w).max(initial=0))))
+        flat_d = np.concatenate([d.ravel() for d in blocks_d]) if blocks_d else np.zeros(0, np.int64)
+        self.dflat = np.ascontiguousarray(flat_d, dtype=np.int64)
+        self.woff, self.roff, self.duni, self.druni, self.shift = woff, roff, duni, druni, shift
+        self.keep_u = np.ascontiguousarray(prog.keep_u, np.int64)
+        self.keep_v = np.ascontiguousarray(prog.keep_v, np.int64)
+        self.keep_uf = self.keep_u * 2.0**-12   # exact: keep <= 4096, a power-of-two scale
+        self.keep_vf = self.keep_v * 2.0**-12
+        self.vth = np.ascontiguousarray(prog.vth, np.int64)
+        self.bias = np.ascontiguousarray(prog.bias, np.int64)
 
 
 def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
@@ -218,8 +319,12 @@ def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
     return run_flat(Flat(prog), x, record, wide)
 
 
-def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False):
-    """Run the kernel on (B, T, C) uint8 ``x`` and wrap the result."""
+def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads: int | None = None):
+    """Run the kernel on (B, T, C) uint8 ``x`` and wrap the result.
+
+    ``threads``: threads to spread the batch over (default ``NUMBA_NUM_THREADS``, the core
+    count unless set); batch 1 or ``threads=1`` runs on the calling thread.
+    """
     from snncc.targets.loihi.emulator import EmulationResult, _prediction
 
     prog = flat.prog
@@ -238,17 +343,30 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False):
     all_u = np.zeros(shape_all, np.int32)
     all_v = np.zeros(shape_all, np.int32)
     ovf = np.zeros((batch, 3), np.int64)
+    lay = np.zeros((layers, 4), np.int64)
+    lay[:, 0] = prog.params[:, 3]
+    lay[:, 3] = flat.shift
     if wide:  # no wrap, no clip: what the network computes without overflow (for the loss split)
         big = 1 << 61
         wraps = np.array([big, (big << 1) - 1, big, (big << 1) - 1], np.int64)
-        params = prog.params.copy()
-        params[1:, 4], params[1:, 5] = -big, big
+        lay[1:, 1], lay[1:, 2] = -big, big
     else:
         wraps = np.array([Q_HALF, Q_MASK, U_HALF, U_MASK], np.int64)
-        params = prog.params
-    runner = _run if batch > 1 else _run_serial
-    runner(np.ascontiguousarray(x), prog.n, prog.noff, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni, flat.druni,
-         params, prog.bias, flat.cells, int(prog.ring), record_all, out, all_s, all_u, all_v, ovf, wraps)
+        lay[:, 1], lay[:, 2] = prog.params[:, 4], prog.params[:, 5]
+    narrow = bool(np.all(lay[1:, 1] >= INT32_MIN) and np.all(lay[1:, 2] <= INT32_MAX))
+    state_proto = np.zeros(0, np.int32 if narrow else np.int64)
+    args = (np.ascontiguousarray(x), prog.n, prog.noff, lay, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni,
+            flat.druni, flat.keep_u, flat.keep_v, flat.keep_uf, flat.keep_vf, flat.vth, flat.bias, int(prog.ring),
+            record_all, out, all_s, all_u, all_v, ovf, wraps, np.zeros(0, flat.acc_dtype), state_proto)
+    workers = max(1, min(batch, config.NUMBA_NUM_THREADS if threads is None else int(threads)))
+    if workers == 1:
+        _chunk(0, batch, *args)
+    else:   # samples are independent: chunks on threads (the kernel releases the GIL); small
+        # chunks let a thread that other load slows down take fewer of them
+        size = max(1, -(-batch // (4 * workers)))
+        bounds = [(lo, min(lo + size, batch)) for lo in range(0, batch, size)]
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(lambda lh: _chunk(lh[0], lh[1], *args), bounds))
     counts = out.sum(axis=1, dtype=np.int64)
     res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts),
                           overflow={"q_wrap": int(ovf[:, 0].sum()), "u_wrap": int(ovf[:, 1].sum()),
