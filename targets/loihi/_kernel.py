@@ -178,11 +178,15 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, k
     qh, qm, uh, um = wraps[0], wraps[1], wraps[2], wraps[3]
     for t in range(steps):
         # input axons: this step's input spikes reach layer 1 one step (+ delay) later
+        xs = x[b, t]
         for k in range(width):
-            if x[b, t, k]:
-                if record_all:
-                    all_s[b, t, k] = 1
-                _deliver(buf, t, ring, total, k, noff[1], n[1], wflat, dflat, woff[1], duni[1])
+            fired[k] = xs[k] != 0
+        nspk = _spike_list(fired, width, spk)
+        for c in range(nspk):
+            k = spk[c]
+            if record_all:
+                all_s[b, t, k] = 1
+            _deliver(buf, t, ring, total, k, noff[1], n[1], wflat, dflat, woff[1], duni[1])
         base = (t % ring) * total
         for i in range(1, n_layers):
             lo = noff[i]
@@ -236,7 +240,7 @@ def _chunk(lo_b, hi_b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, k
     u = np.zeros(total, state_proto.dtype)
     v = np.zeros(total, state_proto.dtype)
     ref = np.zeros(total, np.int32)
-    fired = np.zeros(((n.max() + 7) & ~7) + 8, np.uint8)
+    fired = np.zeros(((max(n.max(), x.shape[2]) + 7) & ~7) + 8, np.uint8)
     spk = np.zeros(fired.shape[0] + 8, np.int32)
     counts = np.zeros(3, np.int64)
     for b in range(lo_b, hi_b):
@@ -259,10 +263,10 @@ def _common_shift(blocks: list[np.ndarray]) -> int:
     return (acc & -acc).bit_length() - 1
 
 
-def narrowest_int(bound: int):
-    """The narrowest signed integer type (int8 .. int64) that holds every value in [-bound, bound]."""
+def narrowest_int(lo: int, hi: int):
+    """The narrowest signed integer type (int8 .. int64) that holds every value in [lo, hi]."""
     for dtype in (np.int8, np.int16, np.int32):
-        if bound <= np.iinfo(dtype).max:
+        if np.iinfo(dtype).min <= lo and hi <= np.iinfo(dtype).max:
             return dtype
     return np.int64
 
@@ -301,8 +305,9 @@ class Flat:
                 blocks_d.append(prog.dr[i])
                 druni[i] = _uniform(prog.dr[i])
         flat_w = np.concatenate([w.ravel() for w in scaled_w]) if scaled_w else np.zeros(0, np.int64)
-        self.acc_dtype = narrowest_int(bound)
-        self.wflat = np.ascontiguousarray(flat_w, dtype=narrowest_int(int(np.abs(flat_w).max(initial=0))))
+        self.acc_dtype = narrowest_int(-bound, bound)
+        w_type = narrowest_int(int(flat_w.min(initial=0)), int(flat_w.max(initial=0)))
+        self.wflat = np.ascontiguousarray(flat_w, dtype=w_type)
         flat_d = np.concatenate([d.ravel() for d in blocks_d]) if blocks_d else np.zeros(0, np.int64)
         self.dflat = np.ascontiguousarray(flat_d, dtype=np.int64)
         self.woff, self.roff, self.duni, self.druni, self.shift = woff, roff, duni, druni, shift

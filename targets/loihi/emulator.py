@@ -12,8 +12,8 @@ The chip's arithmetic, per compartment and step t (integers throughout):
 Every edge (input, feed-forward, recurrent) delivers one step after the spike plus its synaptic
 delay. ``reference_run`` states this literally in numpy (also runnable with float arithmetic:
 no truncation, wrap or clip, used to check the lowering with quantization switched off);
-``emulate`` runs the same rules in an event-driven numba kernel (spikes accumulate into a ring
-buffer of future q), parallel over the samples of a batch. Both count overflows.
+``emulate`` runs the same rules in an event-driven numba kernel (``_kernel.py``: spikes accumulate
+into a ring buffer of future q), the samples of a batch spread over threads. Both count overflows.
 """
 
 from __future__ import annotations
@@ -262,7 +262,8 @@ class PreparedNetwork:
         self.flat = Flat(_program(network))
 
     def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int = 100,
-            wide: bool = False) -> EmulationResult:
+            wide: bool = False, threads: int | None = None) -> EmulationResult:
+        """``threads``: threads the samples of a batch are spread over (default: NUMBA_NUM_THREADS)."""
         from snncc.targets.loihi._kernel import run_flat
 
         if record not in RECORD_CHOICES:
@@ -271,7 +272,7 @@ class PreparedNetwork:
             raise SnnccError(f"mode must be one of {MODES}", field="mode")
         x = check_inputs(inputs, self.network.input_width)
         if mode == "batch":
-            return run_flat(self.flat, self.network.drive(x), record, wide)
+            return run_flat(self.flat, self.network.drive(x), record, wide, threads=threads)
         if gap < 0:
             raise SnnccError("gap must be >= 0 steps", field="gap")
         batch, steps, width = x.shape
