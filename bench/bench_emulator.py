@@ -16,11 +16,13 @@ Figures, measured in one process, side by side (each ``--repeat`` times; best an
     all cores: samples/s; at batch 1: ms per sample;
   * with ``--baseline-rev REV``: the kernel of that git revision (``targets/loihi/_kernel.py``)
     on the same network and inputs, checked to give identical results: before vs after;
-  * the float32 PyTorch IR reference (``snncc.ir.simulate``) on 1 thread and all cores, batch B in
-    chunks of 256 (memory): samples/s; ratio emulator / reference;
+  * the float32 PyTorch IR reference (``snncc.ir.simulate``) on 1 thread and all cores, on the
+    first ``--ir-samples`` (256) samples in chunks of 256 (memory): samples/s; ratio kernel / reference;
+  * the kernel's CPU time per sample on 1 thread and per neuron-step (less inflated by other load);
   * the whole CLI call ``snncc emulate BUNDLE --input x.npy -o out.npz`` on the B samples, in
     fresh processes: warm (numba cache filled) and cold (an empty NUMBA_CACHE_DIR: the kernel is
-    compiled), beside ``python -c "import snncc.cli.main"`` (import time).
+    compiled), beside ``python -c "import snncc.cli.main"`` (import time); with
+    ``--baseline-cli-python`` also that interpreter's ``snncc`` (a venv of an earlier revision).
 
 Other engineers share the machine: ``machine.load_1min_*`` and ``uptime`` are recorded; a load
 above the core count inflates every wall time (the ratios in one run drift much less).
@@ -76,13 +78,16 @@ def inputs(batch: int, steps: int, base: int, copies: int, rate: float, seed: in
 
 
 def timed(fn, repeat: int) -> dict:
-    """Wall times of ``repeat`` runs: best (the least disturbed by other load) and median."""
-    times = []
+    """Wall times of ``repeat`` runs: best (the least disturbed by other load) and median; and the
+    process's CPU time of the run with the best CPU time (all its threads: less inflated by other
+    load than wall time, though a busy sibling hyper-thread still slows it)."""
+    times, cpu = [], []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        c0, t0 = time.process_time(), time.perf_counter()
         fn()
         times.append(time.perf_counter() - t0)
-    return {"best_s": min(times), "median_s": statistics.median(times), "runs": len(times)}
+        cpu.append(time.process_time() - c0)
+    return {"best_s": min(times), "median_s": statistics.median(times), "cpu_best_s": min(cpu), "runs": len(times)}
 
 
 def rate_of(t: dict, samples: int) -> dict:
@@ -104,8 +109,10 @@ def load_kernel_at(rev: str):
     path = folder / "_kernel_baseline.py"
     if not path.exists() or path.read_text() != src:
         path.write_text(src)
-    spec = importlib.util.spec_from_file_location(f"_kernel_baseline_{sha}", path)
+    name = f"_kernel_baseline_{sha}"
+    spec = importlib.util.spec_from_file_location(name, path)
     mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod          # numba's cache finds the module again by name
     spec.loader.exec_module(mod)
     return mod, sha
 
@@ -124,12 +131,16 @@ def with_threads(n: int, fn):
         torch.set_num_threads(before_torch)
 
 
-def cli_calls(net, x: np.ndarray, repeat: int) -> dict:
-    """Whole ``snncc emulate`` calls in fresh processes: import, warm and cold (empty numba cache)."""
+def cli_calls(net, x: np.ndarray, repeat: int, python: str | None = None) -> dict:
+    """Whole ``snncc emulate`` calls in fresh processes: import, warm and cold (empty numba cache).
+
+    ``python``: the interpreter whose ``snncc`` to call (another venv, e.g. one installed from an
+    earlier revision: the before figure); default this one."""
     from snncc.targets.loihi.bundle import write_bundle
 
-    snncc = Path(sys.executable).parent / "snncc"
-    cmd_prefix = [str(snncc)] if snncc.exists() else [sys.executable, "-c", "from snncc.cli.main import run; run()"]
+    python = python or sys.executable
+    snncc = Path(python).parent / "snncc"
+    cmd_prefix = [str(snncc)] if snncc.exists() else [python, "-c", "from snncc.cli.main import run; run()"]
     with tempfile.TemporaryDirectory() as tmp:
         bundle, xin, out = Path(tmp) / "th1.net", Path(tmp) / "x.npy", Path(tmp) / "out.npz"
         write_bundle(net, bundle)
@@ -138,7 +149,7 @@ def cli_calls(net, x: np.ndarray, repeat: int) -> dict:
         env = dict(os.environ)
 
         def run(extra_env=None):
-            subprocess.run(cmd, check=True, capture_output=True, env={**env, **(extra_env or {})})
+            subprocess.run(cmd, check=True, capture_output=True, env={**env, **(extra_env or {})}, cwd=tmp)
 
         run()                                                   # fills the numba cache
         warm = timed(run, repeat)
@@ -149,10 +160,11 @@ def cli_calls(net, x: np.ndarray, repeat: int) -> dict:
             run({"NUMBA_CACHE_DIR": str(d)})
             cold_times.append(time.perf_counter() - t0)
         cold = {"best_s": min(cold_times), "median_s": statistics.median(cold_times), "runs": len(cold_times)}
-        imp = timed(lambda: subprocess.run([sys.executable, "-c", "import snncc.cli.main"], check=True), repeat)
-        bare = timed(lambda: subprocess.run([sys.executable, "-c", "pass"], check=True), repeat)
+        # cwd: the temporary folder, so that no checkout in the current folder shadows the install
+        imp = timed(lambda: subprocess.run([python, "-c", "import snncc.cli.main"], check=True, cwd=tmp), repeat)
+        bare = timed(lambda: subprocess.run([python, "-c", "pass"], check=True, cwd=tmp), repeat)
     n = x.shape[0]
-    return {"command": "snncc emulate BUNDLE --input x.npy -o out.npz", "samples": n,
+    return {"command": "snncc emulate BUNDLE --input x.npy -o out.npz", "snncc": cmd_prefix[0], "samples": n,
             "warm_s": warm, "warm_samples_per_s": rate_of(warm, n),
             "cold_s": cold, "cold_samples_per_s": rate_of(cold, n),
             "import_snncc_cli_main_s": imp, "python_startup_s": bare,
@@ -172,8 +184,11 @@ def main(argv=None) -> dict:
     ap.add_argument("--data", default=None)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--repeat", type=int, default=5, help="runs of each measurement (best and median reported)")
+    ap.add_argument("--ir-samples", type=int, default=256, help="samples the IR reference is timed on")
     ap.add_argument("--baseline-rev", default=None, help="git revision whose kernel to time beside this one")
     ap.add_argument("--no-cli", action="store_true", help="skip the whole-CLI-call measurement")
+    ap.add_argument("--baseline-cli-python", default=None,
+                    help="also time the snncc CLI of this interpreter (e.g. a venv of an earlier revision)")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "emulator.json"))
     args = ap.parse_args(argv)
 
@@ -224,16 +239,18 @@ def main(argv=None) -> dict:
         baseline = {"rev": sha, "identical_results": same, "kernel_by_threads": base_kernel,
                     "batch1_ms_per_sample": ms_per(tb1, len(single))}
 
+    x_ir = x[: args.ir_samples]
+
     def ir_run():
-        for lo in range(0, len(x), IR_CHUNK):
-            simulate(graph, x[lo:lo + IR_CHUNK], dtype=torch.float32)
+        for lo in range(0, len(x_ir), IR_CHUNK):
+            simulate(graph, x_ir[lo:lo + IR_CHUNK], dtype=torch.float32)
 
     simulate(graph, x[:2], dtype=torch.float32)
     ir = {}
     with torch.inference_mode():
         for n_threads in sorted({1, cores}):
             t = with_threads(n_threads, lambda: timed(ir_run, max(2, args.repeat // 2)))
-            ir[str(n_threads)] = {"samples_per_s": rate_of(t, len(x)), **t}
+            ir[str(n_threads)] = {"samples_per_s": rate_of(t, len(x_ir)), **t}
         with_threads(1, lambda: simulate(graph, single[:1], dtype=torch.float32))
         ti1 = with_threads(1, lambda: timed(lambda: [simulate(graph, s[None], dtype=torch.float32)
                                                      for s in single[:16]], max(2, args.repeat // 2)))
@@ -243,7 +260,11 @@ def main(argv=None) -> dict:
     best_ir = max(v["samples_per_s"]["best"] for v in ir.values())
     med_emu = max(v["samples_per_s"]["median"] for v in kernel.values())
     med_ir = max(v["samples_per_s"]["median"] for v in ir.values())
-    cli = None if args.no_cli else cli_calls(net, x, max(3, args.repeat // 2 + 1))
+    cli_repeat = max(3, args.repeat // 2 + 1)
+    cli = None if args.no_cli else cli_calls(net, x, cli_repeat)
+    cli_baseline = None
+    if args.baseline_cli_python and not args.no_cli:
+        cli_baseline = cli_calls(net, x, cli_repeat, python=args.baseline_cli_python)
 
     result = {
         "workload": {"network": " -> ".join(str(lay.n) for lay in net.layers)
@@ -258,6 +279,10 @@ def main(argv=None) -> dict:
         "kernel_by_threads": kernel,
         "kernel_samples_per_s": {"best": best_emu, "median": med_emu},
         "batch1_ms_per_sample": batch1,
+        "kernel_cpu_us_per_sample_1_thread": 1e6 * kernel["1"]["cpu_best_s"] / len(x),
+        "kernel_cpu_ns_per_neuron_step_1_thread": 1e9 * kernel["1"]["cpu_best_s"] / len(x) / steps
+        / sum(lay.n for lay in net.layers[1:]),
+        "ir_float32_samples": len(x_ir),
         "ir_float32_by_threads": ir,
         "ir_float32_samples_per_s": {"best": best_ir, "median": med_ir},
         "ir_float32_batch1_ms_per_sample": ms_per(ti1, 16),
@@ -267,6 +292,7 @@ def main(argv=None) -> dict:
             "batch": best_emu / max(v["samples_per_s"]["best"] for v in baseline["kernel_by_threads"].values()),
             "batch1": baseline["batch1_ms_per_sample"]["best"] / batch1["best"]},
         "cli": cli,
+        "cli_baseline": cli_baseline,
         "goals": {"kernel_batch_samples_per_s>=10000": best_emu >= 10_000,
                   "kernel_batch1_ms<=0.5": batch1["best"] <= 0.5,
                   "kernel>=10x_ir_float32": best_emu >= 10 * best_ir,
