@@ -132,6 +132,39 @@ def _update(buf, base, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, 
     return nf
 
 
+@njit(cache=True)
+def _update_in_range(buf, base, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias, ref_delay, vmin,
+                     vmax, shift, fired, counts):
+    """``_update`` for a layer whose q and u provably never leave their ranges (``Flat.in_range``):
+    the same arithmetic without the two wraps, which would change nothing, and their counts (0)."""
+    cv = 0
+    nf = 0
+    qs = buf[base:base + m]
+    us, vs, rs = u[lo:lo + m], v[lo:lo + m], ref[lo:lo + m]
+    ku, kv, th, bs = keep_u[lo:lo + m], keep_v[lo:lo + m], vth[lo:lo + m], bias[lo:lo + m]
+    kuf, kvf = keep_uf[lo:lo + m], keep_vf[lo:lo + m]
+    for j in range(m):
+        q = np.int64(qs[j]) << shift
+        qs[j] = 0
+        un = _decay(us[j], ku[j], kuf[j]) + q
+        vr = _decay(vs[j], kv[j], kvf[j]) + un + bs[j]
+        vn = min(max(vr, vmin), vmax)
+        cv += vn != vr
+        r = np.int64(rs[j])
+        refractory = r > 0
+        vn = 0 if refractory else vn
+        r = r - 1 if refractory else r
+        s = vn > th[j]
+        vn = 0 if s else vn
+        rs[j] = ref_delay - 1 if s else r
+        us[j] = un
+        vs[j] = vn
+        fired[j] = s
+        nf += s
+    counts[2] += cv
+    return nf
+
+
 # byte i of a 64-bit word of 0/1 bytes -> bit i of (word * _PACK) >> 56 (no carries reach bits 56..63)
 _PACK = np.uint64(0x0102040810204080)
 _SHIFT56 = np.uint64(56)
@@ -164,7 +197,7 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, k
             ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts):
     """One sample from zero state (buffers reset here): the chip's rules, step by step, layer by layer.
 
-    ``lay`` (L+1, 4) int64 per layer: ref_delay, vmin, vmax, weight shift.
+    ``lay`` (L+1, 5) int64 per layer: ref_delay, vmin, vmax, weight shift, 1 if q and u stay in range.
     """
     steps, width = x.shape[1], x.shape[2]
     n_layers = n.shape[0]
@@ -191,8 +224,12 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, k
         for i in range(1, n_layers):
             lo = noff[i]
             m = n[i]
-            nf = _update(buf, base + lo, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias, lay[i, 0],
-                         lay[i, 1], lay[i, 2], lay[i, 3], qh, qm, uh, um, fired, counts)
+            if lay[i, 4]:
+                nf = _update_in_range(buf, base + lo, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
+                                      lay[i, 0], lay[i, 1], lay[i, 2], lay[i, 3], fired, counts)
+            else:
+                nf = _update(buf, base + lo, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias, lay[i, 0],
+                             lay[i, 1], lay[i, 2], lay[i, 3], qh, qm, uh, um, fired, counts)
             if record_all:
                 for j in range(m):
                     all_s[b, t, lo + j] = fired[j]
@@ -263,6 +300,23 @@ def _common_shift(blocks: list[np.ndarray]) -> int:
     return (acc & -acc).bit_length() - 1
 
 
+def q_u_in_range(q_max: np.ndarray, keep_u: np.ndarray) -> bool:
+    """True when no neuron's q or u can ever wrap, from zero state, whatever the spikes.
+
+    |q| <= q_max (every synapse into the neuron delivering at once). With k = keep / 4096 < 1,
+    |u_t| <= k |u_(t-1)| + q_max (the decay truncates toward zero), so |u| <= q_max / (1 - k)
+    = q_max * 4096 / iDecay. In range: q_max < 2**21 and q_max * 4096 < 2**23 * iDecay (iDecay =
+    4096 - keep > 0); then u < 2**23 too, and neither wrap can change a value.
+    """
+    q_max = np.asarray(q_max, np.int64)
+    i_decay = 4096 - np.asarray(keep_u, np.int64)
+    if q_max.size == 0:
+        return True
+    if np.any(q_max >= 1 << 21) or np.any(i_decay <= 0):
+        return False
+    return bool(np.all(q_max * 4096 < (1 << 23) * i_decay))
+
+
 def narrowest_int(lo: int, hi: int):
     """The narrowest signed integer type (int8 .. int64) that holds every value in [lo, hi]."""
     for dtype in (np.int8, np.int16, np.int32):
@@ -288,6 +342,7 @@ class Flat:
         duni = np.zeros(layers, np.int64)
         druni = np.zeros(layers, np.int64)
         shift = np.zeros(layers, np.int64)
+        in_range = np.zeros(layers, np.int64)
         bound = 0
         scaled_w, blocks_d = [], []
         for i in range(1, layers):
@@ -295,6 +350,8 @@ class Flat:
             shift[i] = _common_shift(blocks)
             fan_in_abs = sum(np.abs(w >> shift[i]).sum(axis=0) for w in blocks)
             bound = max(bound, int(np.max(fan_in_abs, initial=0)))
+            cells = slice(int(prog.noff[i]), int(prog.noff[i] + prog.n[i]))
+            in_range[i] = int(q_u_in_range(fan_in_abs.astype(np.int64) << shift[i], prog.keep_u[cells]))
             scaled_w.append(blocks[0] >> shift[i])
             woff[i] = sum(w.size for w in scaled_w[:-1])
             blocks_d.append(prog.dt_[i])
@@ -311,6 +368,7 @@ class Flat:
         flat_d = np.concatenate([d.ravel() for d in blocks_d]) if blocks_d else np.zeros(0, np.int64)
         self.dflat = np.ascontiguousarray(flat_d, dtype=np.int64)
         self.woff, self.roff, self.duni, self.druni, self.shift = woff, roff, duni, druni, shift
+        self.in_range = in_range
         self.keep_u = np.ascontiguousarray(prog.keep_u, np.int64)
         self.keep_v = np.ascontiguousarray(prog.keep_v, np.int64)
         self.keep_uf = self.keep_u * 2.0**-12   # exact: keep <= 4096, a power-of-two scale
@@ -348,9 +406,10 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads
     all_u = np.zeros(shape_all, np.int32)
     all_v = np.zeros(shape_all, np.int32)
     ovf = np.zeros((batch, 3), np.int64)
-    lay = np.zeros((layers, 4), np.int64)
+    lay = np.zeros((layers, 5), np.int64)
     lay[:, 0] = prog.params[:, 3]
     lay[:, 3] = flat.shift
+    lay[:, 4] = flat.in_range
     if wide:  # no wrap, no clip: what the network computes without overflow (for the loss split)
         big = 1 << 61
         wraps = np.array([big, (big << 1) - 1, big, (big << 1) - 1], np.int64)

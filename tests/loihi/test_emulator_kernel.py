@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from snncc.targets.loihi._kernel import Flat, _common_shift, narrowest_int
+from snncc.targets.loihi._kernel import Flat, _common_shift, narrowest_int, q_u_in_range
 from snncc.targets.loihi.emulator import PreparedNetwork, _program, reference_run
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 from tests.loihi.helpers import random_network
@@ -58,12 +58,12 @@ def test_wide_run_threaded_equals_serial():
     assert np.array_equal(a.output_spikes, b.output_spikes)
 
 
-def _all_on_network(n_in: int, first: int, rest: int) -> LoihiNetwork:
+def _all_on_network(n_in: int, first: int, rest: int, i_decay: int = 4096) -> LoihiNetwork:
     """Input 0 reaches every hidden neuron with weight ``first``, the others with ``rest``."""
     w = np.full((3, n_in), rest, np.int16)
     w[:, 0] = first
     hidden = LoihiLayer("hidden", "dense", 3, weight=w, wgt_exp=0,
-                        v_th_mant=2**17 - 1, i_decay=4096, v_decay=4096, vmin=-(2**23 - 1), vmax=2**23 - 1)
+                        v_th_mant=2**17 - 1, i_decay=i_decay, v_decay=4096, vmin=-(2**23 - 1), vmax=2**23 - 1)
     out = LoihiLayer("out", "dense", 2, weight=np.full((2, 3), 2, np.int16), v_th_mant=1)
     return LoihiNetwork([LoihiLayer("input", "input", n_in), hidden, out], t_sample=6)
 
@@ -94,3 +94,34 @@ def test_narrowest_int_and_common_shift():
     assert _common_shift([np.array([[64, -192], [0, 128]]), np.zeros((0, 0), np.int64)]) == 6
     assert _common_shift([np.zeros((2, 2), np.int64)]) == 0
     assert _common_shift([np.array([[3 << 40]])]) == 40
+
+
+def test_q_u_in_range_rule():
+    assert q_u_in_range(np.array([2**21 - 1]), np.array([0]))             # iDecay 4096: u = q
+    assert not q_u_in_range(np.array([2**21]), np.array([0]))             # q itself can wrap
+    assert not q_u_in_range(np.array([1]), np.array([4096]))              # iDecay 0: u accumulates
+    assert q_u_in_range(np.array([2**17 - 1]), np.array([4096 - 64]))     # |u| < q_max * 4096 / 64 < 2**23
+    assert not q_u_in_range(np.array([2**17]), np.array([4096 - 64]))
+    assert not q_u_in_range(np.array([5, 2**17]), np.array([4096 - 64, 4096 - 64]))   # any neuron decides
+
+
+@pytest.mark.parametrize("n_in, in_range", [(8, 1), (9, 0)])
+def test_in_range_path_near_its_limit_is_exact(n_in, in_range):
+    """All inputs on: u climbs toward q_max * 4096 / iDecay; 8 inputs stay below 2**23, 9 wrap."""
+    net = _all_on_network(n_in, 254, 254, i_decay=64)
+    flat = Flat(_program(net))
+    assert flat.in_range[1] == in_range and flat.in_range[2] == 0      # out: iDecay 0, u unbounded
+    x = np.ones((2, 400, n_in), np.uint8)
+    fast = PreparedNetwork(net).run(x, record="all", threads=2)
+    _same(fast, reference_run(net, x, record="all"), "all")
+    peak = np.abs(fast.current[1]).max()
+    if in_range:
+        assert 0.95 * 2**23 < peak < 2**23 and fast.overflow["u_wrap"] == 0
+    else:
+        assert fast.overflow["u_wrap"] > 0
+
+
+def test_both_update_paths_are_exercised_by_the_random_networks():
+    flags = {int(Flat(_program(random_network(seed, **kw))).in_range[1])
+             for seed, kw in ((20, {}), (24, {"big": True}), (26, {"profiles": True}))}
+    assert flags == {0, 1}
