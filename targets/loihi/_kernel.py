@@ -168,27 +168,36 @@ def _update_in_range(buf, base, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_
 # byte i of a 64-bit word of 0/1 bytes -> bit i of (word * _PACK) >> 56 (no carries reach bits 56..63)
 _PACK = np.uint64(0x0102040810204080)
 _SHIFT56 = np.uint64(56)
-_BITS = np.array([[q for q in range(8) if mask >> q & 1] + [0] * (8 - bin(mask).count("1"))
-                  for mask in range(256)], np.int32)           # positions of the set bits of each byte value
-_COUNT = np.array([bin(mask).count("1") for mask in range(256)], np.int64)
+# the index of a 64-bit word's single set bit: (bit * _DEBRUIJN) >> 58 is distinct for each of the 64
+_DEBRUIJN = np.uint64(0x03F79D71B4CB0A89)
+_SHIFT58 = np.uint64(58)
+_BIT_INDEX = np.zeros(64, np.int64)
+for _i in range(64):
+    _BIT_INDEX[((1 << _i) * 0x03F79D71B4CB0A89 % 2**64) >> 58] = _i
 
 
 @njit(cache=True)
 def _spike_list(fired, m, spk):
-    """Indices of the 0/1 bytes fired[0:m] that are 1, into spk (length >= m + 8); returns how many.
+    """Indices of the 0/1 bytes fired[0:m] that are 1, into spk; returns how many.
 
-    Branch-free: 8 neurons at a time, their bytes packed into a bit mask that indexes a table of
-    set-bit positions (spikes are rare and scattered, so per-byte branches mispredict)."""
-    m8 = (m + 7) & ~7
-    fired[m:m8] = 0
-    words = fired[:m8].view(np.uint64)
+    ``fired`` must be padded to a multiple of 64 beyond m. 64 neurons at a time: their bytes are
+    packed into one 64-bit mask (8 neurons per multiply), then its set bits are visited lowest
+    first, so the cost follows the spikes rather than the neurons (spikes are rare)."""
+    m64 = (m + 63) & ~63
+    fired[m:m64] = 0
+    words = fired[:m64].view(np.uint64)
+    one = np.uint64(1)
     c = 0
-    for wi in range(m8 >> 3):
-        mask = (words[wi] * _PACK) >> _SHIFT56
-        base = wi << 3
+    for g in range(m64 >> 6):
+        mask = np.uint64(0)
         for q in range(8):
-            spk[c + q] = base + _BITS[mask, q]
-        c += _COUNT[mask]
+            mask |= ((words[g * 8 + q] * _PACK) >> _SHIFT56) << np.uint64(8 * q)
+        base = g << 6
+        while mask != 0:
+            low = mask & (~mask + one)
+            spk[c] = base + _BIT_INDEX[(low * _DEBRUIJN) >> _SHIFT58]
+            c += 1
+            mask ^= low
     return c
 
 
@@ -277,7 +286,7 @@ def _chunk(lo_b, hi_b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, k
     u = np.zeros(total, state_proto.dtype)
     v = np.zeros(total, state_proto.dtype)
     ref = np.zeros(total, np.int32)
-    fired = np.zeros(((max(n.max(), x.shape[2]) + 7) & ~7) + 8, np.uint8)
+    fired = np.zeros(((max(n.max(), x.shape[2]) + 63) & ~63) + 64, np.uint8)
     spk = np.zeros(fired.shape[0] + 8, np.int32)
     counts = np.zeros(3, np.int64)
     for b in range(lo_b, hi_b):

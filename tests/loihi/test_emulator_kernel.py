@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from snncc.targets.loihi._kernel import Flat, _common_shift, narrowest_int, q_u_in_range
+from snncc.targets.loihi._kernel import Flat, _common_shift, _spike_list, narrowest_int, q_u_in_range
 from snncc.targets.loihi.emulator import PreparedNetwork, _program, reference_run
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 from tests.loihi.helpers import random_network
@@ -125,3 +125,16 @@ def test_both_update_paths_are_exercised_by_the_random_networks():
     flags = {int(Flat(_program(random_network(seed, **kw))).in_range[1])
              for seed, kw in ((20, {}), (24, {"big": True}), (26, {"profiles": True}))}
     assert flags == {0, 1}
+
+
+def test_spike_list_finds_every_spike_in_order():
+    rng = np.random.default_rng(3)
+    spk = np.zeros(256, np.int32)
+    for m in (1, 7, 8, 63, 64, 65, 130):
+        for p in (0.0, 0.03, 0.5, 1.0):
+            fired = np.zeros(((m + 63) & ~63) + 64, np.uint8)
+            fired[:m] = rng.random(m) < p
+            fired[m:] = 1                        # stale bytes past m must be ignored
+            expected = np.flatnonzero(fired[:m])
+            c = _spike_list(fired, m, spk)
+            assert spk[:c].tolist() == expected.tolist(), (m, p)
