@@ -4,7 +4,8 @@ Per sample and step t, layer by layer:
 
 1. one fused, vectorised pass over the layer's compartments reads and clears ring slot t of
    accumulated q, applies the update of ``emulator.py`` and marks the neurons that fire;
-2. each spike of neuron k adds its row of weights into the ring slot ``t + 1 + delay`` of every
+2. the marks become a list of spiking neurons (64 at a time, through bit masks);
+3. each spike of neuron k adds its row of weights into the ring slot ``t + 1 + delay`` of every
    layer it projects to (itself when recurrent, the next layer), so the work per step is
    (compartment updates) + (spikes x fan-out), as on the chip.
 
@@ -16,8 +17,10 @@ Exactness of the narrow types (checked when the program is flattened, never assu
   all synapses into any neuron fits. A ring slot holds at most one delivery per synapse, so no
   partial sum overflows, and q = acc << shift exactly.
 * u, v, refractory counters are int32 when every layer's [vmin, vmax] fits 32 bits (u is wrapped
-  to 24 bits, v clipped): arithmetic is done in int64 and stored back exactly; else int64 (the
-  overflow-free ``wide`` run).
+  to 24 bits, v clipped): arithmetic is done in int64 and stored back exactly, the decays through
+  an exact float64 product; else int64 (the overflow-free ``wide`` run).
+* a layer whose q and u cannot leave their ranges whatever the spikes (``q_u_in_range``) is
+  updated without the two wraps, which could change nothing there.
 
 A batch is split into chunks of samples run on a few Python threads (the kernel releases the
 GIL; plain ``njit`` functions cache reliably and load fast, unlike a ``parallel=True`` kernel);

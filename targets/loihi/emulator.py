@@ -68,9 +68,13 @@ def check_inputs(inputs, width: int, source: str | None = None) -> np.ndarray:
                          file=source, field="input")
     if x.dtype.kind == "f" and not np.all(np.isfinite(x)):
         raise SnnccError("input contains NaN or Inf; spikes must be 0 or 1", file=source, field="input")
-    if x.size and not np.all((x == 0) | (x == 1)):
+    if x.dtype.kind in "iu":       # integers are binary iff they lie in [0, 1]: one pass, no temporaries
+        binary = x.size == 0 or (x.max() <= 1 and (x.dtype.kind == "u" or x.min() >= 0))
+    else:
+        binary = x.dtype.kind == "b" or x.size == 0 or bool(np.all((x == 0) | (x == 1)))
+    if not binary:
         raise SnnccError("input must be binary (0/1 spikes)", file=source, field="input")
-    return x.astype(np.uint8)
+    return x.astype(np.uint8, copy=False)
 
 
 def _prediction(counts: np.ndarray) -> np.ndarray:
