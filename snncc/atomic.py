@@ -239,3 +239,20 @@ def file_sha256(path: str | os.PathLike) -> str:
         for block in iter(lambda: f.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
+
+
+def write_npz_atomic(dest: str | os.PathLike, arrays: dict, compresslevel: int = 1) -> None:
+    """``arrays`` as an .npz (a zip of .npy members, deflated: what ``numpy.savez_compressed``
+    writes, read by ``numpy.load``) at zlib level ``compresslevel``, written atomically.
+
+    Level 1 compresses 0/1 spike arrays about 4x faster than numpy's fixed level 6, for a file
+    about 1.5x larger."""
+    import zipfile
+
+    import numpy as np
+
+    with atomic_path(dest) as tmp:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED, compresslevel=compresslevel) as zf:
+            for name, value in arrays.items():
+                with zf.open(f"{name}.npy", "w", force_zip64=True) as member:
+                    np.lib.format.write_array(member, np.asanyarray(value), allow_pickle=False)

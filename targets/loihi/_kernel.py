@@ -1,17 +1,39 @@
 """The emulator's compiled kernel: the rules of ``emulator.py`` in numba, event-driven.
 
-A spike of neuron k at step t adds its row of chip weights into a ring buffer slot
-(t + 1 + delay) of the layer it projects to, so the work per step is (neuron updates) +
-(spikes x fan-out), as on the chip. Samples of a batch run in parallel (``prange``).
-A large mostly-zero projection (a folded convolution, a relay layer) is stored as its synapses
-per source neuron (``SparseBlock``): a spike then adds only its nonzero weights, in the same
-integer arithmetic, so the result is identical.
+Per sample and step t, layer by layer:
+
+1. one fused, vectorised pass over the layer's compartments reads and clears ring slot t of
+   accumulated q, applies the update of ``emulator.py`` and marks the neurons that fire;
+2. the marks become a list of spiking neurons (64 at a time, through bit masks);
+3. each spike of neuron k adds its row of weights into the ring slot ``t + 1 + delay`` of every
+   layer it projects to (itself when recurrent, the next layer), so the work per step is
+   (compartment updates) + (spikes x fan-out), as on the chip.
+
+Exactness of the narrow types (checked when the program is flattened, never assumed):
+
+* weights are stored as ``w_chip >> shift`` (``shift``: the trailing zero bits common to every
+  chip weight into a layer, so the shift loses nothing) in the narrowest of int8 .. int64 that
+  holds them; q accumulates in the narrowest type in which sum_i |w_chip[j, i] >> shift| over
+  all synapses into any neuron fits. A ring slot holds at most one delivery per synapse, so no
+  partial sum overflows, and q = acc << shift exactly.
+* u, v, refractory counters are int32 when every layer's [vmin, vmax] fits 32 bits (u is wrapped
+  to 24 bits, v clipped): arithmetic is done in int64 and stored back exactly, the decays through
+  an exact float64 product; else int64 (the overflow-free ``wide`` run).
+* a layer whose q and u cannot leave their ranges whatever the spikes (``q_u_in_range``) is
+  updated without the two wraps, which could change nothing there.
+
+A batch is split into chunks of samples run on a few Python threads (the kernel releases the
+GIL; plain ``njit`` functions cache reliably and load fast, unlike a ``parallel=True`` kernel);
+each chunk allocates its state once and reuses it for every sample and step.
 """
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
-from numba import njit, prange
+from numba import config, njit, types
+from numba.extending import overload
 
 from snncc.errors import SnnccError
 
@@ -21,256 +43,374 @@ INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 
 
 @njit(cache=True)
-def _scatter(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform):
-    """Add pre neuron k's weights (row k of a transposed block starting at ``base``) into the ring."""
-    row = base + k * n_post
+def _add_row(buf, dst, w, src, m):
+    """buf[dst:dst+m] += w[src:src+m] (one spike's weights into one ring slot; vectorised)."""
+    out = buf[dst:dst + m]
+    row = w[src:src + m]
+    for j in range(m):
+        out[j] += row[j]
+
+
+@njit(cache=True)
+def _add_row_delays(buf, t, ring, total, post_off, w, d, src, m):
+    """A spike's weights with a delay per synapse: each goes to ring slot (t + 1 + delay) mod ring."""
+    for j in range(m):
+        slot = (t + 1 + d[src + j]) % ring
+        buf[slot * total + post_off + j] += w[src + j]
+
+
+@njit(cache=True)
+def _deliver(buf, t, ring, total, k, post_off, m, w, d, base, uniform):
+    """Pre neuron k fired at step t: add row k of the transposed block at ``base`` into the ring."""
+    src = base + k * m
     if uniform >= 0:
-        slot = (t + 1 + uniform) % ring
-        dst = buf[slot, post_off:post_off + n_post]
-        dst += wflat[row:row + n_post]
+        _add_row(buf, ((t + 1 + uniform) % ring) * total + post_off, w, src, m)
     else:
-        for j in range(n_post):
-            slot = (t + 1 + dflat[row + j]) % ring
-            buf[slot, post_off + j] += wflat[row + j]
+        _add_row_delays(buf, t, ring, total, post_off, w, d, src, m)
+
+
+def _decay(x, keep, keep_f):
+    """sign(x) * ((|x| * keep) >> 12), the chip's truncating decay; ``keep_f`` = keep / 4096."""
+    p = int(x) * int(keep)
+    return -((-p) >> 12) if p < 0 else p >> 12
+
+
+@overload(_decay)
+def _decay_kernel(x, keep, keep_f):
+    """32-bit state: trunc(x * keep_f) in float64, exact because |x * keep| < 2**43 < 2**53 and
+    keep_f = keep * 2**-12 scales by a power of two (4 lanes without a 64-bit multiply).
+    64-bit state: the integer product, rounded toward zero by adding 4095 to negative products."""
+    if isinstance(x, types.Integer) and x.bitwidth <= 32:
+        def decay_f64(x, keep, keep_f):
+            return np.int64(np.float64(x) * keep_f)
+        return decay_f64
+
+    def decay_int(x, keep, keep_f):
+        p = np.int64(x) * keep
+        return (p + ((p >> 63) & 4095)) >> 12
+    return decay_int
 
 
 @njit(cache=True)
-def _scatter_sparse(buf, ring, t, k, post_off, sptr, spost, sw, sd, pbase, uniform):
-    """Add pre neuron k's synapses (entries sptr[pbase + k] .. sptr[pbase + k + 1] - 1) into the ring."""
-    lo = sptr[pbase + k]
-    hi = sptr[pbase + k + 1]
-    if uniform >= 0:
-        slot = (t + 1 + uniform) % ring
-        for m in range(lo, hi):
-            buf[slot, post_off + spost[m]] += sw[m]
-    else:
-        for m in range(lo, hi):
-            buf[(t + 1 + sd[m]) % ring, post_off + spost[m]] += sw[m]
+def _update(buf, base, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias, ref_delay, vmin, vmax,
+            shift, qh, qm, uh, um, fired, counts):
+    """One step of compartments lo..lo+m-1; q is read from (and cleared in) buf[base:base+m].
 
-
-@njit(cache=True, inline="always")
-def _deliver(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform, sparse_base, sptr, spost, sw, sd):
-    """A spike of pre neuron k into one projection: dense block at ``base`` or sparse at ``sparse_base``."""
-    if sparse_base >= 0:
-        _scatter_sparse(buf, ring, t, k, post_off, sptr, spost, sw, sd, sparse_base, uniform)
-    else:
-        _scatter(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform)
-
-
-@njit(cache=True, parallel=True)
-def _run(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-         out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd):
-    for b in prange(x.shape[0]):
-        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-                out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd)
-
-
-@njit(cache=True)
-def _run_serial(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-                out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd):
-    for b in range(x.shape[0]):
-        _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-                out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd)
-
-
-@njit(cache=True, inline="always")
-def _decay(x, keep):
-    """sign(x) * ((|x| * keep) >> 12) without branches: round the product toward zero."""
-    p = x * keep
-    return (p + ((p >> 63) & 4095)) >> 12
-
-
-@njit(cache=True, inline="always")
-def _compartment(j, qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax, qh, qm, uh, um):
-    """Compartment j for one step; returns 1s where q wrapped, u wrapped, v clipped."""
-    q = qrow[j]
-    qrow[j] = 0
-    qw = ((q + qh) & qm) - qh
-    ur = _decay(u[j], i_keep) + qw
-    un = ((ur + uh) & um) - uh
-    vr = _decay(v[j], v_keep) + un + bias[j]
-    vn = min(max(vr, vmin), vmax)
-    clipped = np.int64(vn != vr)
-    r = ref[j]
-    refractory = r > 0
-    vn = 0 if refractory else vn
-    r = r - 1 if refractory else r
-    s = vn > vth
-    vn = 0 if s else vn
-    ref[j] = ref_delay - 1 if s else r
-    u[j] = un
-    v[j] = vn
-    fired[j] = s
-    return np.int64(qw != q), np.int64(un != ur), clipped
-
-
-@njit(cache=True)
-def _update(qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax, counts, qh, qm, uh, um):
-    """One step of one layer's compartments (slices of the flat state); q is read and cleared.
-    One compartment profile for the whole layer (scalars: the fast, common case)."""
+    Writes fired[0:m] (0/1), adds the q-wrap / u-wrap / v-clip counts, returns the spike count.
+    The decays are ``_decay`` (exact float64 product for 32-bit state, integer product otherwise).
+    """
     cq = 0
     cu = 0
     cv = 0
-    for j in range(u.shape[0]):
-        a, b, c = _compartment(j, qrow, u, v, ref, fired, bias, i_keep, v_keep, vth, ref_delay, vmin, vmax,
-                               qh, qm, uh, um)
-        cq += a
-        cu += b
-        cv += c
+    nf = 0
+    qs = buf[base:base + m]
+    us, vs, rs = u[lo:lo + m], v[lo:lo + m], ref[lo:lo + m]
+    ku, kv, th, bs = keep_u[lo:lo + m], keep_v[lo:lo + m], vth[lo:lo + m], bias[lo:lo + m]
+    kuf, kvf = keep_uf[lo:lo + m], keep_vf[lo:lo + m]
+    for j in range(m):
+        q = np.int64(qs[j]) << shift
+        qs[j] = 0
+        qw = ((q + qh) & qm) - qh
+        ur = _decay(us[j], ku[j], kuf[j]) + qw
+        un = ((ur + uh) & um) - uh
+        vr = _decay(vs[j], kv[j], kvf[j]) + un + bs[j]
+        vn = min(max(vr, vmin), vmax)
+        cq += qw != q
+        cu += un != ur
+        cv += vn != vr
+        r = np.int64(rs[j])
+        refractory = r > 0
+        vn = 0 if refractory else vn
+        r = r - 1 if refractory else r
+        s = vn > th[j]
+        vn = 0 if s else vn
+        rs[j] = ref_delay - 1 if s else r
+        us[j] = un
+        vs[j] = vn
+        fired[j] = s
+        nf += s
     counts[0] += cq
     counts[1] += cu
     counts[2] += cv
+    return nf
 
 
 @njit(cache=True)
-def _update_profiles(qrow, u, v, ref, fired, bias, cells, ref_delay, vmin, vmax, counts, qh, qm, uh, um):
-    """``_update`` with a profile per compartment: ``cells`` (3, n) = 4096 - iDecay, 4096 - vDecay, vThMant * 2**6."""
-    cq = 0
-    cu = 0
+def _update_in_range(buf, base, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias, ref_delay, vmin,
+                     vmax, shift, fired, counts):
+    """``_update`` for a layer whose q and u provably never leave their ranges (``Flat.in_range``):
+    the same arithmetic without the two wraps, which would change nothing, and their counts (0)."""
     cv = 0
-    for j in range(u.shape[0]):
-        a, b, c = _compartment(j, qrow, u, v, ref, fired, bias, cells[0, j], cells[1, j], cells[2, j], ref_delay,
-                               vmin, vmax, qh, qm, uh, um)
-        cq += a
-        cu += b
-        cv += c
-    counts[0] += cq
-    counts[1] += cu
+    nf = 0
+    qs = buf[base:base + m]
+    us, vs, rs = u[lo:lo + m], v[lo:lo + m], ref[lo:lo + m]
+    ku, kv, th, bs = keep_u[lo:lo + m], keep_v[lo:lo + m], vth[lo:lo + m], bias[lo:lo + m]
+    kuf, kvf = keep_uf[lo:lo + m], keep_vf[lo:lo + m]
+    for j in range(m):
+        q = np.int64(qs[j]) << shift
+        qs[j] = 0
+        un = _decay(us[j], ku[j], kuf[j]) + q
+        vr = _decay(vs[j], kv[j], kvf[j]) + un + bs[j]
+        vn = min(max(vr, vmin), vmax)
+        cv += vn != vr
+        r = np.int64(rs[j])
+        refractory = r > 0
+        vn = 0 if refractory else vn
+        r = r - 1 if refractory else r
+        s = vn > th[j]
+        vn = 0 if s else vn
+        rs[j] = ref_delay - 1 if s else r
+        us[j] = un
+        vs[j] = vn
+        fired[j] = s
+        nf += s
     counts[2] += cv
+    return nf
+
+
+# byte i of a 64-bit word of 0/1 bytes -> bit i of (word * _PACK) >> 56 (no carries reach bits 56..63)
+_PACK = np.uint64(0x0102040810204080)
+_SHIFT56 = np.uint64(56)
+# the index of a 64-bit word's single set bit: (bit * _DEBRUIJN) >> 58 is distinct for each of the 64
+_DEBRUIJN = np.uint64(0x03F79D71B4CB0A89)
+_SHIFT58 = np.uint64(58)
+_BIT_INDEX = np.zeros(64, np.int64)
+for _i in range(64):
+    _BIT_INDEX[((1 << _i) * 0x03F79D71B4CB0A89 % 2**64) >> 58] = _i
 
 
 @njit(cache=True)
-def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-            out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd):
-    """One sample from zero state: the chip's rules, step by step, layer by layer."""
+def _spike_list(fired, m, spk):
+    """Indices of the 0/1 bytes fired[0:m] that are 1, into spk; returns how many.
+
+    ``fired`` must be padded to a multiple of 64 beyond m. 64 neurons at a time: their bytes are
+    packed into one 64-bit mask (8 neurons per multiply), then its set bits are visited lowest
+    first, so the cost follows the spikes rather than the neurons (spikes are rare)."""
+    m64 = (m + 63) & ~63
+    fired[m:m64] = 0
+    words = fired[:m64].view(np.uint64)
+    one = np.uint64(1)
+    c = 0
+    for g in range(m64 >> 6):
+        mask = np.uint64(0)
+        for q in range(8):
+            mask |= ((words[g * 8 + q] * _PACK) >> _SHIFT56) << np.uint64(8 * q)
+        base = g << 6
+        while mask != 0:
+            low = mask & (~mask + one)
+            spk[c] = base + _BIT_INDEX[(low * _DEBRUIJN) >> _SHIFT58]
+            c += 1
+            mask ^= low
+    return c
+
+
+@njit(cache=True)
+def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
+            ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts):
+    """One sample from zero state (buffers reset here): the chip's rules, step by step, layer by layer.
+
+    ``lay`` (L+1, 5) int64 per layer: ref_delay, vmin, vmax, weight shift, 1 if q and u stay in range.
+    """
     steps, width = x.shape[1], x.shape[2]
     n_layers = n.shape[0]
-    total = noff[n_layers - 1] + n[n_layers - 1]
     last = n_layers - 1
-    buf = np.zeros((ring, total), wflat.dtype)
-    u = np.zeros(total, np.int64)
-    v = np.zeros(total, np.int64)
-    ref = np.zeros(total, np.int64)
-    fired = np.zeros(total, np.uint8)
-    counts = np.zeros(3, np.int64)
+    total = noff[last] + n[last]
+    buf[:] = 0
+    u[:] = 0
+    v[:] = 0
+    ref[:] = 0
+    counts[:] = 0
+    qh, qm, uh, um = wraps[0], wraps[1], wraps[2], wraps[3]
     for t in range(steps):
-        slot = t % ring
         # input axons: this step's input spikes reach layer 1 one step (+ delay) later
+        xs = x[b, t]
         for k in range(width):
-            if x[b, t, k]:
-                if record_all:
-                    all_s[b, t, k] = 1
-                _deliver(buf, ring, t, k, n[1], noff[1], wflat, dflat, woff[1], duni[1], wsp[1], sptr, spost, sw, sd)
+            fired[k] = xs[k] != 0
+        nspk = _spike_list(fired, width, spk)
+        for c in range(nspk):
+            k = spk[c]
+            if record_all:
+                all_s[b, t, k] = 1
+            _deliver(buf, t, ring, total, k, noff[1], n[1], wflat, dflat, woff[1], duni[1])
+        base = (t % ring) * total
         for i in range(1, n_layers):
             lo = noff[i]
-            hi = lo + n[i]
-            if params[i, 6]:
-                _update(buf[slot, lo:hi], u[lo:hi], v[lo:hi], ref[lo:hi], fired[lo:hi], bias[lo:hi],
-                        params[i, 0], params[i, 1], params[i, 2], params[i, 3],
-                        params[i, 4], params[i, 5], counts, wraps[0], wraps[1], wraps[2], wraps[3])
+            m = n[i]
+            if lay[i, 4]:
+                nf = _update_in_range(buf, base + lo, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
+                                      lay[i, 0], lay[i, 1], lay[i, 2], lay[i, 3], fired, counts)
             else:
-                _update_profiles(buf[slot, lo:hi], u[lo:hi], v[lo:hi], ref[lo:hi], fired[lo:hi], bias[lo:hi],
-                                 cells[:, lo:hi], params[i, 3], params[i, 4], params[i, 5], counts,
-                                 wraps[0], wraps[1], wraps[2], wraps[3])
+                nf = _update(buf, base + lo, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias, lay[i, 0],
+                             lay[i, 1], lay[i, 2], lay[i, 3], qh, qm, uh, um, fired, counts)
             if record_all:
-                for j in range(lo, hi):
-                    all_s[b, t, j] = fired[j]
-                    all_u[b, t, j] = u[j]
-                    all_v[b, t, j] = v[j]
-            # deliver this layer's spikes: to itself (recurrent) and to the next layer
-            for k in range(n[i]):
-                if fired[lo + k]:
-                    if i == last:
-                        out_spikes[b, t, k] = 1
-                    if roff[i] >= 0 or rsp[i] >= 0:
-                        _deliver(buf, ring, t, k, n[i], lo, wflat, dflat, roff[i], druni[i], rsp[i],
-                                 sptr, spost, sw, sd)
-                    if i < last:
-                        _deliver(buf, ring, t, k, n[i + 1], noff[i + 1], wflat, dflat, woff[i + 1], duni[i + 1],
-                                 wsp[i + 1], sptr, spost, sw, sd)
+                for j in range(m):
+                    all_s[b, t, lo + j] = fired[j]
+                    all_u[b, t, lo + j] = u[lo + j]
+                    all_v[b, t, lo + j] = v[lo + j]
+            if nf == 0:
+                continue
+            # ring positions this step's spikes go to (uniform delays), computed once per step
+            rec_dst = ((t + 1 + druni[i]) % ring) * total + lo
+            nxt_dst = 0
+            nxt_m = 0
+            if i < last:
+                nxt_dst = ((t + 1 + duni[i + 1]) % ring) * total + noff[i + 1]
+                nxt_m = n[i + 1]
+            nspk = _spike_list(fired, m, spk)
+            if i == last:
+                for c in range(nspk):
+                    out_spikes[b, t, spk[c]] = 1
+            if roff[i] >= 0:                # to itself (recurrent)
+                for c in range(nspk):
+                    if druni[i] >= 0:
+                        _add_row(buf, rec_dst, wflat, roff[i] + spk[c] * m, m)
+                    else:
+                        _add_row_delays(buf, t, ring, total, lo, wflat, dflat, roff[i] + spk[c] * m, m)
+            if i < last:                    # to the next layer
+                for c in range(nspk):
+                    if duni[i + 1] >= 0:
+                        _add_row(buf, nxt_dst, wflat, woff[i + 1] + spk[c] * nxt_m, nxt_m)
+                    else:
+                        _add_row_delays(buf, t, ring, total, noff[i + 1], wflat, dflat, woff[i + 1] + spk[c] * nxt_m,
+                                        nxt_m)
     ovf[b, 0] = counts[0]
     ovf[b, 1] = counts[1]
     ovf[b, 2] = counts[2]
 
 
-def _fits_int32(prog) -> bool:
-    """True when sum_i |w_chip[j, i]| over all synapses into any neuron stays below 2**31."""
-    from snncc.targets.loihi.emulator import SparseBlock
+@njit(cache=True, nogil=True)
+def _chunk(lo_b, hi_b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, keep_v, keep_uf, keep_vf, vth,
+           bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, acc_proto, state_proto):
+    """Samples lo_b..hi_b-1 one after another, with state allocated once for the chunk.
 
-    def abs_in(block) -> np.ndarray:
-        return block.abs_in() if isinstance(block, SparseBlock) else np.abs(block).sum(axis=0).astype(np.float64)
-
-    total = np.zeros(int(prog.n.sum()), np.float64)
-    for i in range(1, len(prog.n)):
-        lo, hi = int(prog.noff[i]), int(prog.noff[i] + prog.n[i])
-        total[lo:hi] += abs_in(prog.wt[i])
-        if _present(prog.wr[i]):
-            total[lo:hi] += abs_in(prog.wr[i])
-    return bool(total.max(initial=0) < 2**31)
-
-
-def _present(block) -> bool:
-    """A projection is there: a SparseBlock, or a non-empty dense block."""
-    return not isinstance(block, np.ndarray) or block.size > 0
+    Runs without the GIL: ``run_flat`` runs chunks of a batch on several Python threads."""
+    total = noff[-1] + n[-1]
+    buf = np.zeros(ring * total, acc_proto.dtype)
+    u = np.zeros(total, state_proto.dtype)
+    v = np.zeros(total, state_proto.dtype)
+    ref = np.zeros(total, np.int32)
+    fired = np.zeros(((max(n.max(), x.shape[2]) + 63) & ~63) + 64, np.uint8)
+    spk = np.zeros(fired.shape[0] + 8, np.int32)
+    counts = np.zeros(3, np.int64)
+    for b in range(lo_b, hi_b):
+        _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
+                ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts)
 
 
 def _uniform(d: np.ndarray) -> int:
     return int(d.flat[0]) if d.size and np.all(d == d.flat[0]) else (-1 if d.size else 0)
 
 
+def _common_shift(blocks: list[np.ndarray]) -> int:
+    """The trailing zero bits shared by every non-zero chip weight of ``blocks`` (0 when all are zero)."""
+    acc = 0
+    for w in blocks:
+        if w.size:
+            acc |= int(np.bitwise_or.reduce(np.abs(w).ravel()))
+    if acc == 0:
+        return 0
+    return (acc & -acc).bit_length() - 1
+
+
+def q_u_in_range(q_max: np.ndarray, keep_u: np.ndarray) -> bool:
+    """True when no neuron's q or u can ever wrap, from zero state, whatever the spikes.
+
+    |q| <= q_max (every synapse into the neuron delivering at once). With k = keep / 4096 < 1,
+    |u_t| <= k |u_(t-1)| + q_max (the decay truncates toward zero), so |u| <= q_max / (1 - k)
+    = q_max * 4096 / iDecay. In range: q_max < 2**21 and q_max * 4096 < 2**23 * iDecay (iDecay =
+    4096 - keep > 0); then u < 2**23 too, and neither wrap can change a value.
+    """
+    q_max = np.asarray(q_max, np.int64)
+    i_decay = 4096 - np.asarray(keep_u, np.int64)
+    if q_max.size == 0:
+        return True
+    if np.any(q_max >= 1 << 21) or np.any(i_decay <= 0):
+        return False
+    return bool(np.all(q_max * 4096 < (1 << 23) * i_decay))
+
+
+def narrowest_int(lo: int, hi: int):
+    """The narrowest signed integer type (int8 .. int64) that holds every value in [lo, hi]."""
+    for dtype in (np.int8, np.int16, np.int32):
+        if np.iinfo(dtype).min <= lo and hi <= np.iinfo(dtype).max:
+            return dtype
+    return np.int64
+
+
+def _dense_program(prog):
+    """``prog`` with any SparseBlock (a large mostly-zero projection) as the dense transposed arrays
+    this kernel scatters from: the same synapses, so the same integer sums."""
+    from dataclasses import replace
+
+    from snncc.targets.loihi.emulator import SparseBlock
+
+    def dense(blocks, delays):
+        out_w, out_d = [], []
+        for w, d in zip(blocks, delays):
+            if isinstance(w, SparseBlock):
+                w, d = w.dense_transposed()
+            out_w.append(w)
+            out_d.append(d)
+        return out_w, out_d
+
+    if not any(isinstance(b, SparseBlock) for b in list(prog.wt) + list(prog.wr)):
+        return prog
+    wt, dt_ = dense(prog.wt, prog.dt_)
+    wr, dr = dense(prog.wr, prog.dr)
+    return replace(prog, wt=wt, dt_=dt_, wr=wr, dr=dr)
+
+
 class Flat:
-    """A program flattened once into the kernel's arrays (weights in one int32/int64 vector)."""
+    """A program flattened once into the kernel's arrays.
+
+    Weights of every block (layer i's feed-forward, then its recurrent) are stored transposed
+    (row k = pre neuron k's fan-out) in one vector, divided by 2**shift of their layer, in the
+    narrowest type that holds them; q accumulates in the narrowest type that holds the largest
+    per-neuron sum of |w| (``narrowest_int``).
+    """
 
     def __init__(self, prog):
-        self.prog = prog
-        from snncc.targets.loihi.emulator import SparseBlock
-
+        self.prog = prog                  # as given (dense or SparseBlock projections)
+        prog = _dense_program(prog)       # what this kernel scatters from
         layers = len(prog.n)
-        blocks_w, blocks_d = [], []
-        sparse_ptr, sparse_post, sparse_w, sparse_d = [np.zeros(0, np.int64)], [], [], []
         woff = np.full(layers, -1, np.int64)
         roff = np.full(layers, -1, np.int64)
-        wsp = np.full(layers, -1, np.int64)      # offset of a sparse block's pointers in sptr (-1: dense)
-        rsp = np.full(layers, -1, np.int64)
         duni = np.zeros(layers, np.int64)
         druni = np.zeros(layers, np.int64)
-        pos, ptr_pos, syn_pos = 0, 0, 0
-
-        def add(block, delays):
-            """Append a block; returns (dense offset or -1, sparse pointer offset or -1, uniform delay)."""
-            nonlocal pos, ptr_pos, syn_pos
-            if isinstance(block, SparseBlock):
-                sparse_ptr.append(block.ptr + syn_pos)
-                sparse_post.append(block.post)
-                sparse_w.append(block.w)
-                sparse_d.append(block.delay)
-                start = ptr_pos
-                ptr_pos += block.ptr.size
-                syn_pos += block.post.size
-                return -1, start, _uniform(block.delay)
-            blocks_w.append(block.ravel())
-            blocks_d.append(delays.ravel())
-            start = pos
-            pos += block.size
-            return start, -1, _uniform(delays)
-
+        shift = np.zeros(layers, np.int64)
+        in_range = np.zeros(layers, np.int64)
+        bound = 0
+        scaled_w, blocks_d = [], []
         for i in range(1, layers):
-            woff[i], wsp[i], duni[i] = add(prog.wt[i], prog.dt_[i])
-            if _present(prog.wr[i]):
-                roff[i], rsp[i], druni[i] = add(prog.wr[i], prog.dr[i])
-        wflat = np.ascontiguousarray(np.concatenate(blocks_w) if blocks_w else np.zeros(0, np.int64), dtype=np.int64)
-        sw = np.ascontiguousarray(np.concatenate(sparse_w) if sparse_w else np.zeros(0, np.int64), dtype=np.int64)
-        if _fits_int32(prog):
-            # every q a step can deliver fits 32 bits: accumulate in int32 (twice the SIMD width)
-            wflat, sw = wflat.astype(np.int32), sw.astype(np.int32)
-        dflat = np.ascontiguousarray(np.concatenate(blocks_d) if blocks_d else np.zeros(0, np.int64), dtype=np.int64)
-        self.wflat, self.dflat, self.woff, self.roff, self.duni, self.druni = wflat, dflat, woff, roff, duni, druni
-        self.wsp, self.rsp, self.sw = wsp, rsp, sw
-        self.sptr = np.ascontiguousarray(np.concatenate(sparse_ptr), dtype=np.int64)
-        self.spost = np.ascontiguousarray(np.concatenate(sparse_post) if sparse_post else np.zeros(0, np.int64),
-                                          dtype=np.int64)
-        self.sd = np.ascontiguousarray(np.concatenate(sparse_d) if sparse_d else np.zeros(0, np.int64), dtype=np.int64)
-        self.cells = np.ascontiguousarray(np.stack([prog.keep_u, prog.keep_v, prog.vth]), dtype=np.int64)
+            blocks = [prog.wt[i]] + ([prog.wr[i]] if prog.wr[i].size else [])
+            shift[i] = _common_shift(blocks)
+            fan_in_abs = sum(np.abs(w >> shift[i]).sum(axis=0) for w in blocks)
+            bound = max(bound, int(np.max(fan_in_abs, initial=0)))
+            cells = slice(int(prog.noff[i]), int(prog.noff[i] + prog.n[i]))
+            in_range[i] = int(q_u_in_range(fan_in_abs.astype(np.int64) << shift[i], prog.keep_u[cells]))
+            scaled_w.append(blocks[0] >> shift[i])
+            woff[i] = sum(w.size for w in scaled_w[:-1])
+            blocks_d.append(prog.dt_[i])
+            duni[i] = _uniform(prog.dt_[i])
+            if prog.wr[i].size:
+                scaled_w.append(prog.wr[i] >> shift[i])
+                roff[i] = sum(w.size for w in scaled_w[:-1])
+                blocks_d.append(prog.dr[i])
+                druni[i] = _uniform(prog.dr[i])
+        flat_w = np.concatenate([w.ravel() for w in scaled_w]) if scaled_w else np.zeros(0, np.int64)
+        self.acc_dtype = narrowest_int(-bound, bound)
+        w_type = narrowest_int(int(flat_w.min(initial=0)), int(flat_w.max(initial=0)))
+        self.wflat = np.ascontiguousarray(flat_w, dtype=w_type)
+        flat_d = np.concatenate([d.ravel() for d in blocks_d]) if blocks_d else np.zeros(0, np.int64)
+        self.dflat = np.ascontiguousarray(flat_d, dtype=np.int64)
+        self.woff, self.roff, self.duni, self.druni, self.shift = woff, roff, duni, druni, shift
+        self.in_range = in_range
+        self.keep_u = np.ascontiguousarray(prog.keep_u, np.int64)
+        self.keep_v = np.ascontiguousarray(prog.keep_v, np.int64)
+        self.keep_uf = self.keep_u * 2.0**-12   # exact: keep <= 4096, a power-of-two scale
+        self.keep_vf = self.keep_v * 2.0**-12
+        self.vth = np.ascontiguousarray(prog.vth, np.int64)
+        self.bias = np.ascontiguousarray(prog.bias, np.int64)
 
 
 def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
@@ -278,8 +418,12 @@ def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
     return run_flat(Flat(prog), x, record, wide)
 
 
-def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False):
-    """Run the kernel on (B, T, C) uint8 ``x`` and wrap the result."""
+def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads: int | None = None):
+    """Run the kernel on (B, T, C) uint8 ``x`` and wrap the result.
+
+    ``threads``: threads to spread the batch over (default ``NUMBA_NUM_THREADS``, the core
+    count unless set); batch 1 or ``threads=1`` runs on the calling thread.
+    """
     from snncc.targets.loihi.emulator import EmulationResult, _prediction
 
     prog = flat.prog
@@ -298,18 +442,31 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False):
     all_u = np.zeros(shape_all, np.int32)
     all_v = np.zeros(shape_all, np.int32)
     ovf = np.zeros((batch, 3), np.int64)
+    lay = np.zeros((layers, 5), np.int64)
+    lay[:, 0] = prog.params[:, 3]
+    lay[:, 3] = flat.shift
+    lay[:, 4] = flat.in_range
     if wide:  # no wrap, no clip: what the network computes without overflow (for the loss split)
         big = 1 << 61
         wraps = np.array([big, (big << 1) - 1, big, (big << 1) - 1], np.int64)
-        params = prog.params.copy()
-        params[1:, 4], params[1:, 5] = -big, big
+        lay[1:, 1], lay[1:, 2] = -big, big
     else:
         wraps = np.array([Q_HALF, Q_MASK, U_HALF, U_MASK], np.int64)
-        params = prog.params
-    runner = _run if batch > 1 else _run_serial
-    runner(np.ascontiguousarray(x), prog.n, prog.noff, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni, flat.druni,
-           params, prog.bias, flat.cells, int(prog.ring), record_all, out, all_s, all_u, all_v, ovf, wraps,
-           flat.wsp, flat.rsp, flat.sptr, flat.spost, flat.sw, flat.sd)
+        lay[:, 1], lay[:, 2] = prog.params[:, 4], prog.params[:, 5]
+    narrow = bool(np.all(lay[1:, 1] >= INT32_MIN) and np.all(lay[1:, 2] <= INT32_MAX))
+    state_proto = np.zeros(0, np.int32 if narrow else np.int64)
+    args = (np.ascontiguousarray(x), prog.n, prog.noff, lay, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni,
+            flat.druni, flat.keep_u, flat.keep_v, flat.keep_uf, flat.keep_vf, flat.vth, flat.bias, int(prog.ring),
+            record_all, out, all_s, all_u, all_v, ovf, wraps, np.zeros(0, flat.acc_dtype), state_proto)
+    workers = max(1, min(batch, config.NUMBA_NUM_THREADS if threads is None else int(threads)))
+    if workers == 1:
+        _chunk(0, batch, *args)
+    else:   # samples are independent: chunks on threads (the kernel releases the GIL); small
+        # chunks let a thread that other load slows down take fewer of them
+        size = max(1, -(-batch // (4 * workers)))
+        bounds = [(lo, min(lo + size, batch)) for lo in range(0, batch, size)]
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(lambda lh: _chunk(lh[0], lh[1], *args), bounds))
     counts = out.sum(axis=1, dtype=np.int64)
     res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts),
                           overflow={"q_wrap": int(ovf[:, 0].sum()), "u_wrap": int(ovf[:, 1].sum()),

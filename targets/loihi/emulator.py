@@ -12,8 +12,8 @@ The chip's arithmetic, per compartment and step t (integers throughout):
 Every edge (input, feed-forward, recurrent) delivers one step after the spike plus its synaptic
 delay. ``reference_run`` states this literally in numpy (also runnable with float arithmetic:
 no truncation, wrap or clip, used to check the lowering with quantization switched off);
-``emulate`` runs the same rules in an event-driven numba kernel (spikes accumulate into a ring
-buffer of future q), parallel over the samples of a batch. Both count overflows.
+``emulate`` runs the same rules in an event-driven numba kernel (``_kernel.py``: spikes accumulate
+into a ring buffer of future q), the samples of a batch spread over threads. Both count overflows.
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ def check_inputs(inputs, width: int, source: str | None = None) -> np.ndarray:
     (the rules of ``snncc.inputs.check_batch``, shared with ``snncc run``)."""
     from snncc.inputs import check_batch
 
-    return check_batch(inputs, width, spikes=True, source=source).astype(np.uint8)
+    return check_batch(inputs, width, spikes=True, source=source).astype(np.uint8, copy=False)
 
 
 def _prediction(counts: np.ndarray) -> np.ndarray:
@@ -232,9 +232,15 @@ class SparseBlock:
     w: np.ndarray            # (nnz,) int64, chip units
     delay: np.ndarray        # (nnz,) int64
 
-    def abs_in(self) -> np.ndarray:
-        """sum |w| over the synapses into each post neuron."""
-        return np.bincount(self.post, weights=np.abs(self.w).astype(np.float64), minlength=self.n_post)
+    def dense_transposed(self) -> tuple[np.ndarray, np.ndarray]:
+        """(weights, delays) as dense (n_pre, n_post) int64 arrays, zeros where there is no synapse."""
+        pre = np.repeat(np.arange(self.n_pre), np.diff(self.ptr))
+        w = np.zeros((self.n_pre, self.n_post), np.int64)
+        uniform = self.delay.size and np.all(self.delay == self.delay[0])
+        d = np.full((self.n_pre, self.n_post), int(self.delay[0]) if uniform else 0, np.int64)
+        w[pre, self.post] = self.w
+        d[pre, self.post] = self.delay
+        return w, d
 
 
 def _sparse_eligible(weight) -> bool:
@@ -341,7 +347,8 @@ class PreparedNetwork:
                              field="--gap")
 
     def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int | None = None,
-            wide: bool = False) -> EmulationResult:
+            wide: bool = False, threads: int | None = None) -> EmulationResult:
+        """``threads``: threads the samples of a batch are spread over (default: NUMBA_NUM_THREADS)."""
         from snncc.targets.loihi._kernel import run_flat
 
         if record not in RECORD_CHOICES:
@@ -355,7 +362,7 @@ class PreparedNetwork:
                 raise SnnccError("applies only to stream mode (--stream, the paper's protocol); batch mode starts "
                                  "every sample from zero state", field="--gap")
             self._check_size(batch * steps, record)
-            return run_flat(self.flat, self.network.drive(x), record, wide)
+            return run_flat(self.flat, self.network.drive(x), record, wide, threads=threads)
         gap = DEFAULT_GAP if gap is None else gap
         self._check_stream(batch, steps, gap)
         self._check_size(batch * (steps + gap), record)
