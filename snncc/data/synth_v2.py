@@ -65,17 +65,17 @@ class SynthParamsV2:
     rf_sigma: float = 1.6
     contact_length: float = 12.0
     amplitude: float = 250.0
-    saturation: float = 30.0
+    saturation: float = 28.0
     # per-trial variation
-    force_sigma: float = 0.2
+    force_sigma: float = 0.25
     p_no_contact: float = 0.02
     no_contact_force: float = 0.1
     start_sigma: float = 0.6
     lateral_sigma: float = 0.5
     yaw_sigma: float = 4.0
     tilt_sigma: float = 0.04
-    speed_sigma: float = 0.1
-    onset_sigma: float = 0.07
+    speed_sigma: float = 0.12
+    onset_sigma: float = 0.085
     stick_min: float = 0.95
     stick_max: float = 1.0
     slip_min: float = 2.5
@@ -93,8 +93,8 @@ class SynthParamsV2:
     wobble_sigma: float = 0.3
     wobble_rho: float = 0.6
     noise_level_sigma: float = 0.2
-    load_jitter: float = 0.08  # relative, per frame and taxel: micro-slips of the loaded fabric
-    load_jitter_level_sigma: float = 0.0  # log-normal per trial factor on load_jitter
+    load_jitter: float = 0.06  # relative, per frame and taxel: micro-slips of the loaded fabric
+    load_jitter_level_sigma: float = 0.8  # log-normal per trial factor on load_jitter
 
 
 DEFAULT_PARAMS_V2 = SynthParamsV2()
@@ -181,7 +181,9 @@ def generate_v2(
         pressure *= p.amplitude * (gain * force[:, None])[:, None, :]
         load = taxel_sat * (1.0 - np.exp(-pressure / taxel_sat))
         if p.load_jitter > 0:
-            lj = p.load_jitter * np.exp(rng.normal(0.0, p.load_jitter_level_sigma, size=(r, 1, 1)))
+            lj = p.load_jitter
+            if p.load_jitter_level_sigma > 0:
+                lj = lj * np.exp(rng.normal(0.0, p.load_jitter_level_sigma, size=(r, 1, 1)))
             load *= np.exp(lj * rng.normal(0.0, 1.0, size=load.shape))
         signal = offset + drift + load + noise + wobble
         frames[label * r:(label + 1) * r] = np.clip(np.rint(255.0 - signal), 0, 255).astype(np.uint8)

@@ -32,3 +32,17 @@ def test_failed_steps_are_reported_and_dependants_skipped(tmp_path):
     text = rp.markdown(res)
     assert "| train RSNN th1 | failed |" in text and "| check RSNN Loihi | unavailable |" in text
     assert "78.32 %" in text and "96.92 %" in text and "82.31 %" in text
+
+
+def test_results_state_what_the_small_rsnn_reaches(tmp_path):
+    rp = _module()
+    p = rp.Pipeline(tmp_path, {"repetitions": 40, "rsnn_epochs": 3}, 0)
+    step = rp.Step("train RSNN th1", [], "ok", 1.0, "", {"epochs": [{"test_accuracy": a} for a in (0.05, 0.09, 0.14)],
+                                                       "history": {"test_accuracy": 0.14}})
+    p.steps.append(step)
+    res = rp.results(p)
+    assert res["learning"]["rsnn_test_percent_per_epoch"] == [5.0, 9.0, 14.0]
+    text = rp.markdown(res)
+    assert "5.0 % -> 9.0 % -> 14.0 %" in text and "chance 3.7 %" in text and "it is learning" in text
+    step.record = {"epochs": [{"test_accuracy": 0.04}], "history": {"test_accuracy": 0.04}}
+    assert "NOT clearly above chance" in rp.markdown(rp.results(p))
