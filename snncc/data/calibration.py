@@ -44,9 +44,10 @@ class FrameProtocol:
 
 
 FRAME_PROTOCOLS = (
-    FrameProtocol("fullscale_C10", "fullscale", 10.0),  # primary
+    FrameProtocol("fullscale_C100", "fullscale", 100.0),  # primary
+    FrameProtocol("fullscale_C10", "fullscale", 10.0),
+    FrameProtocol("fullscale_C30", "fullscale", 30.0),
     FrameProtocol("fullscale_C1", "fullscale", 1.0),  # snncc's protocol before generator version 2
-    FrameProtocol("fullscale_C100", "fullscale", 100.0),
 )
 PRIMARY = FRAME_PROTOCOLS[0].name
 # Measured on request only (bench/calibrate_synth.py --protocols): z-scoring every frame value
@@ -102,6 +103,15 @@ class CalibrationReport:
 
     def text(self) -> str:
         return "\n".join([f"calibration figures on {self.samples} samples"] + [f.text() for f in self.figures])
+
+    def markdown(self) -> str:
+        """The figures as a Markdown table (measured beside the paper, tolerance, protocol)."""
+        rows = ["| figure | measured | paper | tolerance | met | protocol |", "|---|---|---|---|---|---|"]
+        for f in self.figures:
+            sd = f" +- {f.std:.1f}" if f.std is not None else ""
+            rows.append(f"| {f.name} | {f.measured:.2f}{sd} | {f.paper:g} | {f.tolerance} | "
+                        f"{'yes' if f.ok else '**no**'} | {f.protocol} |")
+        return "\n".join(rows)
 
     def svm_results(self, protocol: str = PRIMARY) -> dict:
         """The frame SVMs under one protocol as ``analysis.SvmResult`` (keys ``raw``, ``collapsed``)."""
