@@ -163,7 +163,7 @@ def svm_accuracy(X, y: np.ndarray, C: float = 1.0, standardise: bool = False, fo
     folds = int(min(folds, counts[counts > 0].min()))  # tiny sets: fewer folds, as analysis.svm_cv
     if folds < 2:
         return np.array([np.nan])
-    est = OneVsRestClassifier(LinearSVC(C=C, dual=dual, max_iter=5000))
+    est = OneVsRestClassifier(LinearSVC(C=C, dual=dual, max_iter=5000, random_state=seed))
     if standardise:
         est = make_pipeline(StandardScaler(), est)
     cv = StratifiedKFold(n_splits=folds, shuffle=True, random_state=seed)
