@@ -25,7 +25,7 @@ from snncc.data.calibration import calibration_figures  # noqa: E402
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--reps", type=int, default=200, help="repetitions per letter (paper: 200? default set)")
+    ap.add_argument("--reps", type=int, default=200, help="repetitions per letter (the default set: 200)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--version", type=int, default=synth.GENERATOR_VERSION)
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a generator constant")

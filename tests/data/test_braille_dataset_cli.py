@@ -147,6 +147,11 @@ def test_analyse_cli_text_json_figures(small_set, tmp_path, capsys):
     assert [p["frames"] for p in r["svm_pca_vs_frames"]] == [1, 54]
     assert r["svm_events"]["all_bins"]["n_features"] == 270 * 24
     assert r["synthetic"] is False  # the fixture set has no SYNTHETIC.json marker
+    figs_ = {(f["name"], f["protocol"].split(":")[0]): f for f in r["paper_figures"]["figures"]}
+    assert figs_[("svm_raw", "fullscale_C100")]["paper"] == 86.7
+    assert figs_[("lost_th1_bin5_pct", "th 1, 5 ms bins")]["paper"] == 34.0
+    assert {n for n, _ in figs_} >= {"events_th1", "isi_below_1ms_th1_pct", "svm_collapsed",
+                                      "svm_events_all_bins", "svm_events_spatial"}
     assert sorted(p.name for p in figs.iterdir()) == ["events_vs_bin_size.png", "reconstruction.png",
                                                       "svm_vs_frames.png"]
     code, stdout, _ = cli(["data", "analyse", d, "--no-svm", "--no-event-svm", "--pca-step", "0"], capsys)
