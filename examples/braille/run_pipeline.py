@@ -203,6 +203,7 @@ def results(p: Pipeline) -> dict:
                             for m in bench["models"]]
     return {
         **extra,
+        "learning": learning(p.record("train RSNN th1"), p.settings),
         "data": "SYNTHETIC Braille set (snncc data synth), NOT the paper's recordings: compare trends, not values",
         "settings": p.settings,
         "selection": "training accuracies are of the best TEST epoch, as the authors selected (optimistic)",
@@ -211,9 +212,27 @@ def results(p: Pipeline) -> dict:
     }
 
 
+CHANCE_PERCENT = 100.0 / 27
+
+
+def learning(record: dict | None, settings: dict) -> dict:
+    """What the (small) RSNN reached: test accuracy per epoch against chance (1 in 27 letters)."""
+    if not record or not record.get("epochs"):
+        return {"rsnn_test_percent_per_epoch": [], "statement": "the RSNN was not trained in this run"}
+    accs = [round(100 * e["test_accuracy"], 2) for e in record["epochs"]]
+    best = max(accs)
+    verdict = ("it is learning: above chance" if best > 2 * CHANCE_PERCENT
+               else "NOT clearly above chance: more epochs or data needed")
+    statement = (f"RSNN th1 ({settings.get('repetitions')} repetitions per letter, {len(accs)} epochs): test accuracy "
+                 f"{' -> '.join(f'{a:.1f} %' for a in accs)} (chance {CHANCE_PERCENT:.1f} %); {verdict}. "
+                 "Far from converged at these settings; the paper's schedule is --full.")
+    return {"rsnn_test_percent_per_epoch": accs, "chance_percent": round(CHANCE_PERCENT, 2), "statement": statement}
+
+
 def markdown(res: dict) -> str:
     lines = ["# Braille pipeline results (SYNTHETIC data)", "", f"> {res['data']}.", f"> {res['selection']}.", "",
              f"Settings: {json.dumps(res['settings'])}", "",
+             f"Small-run check: {res.get('learning', {}).get('statement', '')}", "",
              "| model | this run (synthetic) | paper (real data) |", "|---|---|---|"]
     for r in res["rows"]:
         lines.append(f"| {r['model']} | {pct(r['ours_percent'])} | {pct(r['paper_percent'])} |")

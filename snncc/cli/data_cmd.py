@@ -72,6 +72,9 @@ def synth_cmd(
                                 help="Container of the published release: 1 = list of dicts (Zenodo 6556273), "
                                      "2 = pandas DataFrame (Zenodo 7050094)."),
     thresholds: str = typer.Option("1,2,5,10", "--thresholds", help="Event files to write (sigma-delta thresholds)."),
+    generator_version: int = typer.Option(2, "--generator-version", min=1, max=2,
+                                          help="2 = calibrated to task difficulty (issue 15, default); "
+                                               "1 = the earlier, much easier generator."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
     """Generate the SYNTHETIC Braille set (physical model, calibrated to the paper's analyses).
@@ -89,7 +92,8 @@ def synth_cmd(
     n_total = 27 * repetitions
     with _progress(not json_out) as bar:
         task = bar.add_task("generating frames", total=n_total)
-        raw, labels = synth.generate(repetitions, seed, progress=lambda k: bar.update(task, completed=k))
+        raw, labels = synth.generate(repetitions, seed, progress=lambda k: bar.update(task, completed=k),
+                                     version=generator_version)
         wtask = bar.add_task("encoding and writing", total=1 + len(ths))
         formats.write_raw(out / formats.RAW_NAME, raw, labels, release=release)
         bar.advance(wtask)
@@ -103,13 +107,14 @@ def synth_cmd(
     info = {
         "synthetic": True,
         "generator": "snncc.data.synth (physical model, calibrated; see docs/braille_synthetic.md)",
+        "generator_version": generator_version,
         "seed": seed,
         "repetitions": repetitions,
         "release": release,
         "samples": int(raw.shape[0]),
         "frames": int(raw.shape[1]),
         "thresholds": ths,
-        "params": synth.params_dict(),
+        "params": synth.params_dict(version=generator_version),
     }
     from snncc.atomic import atomic_path
 
@@ -117,7 +122,8 @@ def synth_cmd(
         tmp.write_text(json.dumps(info, indent=2, sort_keys=True) + "\n")
     record = {"out": str(out), "samples": int(raw.shape[0]), "frames": int(raw.shape[1]),
               "files": [formats.RAW_NAME] + [formats.events_name(t) for t in ths] + [MARKER],
-              "mean_events_per_taxel": counts, "seed": seed, "release": release, "synthetic": True}
+              "mean_events_per_taxel": counts, "seed": seed, "release": release, "synthetic": True,
+              "generator_version": generator_version}
     if json_out:
         print_json(record)
     else:
@@ -224,7 +230,7 @@ def analyse_cmd(
     frames, time collapsed, PCA-12 over a growing number of frames, binned events with all bins vs
     spatial sums. On a synthetic set it also checks the calibration targets.
     """
-    from snncc.data import analysis, figures as figs, formats, sources
+    from snncc.data import analysis, calibration, figures as figs, formats, sources
     from snncc.data.binning import bin_events, binned_reconstruction, n_bins_for, record_ms
     from snncc.data.sigma_delta import reconstruct
 
@@ -278,20 +284,19 @@ def analyse_cmd(
                 raise err.with_file(from_files[_fmt_th(th)])
             bar.advance(task)
         vs_bin = analysis.events_vs_bin_size(x.shape, events_by_th)
-        svm_res = {}
-        if svm:
-            for kind in ("raw", "collapsed"):
-                note(f"SVM, {kind} frames")
-                svm_res[kind] = analysis.svm_cv(kind, analysis.frame_features(x, kind), labels, seed=seed,
-                                                n_jobs=jobs)
-                bar.advance(task)
+        std_events = event_threshold == 1 and event_bin == 5
+        note("the paper's figures: frame SVMs under each protocol, event statistics")
+        paper_figs = calibration.calibration_figures(x, labels, seed=seed, n_jobs=jobs, svm=svm,
+                                                     event_svm=event_svm and std_events, progress=note)
+        svm_res = paper_figs.svm_results() if svm else {}
+        bar.advance(task, 2 if svm else 0)
         pca_points = []
         for k in frame_counts:
             note(f"PCA-12 SVM, first {k} frames")
             pca_points += analysis.svm_pca_vs_frames(x, labels, [k], seed=seed, n_jobs=jobs)
             bar.advance(task)
-        ev_svm = {}
-        if event_svm:
+        ev_svm = paper_figs.event_svm_results() if event_svm and std_events else {}
+        if event_svm and not std_events:
             ev = events_by_th.get(event_threshold)
             if ev is None:
                 ev = encode(x, event_threshold)
@@ -299,7 +304,7 @@ def analyse_cmd(
             note("SVM, binned events")
             ev_svm = analysis.svm_events(binned, labels, seed=seed, n_jobs=jobs)
             bar.advance(task, 2)
-    calib = analysis.calibration_check(svm_res, rows) if syn else []
+    calib = [f.as_dict() for f in paper_figs.figures] if syn else []
     calib_note = None
     if syn and n < 27 * 200:
         calib_note = (f"the targets refer to the default set (200 repetitions per letter); with {n} samples "
@@ -337,6 +342,7 @@ def analyse_cmd(
         "svm_events": ({"threshold": event_threshold, "bin_ms": event_bin,
                         **{k: asdict(v) for k, v in ev_svm.items()}} if ev_svm else {}),
         "paper": analysis.PAPER,
+        "paper_figures": paper_figs.as_dict(),
         "calibration": calib,
         "calibration_note": calib_note,
         "figures": fig_files,
@@ -377,7 +383,8 @@ def _print_report(r: dict) -> None:
         st = Table(title="Linear SVM, one-vs-rest, 5-fold CV")
         for col in ("features", "accuracy %", "paper %"):
             st.add_column(col, justify="right")
-        names = {"raw": ("raw frames (all)", PAPER["svm_raw"]), "collapsed": ("time collapsed", PAPER["svm_collapsed"])}
+        names = {"raw": ("raw frames (all), primary protocol", PAPER["svm_raw"]),
+                 "collapsed": ("time collapsed, primary protocol", PAPER["svm_collapsed"])}
         for k, v in r["svm_frames"].items():
             st.add_row(names[k][0], f"{v['mean_pct']:.1f} +- {v['std_pct']:.1f}", f"{names[k][1]:g}")
         if r["svm_events"]:
@@ -390,13 +397,15 @@ def _print_report(r: dict) -> None:
     if r["svm_pca_vs_frames"]:
         pts = ", ".join(f"{p['seconds']:.2f}s {p['mean_pct']:.0f}%" for p in r["svm_pca_vs_frames"])
         console.print(f"PCA-12 SVM vs frames used: {pts}")
-    if r["calibration"]:
-        ct = Table(title="Calibration of the synthetic generator")
-        for col in ("statistic", "measured", "target", "tolerance", "ok"):
-            ct.add_column(col, justify="right")
-        for row in r["calibration"]:
-            ct.add_row(row["statistic"], f"{row['measured']:.1f}", f"{row['target']:g}", row["tolerance"],
-                       "yes" if row["ok"] else "[red]NO[/red]")
+    if r.get("paper_figures"):
+        title = "The paper's figures: measured vs paper" + (" (calibration of the synthetic generator)"
+                                                               if r["synthetic"] else "")
+        ct = Table(title=title)
+        for col in ("figure", "measured", "paper", "tolerance", "ok", "protocol"):
+            ct.add_column(col, justify="right" if col != "protocol" else "left")
+        for row in r["paper_figures"]["figures"]:
+            ct.add_row(row["name"], f"{row['measured']:.1f}", f"{row['paper']:g}", row["tolerance"],
+                       "yes" if row["ok"] else "[red]NO[/red]", row["protocol"])
         console.print(ct)
         if r.get("calibration_note"):
             console.print(f"note: {r['calibration_note']}")

@@ -15,6 +15,8 @@ SVM analyses (scikit-learn): ``OneVsRestClassifier(LinearSVC(C=1))``, 5-fold str
 (a fixed, data-independent scale); "raw" = all T x 12 values, "time collapsed" = the mean over
 frames per taxel; "PCA-12" = the first 12 principal components (fitted inside each fold) of the
 first n frames; event features are the binary bins (all bins) or their sum per channel (spatial).
+The calibration figures (several frame-SVM protocols, binning loss, short intervals, each beside
+the paper's value) are in ``snncc.data.calibration``.
 """
 
 from __future__ import annotations
@@ -44,13 +46,6 @@ PAPER = {
     "svm_events_all_bins": 58.9,
     "svm_events_spatial": 47.7,
 }
-# Calibration targets of the synthetic generator and their tolerances (issue 7).
-TARGETS = {
-    "svm_raw": (86.7, 5.0),  # absolute points
-    "svm_collapsed": (72.3, 5.0),
-    "events": ({1: 87.6, 2: 38.0, 5: 10.5, 10: 3.4}, 0.25),  # relative
-}
-
 Progress = Callable[[str], None]
 
 
@@ -212,23 +207,3 @@ def svm_events(binned: np.ndarray, labels: np.ndarray, seed: int = 0, n_jobs: in
 
 def encode_all(frames: np.ndarray, thresholds: Sequence[float]) -> dict[float, Events]:
     return {th: encode(frames, th) for th in thresholds}
-
-
-def calibration_check(svm: dict[str, SvmResult] | None, rows: Sequence[EncodingRow]) -> list[dict]:
-    """Each calibration target: measured, target, tolerance, ok."""
-    out = []
-    if svm:
-        for key, name in (("raw", "svm_raw"), ("collapsed", "svm_collapsed")):
-            if key in svm:
-                target, tol = TARGETS[name]
-                v = svm[key].mean_pct
-                out.append({"statistic": name, "measured": v, "target": target,
-                            "tolerance": f"+-{tol:g} points", "ok": bool(abs(v - target) <= tol)})
-    ev_targets, rel = TARGETS["events"]
-    for r in rows:
-        th = int(r.threshold) if float(r.threshold).is_integer() else r.threshold
-        if th in ev_targets:
-            target = ev_targets[th]
-            out.append({"statistic": f"events_th{th}", "measured": r.events, "target": target,
-                        "tolerance": f"+-{100 * rel:g} %", "ok": bool(abs(r.events - target) <= rel * target)})
-    return out

@@ -108,7 +108,8 @@ def _meta(kind: str, source: str, threshold, bin_ms, dt_s: float, n_steps: int, 
     syn = synthetic_info(Path(source))
     meta = {"kind": kind, "threshold": threshold, "time_bin_size_ms": bin_ms, "dt_s": dt_s,
             "n_steps": int(n_steps), "classes": list(CLASSES), "synthetic": syn is not None,
-            "source": source, "seed": syn.get("seed") if syn else None}
+            "source": source, "seed": syn.get("seed") if syn else None,
+            "generator_version": syn.get("generator_version", 1) if syn else None}
     meta.update(extra)
     return meta
 

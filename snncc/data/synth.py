@@ -1,5 +1,8 @@
 """A calibrated physical model of the tactile Braille recording (SYNTHETIC data, not the real set).
 
+This module holds the shared geometry, generator version 1 and the version switch
+(:func:`generate`, default :data:`GENERATOR_VERSION` = 2, see ``snncc.data.synth_v2``). Version 1:
+
 The real Zenodo recordings cannot be fetched on these machines, so ``snncc data synth`` builds a
 stand-in from the recording's physics (spec: braille.md, "Synthetic generator"):
 
@@ -105,13 +108,53 @@ def slide_offset(t: np.ndarray, t_start: float | np.ndarray) -> np.ndarray:
     return SPEED_MM_S * np.clip(t - t_start, 0.0, SLIDE_MM / SPEED_MM_S)
 
 
+GENERATOR_VERSION = 2  # the default; version 1 stays reachable with version=1 / --generator-version 1
+VERSIONS = (1, 2)
+
+
+def _check_version(version: int) -> int:
+    if int(version) not in VERSIONS:
+        raise SnnccError(f"generator version must be one of {', '.join(map(str, VERSIONS))}, got {version}",
+                         field="generator_version")
+    return int(version)
+
+
+def default_params(version: int = GENERATOR_VERSION):
+    """The calibrated constants of a generator version (``SynthParams`` or ``SynthParamsV2``)."""
+    if _check_version(version) == 1:
+        return DEFAULT_PARAMS
+    from snncc.data.synth_v2 import DEFAULT_PARAMS_V2
+
+    return DEFAULT_PARAMS_V2
+
+
 def generate(
+    repetitions: int = 200,
+    seed: int = 0,
+    params=None,
+    progress: Callable[[int], None] | None = None,
+    version: int | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Raw frames and labels from generator ``version`` (2: calibrated to task difficulty, issue 15;
+    1: calibrated to summary statistics only, issue 7). Without ``version``: the version of
+    ``params`` (a ``SynthParams`` is version 1), else :data:`GENERATOR_VERSION`. ``params`` default
+    to the version's own."""
+    if version is None:
+        version = 1 if isinstance(params, SynthParams) else GENERATOR_VERSION
+    if _check_version(version) == 2:
+        from snncc.data.synth_v2 import DEFAULT_PARAMS_V2, generate_v2
+
+        return generate_v2(repetitions, seed, DEFAULT_PARAMS_V2 if params is None else params, progress)
+    return generate_v1(repetitions, seed, DEFAULT_PARAMS if params is None else params, progress)
+
+
+def generate_v1(
     repetitions: int = 200,
     seed: int = 0,
     params: SynthParams = DEFAULT_PARAMS,
     progress: Callable[[int], None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Raw 8-bit frames ``(27 * repetitions, n_frames, 12)`` uint8 (255 at rest) and labels.
+    """Version 1. Raw 8-bit frames ``(27 * repetitions, n_frames, 12)`` uint8 (255 at rest) and labels.
 
     Samples are ordered letter by letter (Space, A, ..., Z), ``repetitions`` each. ``progress`` is
     called with the number of samples finished after each letter. Seeded: the same arguments give
@@ -162,5 +205,6 @@ def generate(
     return frames, labels
 
 
-def params_dict(p: SynthParams = DEFAULT_PARAMS) -> dict:
-    return asdict(p)
+def params_dict(p=None, version: int = GENERATOR_VERSION) -> dict:
+    """The constants as a dict (``p`` or the version's defaults)."""
+    return asdict(default_params(version) if p is None else p)

@@ -54,3 +54,17 @@ def test_baseline_rows_ttc_and_latency_are_reported_beside_the_paper(tmp_path):
     text = rp.markdown(res)
     assert "| fcn.pt | fcn | 50.0 % | 0.800 | 0.900 | 50.0 % |" in text
     assert "| fcn_jetson | fcn | 2.000 | 0.100 | 1.00 |" in text and "SYNTHETIC" in text
+
+
+def test_results_state_what_the_small_rsnn_reaches(tmp_path):
+    rp = _module()
+    p = rp.Pipeline(tmp_path, {"repetitions": 40, "rsnn_epochs": 3}, 0)
+    step = rp.Step("train RSNN th1", [], "ok", 1.0, "", {"epochs": [{"test_accuracy": a} for a in (0.05, 0.09, 0.14)],
+                                                       "history": {"test_accuracy": 0.14}})
+    p.steps.append(step)
+    res = rp.results(p)
+    assert res["learning"]["rsnn_test_percent_per_epoch"] == [5.0, 9.0, 14.0]
+    text = rp.markdown(res)
+    assert "5.0 % -> 9.0 % -> 14.0 %" in text and "chance 3.7 %" in text and "it is learning" in text
+    step.record = {"epochs": [{"test_accuracy": 0.04}], "history": {"test_accuracy": 0.04}}
+    assert "NOT clearly above chance" in rp.markdown(rp.results(p))
