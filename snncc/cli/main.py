@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import errno
 import os
+import signal
 import sys
 
 # Each module registers its verb(s) on the typer app when imported; they import only typer,
@@ -143,6 +144,9 @@ def run(argv: list[str] | None = None) -> int:
         _say(INTERRUPTED)
         code = 130
     if argv is None:
+        # The work is done: a Ctrl-C during the interpreter's own teardown (where Python restores the
+        # default SIGINT action, which would kill the process silently) must not change the status.
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         sys.exit(code)
     return code
 

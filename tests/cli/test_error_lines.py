@@ -105,11 +105,10 @@ def test_real_full_and_read_only_disks_give_one_line_and_no_crash(small_mounts, 
     del torch
 
 
-READY_THEN_RUN = (
-    "import sys\n"
+READY_THEN_RUN = (   # the console script's own call, run() reading sys.argv, after a 'ready' line
     "from snncc.cli.main import run\n"
     "print('ready', flush=True)\n"
-    "sys.exit(run(sys.argv[1:]))\n"
+    "run()\n"
 )
 
 
