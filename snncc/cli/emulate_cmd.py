@@ -49,11 +49,10 @@ def emulate_command(
 ) -> None:
     """Run a Loihi bundle bit-exactly (integer u, v; truncating decays; wrap and clip counted)."""
     from snncc.targets.loihi.bundle import read_bundle
-    from snncc.targets.loihi.emulator import EmulationResult, PreparedNetwork, check_inputs, emulate
+    from snncc.targets.loihi.emulator import EmulationResult, PreparedNetwork, check_inputs, emulate, pad
 
     if record not in ("outputs", "all"):
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
-    from snncc.targets.loihi.validation import pad
 
     network = read_bundle(bundle)
     x = check_inputs(load_spike_input(input), network.input_width, source=str(input))

@@ -55,6 +55,17 @@ def decay(x: np.ndarray, register) -> np.ndarray:
     return np.sign(x) * ((np.abs(x) * (4096 - np.asarray(register, np.int64))) >> 12)
 
 
+# -- input padding ---------------------------------------------------------------------------------
+def pad(x: np.ndarray, extra: int) -> np.ndarray:
+    """(B, T, C) inputs with ``extra`` blank steps appended (outputs shifted later by the lowering)."""
+    return np.concatenate([x, np.zeros((x.shape[0], extra, x.shape[2]), x.dtype)], axis=1) if extra else x
+
+
+def lead_steps(shifts: dict[str, int], output_shift: int) -> int:
+    """Blank steps to append so every population's shifted spike train fits in the run."""
+    return max([int(output_shift), *(int(v) for v in shifts.values())])
+
+
 # -- input checks ---------------------------------------------------------------------------------
 def check_inputs(inputs, width: int, source: str | None = None) -> np.ndarray:
     """(T, C) or (B, T, C) 0/1 data (bool, ints or floats) -> (B, T, C) uint8, or a one-line error

@@ -23,7 +23,7 @@ import torch
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.simulate import simulate
-from snncc.targets.loihi.emulator import EmulationResult, emulate, reference_run
+from snncc.targets.loihi.emulator import EmulationResult, emulate, lead_steps, pad, reference_run  # noqa: F401
 from snncc.targets.loihi.lowering import ChainLayer, float_twin
 from snncc.targets.loihi.network import LoihiNetwork
 
@@ -61,15 +61,6 @@ def loihi_spikes(result: EmulationResult, network: LoihiNetwork, layers: list[Ch
         s = shifts.get(c.lif, 0)
         out[c.lif] = result.spikes[i][:, s:s + steps, :network.layers[i].model_n]
     return out
-
-
-def pad(x: np.ndarray, extra: int) -> np.ndarray:
-    return np.concatenate([x, np.zeros((x.shape[0], extra, x.shape[2]), x.dtype)], axis=1) if extra else x
-
-
-def lead_steps(shifts: dict[str, int], output_shift: int) -> int:
-    """Blank steps to append so every population's shifted spike train fits in the run."""
-    return max([int(output_shift), *(int(v) for v in shifts.values())])
 
 
 def agreement(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> dict[str, float]:

@@ -43,3 +43,21 @@ def test_every_verb_is_registered():
     from snncc.cli.main import build_app
 
     assert set(VERBS) <= set(typer.main.get_command(build_app()).commands)
+
+
+def test_bundle_verbs_import_no_torch_or_sklearn(tmp_path, small_rsnn_checkpoint, capsys):
+    """emulate / map / report on a bundle need numpy, numba and h5py only (not the compiler's stack)."""
+    import numpy as np
+
+    from snncc_test_helpers import run_cli
+
+    bundle = tmp_path / "b.net"
+    code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "loihi", "-o", bundle], capsys)
+    assert code == 0, err
+    x = tmp_path / "x.npy"
+    np.save(x, (np.random.default_rng(0).random((2, 30, 48)) < 0.05).astype(np.uint8))
+    for args in (["emulate", str(bundle), "-i", str(x), "-o", str(tmp_path / "o.npz")], ["map", str(bundle)],
+                 ["report", str(bundle), "--energy", "--samples", "2"]):
+        (record,) = run_in_fresh_interpreter([args])
+        assert record["code"] == 0, record
+        assert not set(record["heavy"]) & {"torch", "sklearn", "pandas", "onnx", "onnxruntime", "matplotlib"}, record

@@ -1,0 +1,310 @@
+"""Lowering a graph to Loihi 1: timing, quantization, a netx-layout HDF5 bundle checked by a bit-exact emulator.
+
+``target.lower(graph, options)`` returns a ``LoihiArtefact`` that has already been checked
+against the IR reference (``validation.py``); ``target.check(...)`` measures the accuracy lost
+on a data set (``check.py``). Options: timing ("exact" | "paper"), scale ("auto" | "global" |
+"per-layer" | "split" | "fine"), allow_reset_change (bool), source (model path), time_steps (tSample
+when the model states no recording length; --time-steps).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.passes.fold_linear import fold_linear
+from snncc.passes.quantize import samples_steps
+from snncc.passes.timing import lower_timing
+from snncc.targets.loihi.bundle import netx_compat, write_bundle
+from snncc.targets.loihi.chip_units import in_chip_units
+from snncc.targets.loihi.lowering import build_network, chain, lif_params_check
+from snncc.targets.loihi.network import LoihiNetwork
+from snncc.targets.loihi.partition import map_network
+from snncc.targets.loihi.resources import LOIHI1
+
+DEFAULT_STEPS = 100        # tSample when the model states no recording length
+VALIDATION_BATCH = 4
+CALIBRATION_BATCH = 8
+CALIBRATION_RATE = 0.05
+
+
+@dataclass
+class LoihiArtefact:
+    network: LoihiNetwork
+    quantization: dict[str, Any]
+    timing: dict[str, Any]
+    validation: dict[str, Any]
+    notes: list[str] = field(default_factory=list)
+
+    def write(self, path: str | Path) -> None:
+        write_bundle(self.network, path, extra={"quantization": self.quantization, "timing": self.timing,
+                                                "validation": self.validation})
+
+    def summary(self) -> dict[str, Any]:
+        net = self.network
+        q = self.quantization
+        return {
+            "format": "HDF5 bundle, lava-dl netx layout (+ snncc groups at /snncc)",
+            "t_sample": net.t_sample,
+            "layers": [
+                {"index": i, "name": lay.name, "type": lay.kind, "neurons": lay.n, "bias_sources": lay.always_on,
+                 **({} if i == 0 else {"vThMant": _register_text(lay.v_th_mant), "iDecay": _register_text(lay.i_decay),
+                                       "vDecay": _register_text(lay.v_decay),
+                                       "refDelay": lay.ref_delay, "wgtExp": _exp_text(lay.wgt_exp),
+                                       **({"wgtExpRec": _exp_text(lay.wgt_exp_rec)} if lay.weight_rec is not None
+                                          else {}),
+                                       "delay": _delay_text(lay.delay),
+                                       **({"delay_rec": _delay_text(lay.delay_rec)} if lay.weight_rec is not None else {})})}
+                for i, lay in enumerate(net.layers)
+            ],
+            "scale_rule": q["rule"], "scale_reason": q["reason"], "w_scale": q["w_scale"],
+            "scale_candidates": (q.get("calibration") or {}).get("errors", {}),
+            "weights_clipped": q["clipped_total"],
+            "timing": self.timing["mode"], "timing_changes": self.timing["changes"],
+            "validation": self.validation,
+            "netx_compat": netx_compat(net),
+            "core_map": net.core_map,
+            "notes": self.notes,
+        }
+
+    def render_text(self, console) -> None:
+        s = self.summary()
+        console.print(f"[bold]Loihi bundle[/bold]: tSample {s['t_sample']}, timing '{s['timing']}', "
+                      f"scale rule '{s['scale_rule']}'" + (f", w_scale {s['w_scale']}" if s["w_scale"] else ""))
+        console.print(f"  scale: {s['scale_reason']}")
+        if s["scale_candidates"]:
+            console.print("  scale candidates, measured spike-count error on the calibration inputs (lower is better): "
+                          + ", ".join(f"{k} {v:.4f}" for k, v in s["scale_candidates"].items()))
+        for lay in s["layers"]:
+            sources = lay["bias_sources"]
+            if lay["index"] == 0:
+                console.print(f"  layer 0  input      {lay['neurons'] - sources} axons"
+                              + (f" + {sources} always-on (current biases)" if sources else ""))
+                continue
+            rec = f" wgtExpRec {lay['wgtExpRec']} delay_rec {lay['delay_rec']}" if "wgtExpRec" in lay else ""
+            extra = f" + {sources} bias sources" if sources else ""
+            console.print(f"  layer {lay['index']}  {lay['type']:<9}  {lay['neurons'] - sources} neurons{extra}  "
+                          f"vThMant {lay['vThMant']} "
+                          f"iDecay {lay['iDecay']} vDecay {lay['vDecay']} refDelay {lay['refDelay']} "
+                          f"wgtExp {lay['wgtExp']} delay {lay['delay']}{rec}")
+        if s["weights_clipped"]:
+            console.print(f"  [yellow]{s['weights_clipped']} weight(s) rounded beyond the 8-bit range and were clipped "
+                          "(e.g. +256 -> 254)[/yellow]")
+        for change in s["timing_changes"]:
+            console.print(f"  [yellow]timing: {change}[/yellow]")
+        v = s["validation"]
+        console.print(f"  checked on {v['inputs']}: timing exact {v['timing_exact']}, quantized registers exact "
+                      f"{v['quantized_params_exact']}, emulator kernel exact {v['kernel_exact']}")
+        console.print("  spike agreement, emulator vs float model as trained: "
+                      + ", ".join(f"{k} {100 * a:.2f}%" for k, a in v["emulator_vs_trained"].items())
+                      + f"; predictions {100 * v['prediction_agreement']:.1f}% (quantization-only loss; "
+                      "`snncc check` measures accuracy on data)")
+        if any(v["overflow"].values()):
+            console.print(f"  [yellow]overflow on the check inputs: {v['overflow']}[/yellow]")
+        for note in s["netx_compat"]:
+            console.print(f"  [yellow]netx compatibility: {note}[/yellow]")
+        if s["netx_compat"]:
+            console.print("  [yellow]lava-dl netx ignores the fields above, so Lava would run this bundle differently "
+                          "than the chip semantics snncc emulates.[/yellow]")
+        if s["core_map"] is not None:
+            console.print(f"  core map: {_core_text(s['core_map'])}")
+        for note in s["notes"]:
+            console.print(f"  note: {note}")
+
+
+def _delay_text(delay) -> Any:
+    import numpy as np
+
+    d = np.asarray(delay)
+    return int(d) if d.ndim == 0 else f"per-synapse {int(d.min())}..{int(d.max())}"
+
+
+def _register_text(value) -> Any:
+    import numpy as np
+
+    v = np.asarray(value)
+    return int(v) if v.ndim == 0 else f"per-neuron {int(v.min())}..{int(v.max())} ({len(np.unique(v))} values)"
+
+
+def _exp_text(exp) -> Any:
+    import numpy as np
+
+    e = np.asarray(exp)
+    if e.ndim == 0:
+        return int(e)
+    values, counts = np.unique(e, return_counts=True)
+    return "per-synapse " + ", ".join(f"{int(v)} ({int(c)})" for v, c in zip(values, counts))
+
+
+def _core_text(core_map: dict) -> str:
+    for key in ("total_cores", "cores", "n_cores"):
+        if key in core_map:
+            value = core_map[key]
+            return f"{len(value) if isinstance(value, list) else value} cores"
+    return "recorded in /snncc/core_map"
+
+
+@dataclass
+class LoweredModel:
+    """Everything lowering produced, for checks: the graphs at each stage and the network."""
+
+    trained: Graph           # the model as given (its own update order)
+    order: Graph             # the IR in the order Loihi runs (timing change, reset change)
+    quantized: Graph         # ``order`` with quantized parameters read back in float
+    layers: list
+    network: LoihiNetwork
+    quant_record: Any
+    timing_record: Any
+    deployed: Graph | None = None   # ``trained`` with only the reset change (None: same as ``trained``)
+    notes: list[str] = field(default_factory=list)
+
+
+def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
+    """Timing, quantization and register values (no validation)."""
+    from snncc.targets.loihi import scaling
+    from snncc.targets.loihi.validation import ir_spikes, lead_steps, loihi_spikes, pad, random_spikes
+
+    timing_mode = options.get("timing") or "exact"
+    rule = options.get("scale") or "auto"
+    graph, fold = fold_linear(graph)     # Conv -> connection matrix; linear chains -> one projection
+    layers = chain(graph)
+    deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
+    order, trec = lower_timing(deployed, timing_mode)
+    if timing_mode == "exact":
+        order = deployed   # exact timing leaves the graph as it is: share it (saves a reference run)
+    trec.changes = reset_changes + trec.changes
+    steps = options.get("t_sample")
+    if steps is not None:
+        t_rule = "the input length"
+    elif options.get("time_steps") is not None:
+        steps, t_rule = options["time_steps"], "--time-steps"
+        if int(steps) != steps or steps < 1:
+            raise SnnccError(f"time steps must be a whole number >= 1, got {steps}", field="--time-steps")
+    else:
+        try:
+            steps, t_rule = samples_steps(graph)
+        except SnnccError:
+            steps, t_rule = DEFAULT_STEPS, (f"{DEFAULT_STEPS} steps: the model states no recording length "
+                                            "(graph.metadata['recording_length_s'])")
+    steps = int(steps)
+
+    names = [c.lif for c in layers]
+    calib = random_spikes(CALIBRATION_BATCH, steps, graph.node(layers[0].pre).width, CALIBRATION_RATE, seed=1)
+    reference: dict[str, Any] = {}
+
+    def measure(gq: Graph, rq) -> float:
+        """Mean over layers of ``count_error``: per-neuron spike counts against the float model's."""
+        from snncc.targets.loihi.emulator import emulate
+
+        if "spikes" not in reference:
+            reference["spikes"] = ir_spikes(order, calib, names)
+        net = build_network(order, layers, rq, trec, steps + trec.output_shift, {})
+        xp = pad(calib, lead_steps(trec.shifts, trec.output_shift))
+        emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
+        return float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
+
+    quantized, qrec = scaling.choose(order, rule, measure, f"{CALIBRATION_BATCH} seeded random spike trains "
+                                     f"(p={CALIBRATION_RATE}, seed 1), {steps} steps")
+    quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
+    meta = {
+        "source_sha256": graph.metadata.get("source_sha256", ""),
+        "source_file": graph.metadata.get("source_file", options.get("source", "")),
+        "model_name": graph.name,
+        "layer_names": [layers[0].pre] + names,
+        "dt": graph.dt,
+        "input_copies": graph.metadata.get("input_copies", 1),
+        "base_inputs": graph.metadata.get("base_inputs", graph.node(layers[0].pre).width),
+        "classes": graph.metadata.get("classes"),
+        "update_order": graph.metadata.get("update_order"),
+        "timing": timing_mode,
+        "output_shift": trec.output_shift,
+        "population_shifts": trec.shifts,
+        "steps": steps,
+        "t_sample_rule": t_rule,
+    }
+    network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
+    return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
+                        deployed=None if deployed is graph else deployed, notes=fold.notes())
+
+
+def count_error(emulated, reference) -> float:
+    """Mean |spike count difference| per neuron and sample, relative to the float model's mean count.
+
+    Counts, not spike-by-spike mismatch: in a recurrent network one moved spike shifts all later
+    ones, so spike mismatch saturates and stops telling candidates apart; counts are what the
+    readout uses."""
+    a, b = emulated.sum(axis=1, dtype=np.int64), reference.sum(axis=1, dtype=np.int64)
+    return float(np.abs(a - b).mean() / max(b.mean(), 1.0))
+
+
+def attach_core_map(network: LoihiNetwork) -> None:
+    """Place the network on cores and record the map (refuse maps that would change the network)."""
+    core_map = map_network(network)
+    if core_map.transforms:
+        layer = core_map.transforms[0].get("layer")
+        raise SnnccError(
+            f"fan-in exceeds the {LOIHI1.input_axons_per_core} input axons of a core; mapping it needs relay neurons that change "
+            "the network's timing (see `snncc map` for the relay plan), and compiling a relayed bundle is not supported yet",
+            field=f"layer '{layer}'")
+    network.core_map = core_map.to_dict()
+
+
+class LoihiTarget:
+    name = "loihi"
+    description = "Intel Loihi 1: HDF5 bundle (netx layout) checked by a bit-exact emulator"
+    output_kind = "file"
+    accepts = ("timing", "scale", "allow_reset_change", "stream", "time_steps")
+
+    def lower(self, graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
+        from snncc.targets import check_target_options
+        from snncc.targets.loihi.relays import needs_relays, relay_agreement, relay_network
+        from snncc.targets.loihi.validation import lead_steps, pad, random_spikes, validate_lowering
+
+        check_target_options(self, options)
+        lowered = lower_model(graph, options)
+        notes: list[str] = list(lowered.notes)
+        network, plan = lowered.network, None
+        if needs_relays(lowered.network):
+            network, plan = relay_network(lowered.network)   # the mapper's relays: the bundle holds them
+        else:
+            attach_core_map(lowered.network)
+        record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
+                                   lowered.timing_record.shifts, lowered.timing_record.output_shift,
+                                   batch=VALIDATION_BATCH)
+        validation = record.as_dict()
+        if plan is not None:
+            trec = lowered.timing_record
+            x = random_spikes(VALIDATION_BATCH, lowered.network.t_sample - trec.output_shift,
+                              lowered.network.input_width, 0.05, seed=0)
+            validation["relays"] = relay_agreement(lowered.network, network, plan,
+                                                   pad(x, lead_steps(trec.shifts, trec.output_shift)))
+            notes += plan.notes()
+            notes.append("relayed vs the same bundle without relays (itself checked against the IR above): spike "
+                         "agreement " + ", ".join(f"{k} {100 * v:.2f}%" for k, v in
+                                                  validation["relays"]["spike_agreement"].items())
+                         + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
+                         + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
+        notes.append(f"tSample {network.t_sample}: {lowered.network.metadata['t_sample_rule']}"
+                     + (f" + {plan.total_shift} relay step(s)" if plan is not None and plan.total_shift else ""))
+        if network.metadata.get("output_shift"):
+            notes.append(f"outputs appear {network.metadata['output_shift']} step(s) later than in the IR; tSample "
+                         "includes them")
+        return LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
+                             timing=lowered.timing_record.as_dict(), validation=validation, notes=notes)
+
+    def check(self, graph: Graph, inputs, labels, options: dict[str, Any]):
+        from snncc.targets import check_target_options
+        from snncc.targets.loihi.check import check_model
+
+        check_target_options(self, options)
+        return check_model(graph, inputs, labels, options)
+
+
+target = LoihiTarget()
+
+__all__ = ["target", "LoihiTarget", "LoihiArtefact", "LoihiNetwork", "lower_model"]
