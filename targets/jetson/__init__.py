@@ -31,7 +31,8 @@ from snncc.targets.jetson.export import export_sequence, export_step, opset_for_
 from snncc.targets.jetson.manifest import build_manifest, manifest_bytes, replace_refusal
 from snncc.targets.jetson.plan import GraphPlan, plan_graph
 from snncc.targets.jetson.recipe import build_engine_script
-from snncc.targets.jetson.validate import single_thread, validate_export
+from snncc.targets.jetson.validate import validate_export
+from snncc.threads import one_thread
 
 EXECUTABLE = ("build_engine.sh", "run.py")
 MAX_UNROLLED_STEPS = 5000
@@ -152,7 +153,7 @@ class JetsonTarget:
         steps = resolve_steps(plan, options)
         jetpack = str(options.get("jetpack") or "4.6")
         opset = opset_for_jetpack(jetpack)
-        with single_thread():
+        with one_thread():
             sequence = export_sequence(plan, steps, opset)
             step = export_step(plan, opset)
         record = validate_export(plan, steps, sequence, step, seed=int(options.get("seed", 0)))
@@ -181,7 +182,7 @@ class JetsonTarget:
             x = x[None]
         options.setdefault("time_steps", int(x.shape[1]))
         artefact = self.lower(graph, options)
-        with single_thread():
+        with one_thread():
             return check_artefact(plan_graph(graph.copy()), artefact, x, labels, progress)
 
 

@@ -31,7 +31,8 @@ from snncc.models.baselines import BASELINE_KINDS, BufferedClassifier
 from snncc.targets.jetson.export import _export, opset_for_jetpack
 from snncc.targets.jetson.manifest import FORMAT, FORMAT_VERSION, manifest_bytes
 from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK, build_engine_script
-from snncc.targets.jetson.validate import VALUE_TOLERANCE, check_structure, session, single_thread
+from snncc.targets.jetson.validate import VALUE_TOLERANCE, check_structure, session
+from snncc.threads import one_thread
 
 EXECUTABLE = ("build_engine.sh", "run.py")
 MAIN_BATCH, SECOND_BATCH = 8, 3
@@ -171,7 +172,7 @@ def lower_buffered(module: BufferedClassifier, metadata: dict | None = None, opt
     jetpack = str(options.get("jetpack") or "4.6")
     opset = opset_for_jetpack(jetpack)
     module = module.eval()
-    with single_thread():
+    with one_thread():
         example = torch.from_numpy(seeded_frames(2, module.config.n_steps, module.config.n_inputs, 7))
         exported = _export(module, (example,), ["frames"], ["scores"], {"frames": {0: "batch"}, "scores": {0: "batch"}},
                            opset)

@@ -13,7 +13,6 @@
 
 from __future__ import annotations
 
-import contextlib
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -22,6 +21,7 @@ import onnxruntime as ort
 import torch
 
 from snncc.errors import SnnccError
+from snncc.threads import one_thread
 from snncc.ir.simulate import simulate
 from snncc.targets.jetson.export import ExportedModel
 from snncc.targets.jetson.plan import GraphPlan
@@ -171,22 +171,10 @@ def _run_sequence(plan: GraphPlan, sess: ort.InferenceSession, x: np.ndarray):
     return seq, score
 
 
-@contextlib.contextmanager
-def single_thread():
-    """torch on one thread while validating: small batch-8 ops lose more to thread hand-offs than
-    they gain, badly so on a busy machine."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(before)
-
-
 def validate_export(plan: GraphPlan, steps: int, sequence: ExportedModel, step: ExportedModel,
                     seed: int = 0) -> ValidationRecord:
     """Run every check; raise SnnccError on the first failure; return the measured figures."""
-    with single_thread():
+    with one_thread():
         return _validate(plan, steps, sequence, step, seed)
 
 

@@ -119,7 +119,8 @@ def measure_agreement(graph: Graph, options: dict[str, Any], inputs: np.ndarray 
     """
     from snncc.targets.loihi import lower_model
     from snncc.targets.loihi.emulator import check_inputs, emulate
-    from snncc.targets.loihi.validation import ir_spikes, lead_steps, loihi_spikes, one_thread, pad
+    from snncc.targets.loihi.validation import ir_spikes, lead_steps, loihi_spikes, pad
+    from snncc.threads import one_thread
     from snncc.ir.simulate import simulate
 
     if not noise >= 0:

@@ -67,7 +67,7 @@ class CheckRecord:
 
 
 def _ir_run(graph: Graph, x: np.ndarray, names: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    from snncc.targets.loihi.validation import one_thread
+    from snncc.threads import one_thread
 
     with one_thread():
         res = simulate(graph, x, record="spikes")

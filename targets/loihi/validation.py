@@ -13,7 +13,6 @@ overflow are the only differences left) and against the float model as trained.
 
 from __future__ import annotations
 
-import contextlib
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -21,6 +20,7 @@ import numpy as np
 import torch
 
 from snncc.errors import SnnccError
+from snncc.threads import one_thread
 from snncc.ir.graph import Graph
 from snncc.ir.simulate import simulate
 from snncc.targets.loihi.emulator import EmulationResult, emulate, lead_steps, pad, reference_run  # noqa: F401
@@ -30,20 +30,6 @@ from snncc.targets.loihi.network import LoihiNetwork
 
 def random_spikes(batch: int, steps: int, width: int, rate: float, seed: int) -> np.ndarray:
     return (np.random.default_rng(seed).random((batch, steps, width)) < rate).astype(np.uint8)
-
-
-@contextlib.contextmanager
-def one_thread():
-    """Small batches run faster on one torch thread (and far faster on a busy machine)."""
-    from threadpoolctl import threadpool_limits
-
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with threadpool_limits(limits=1):
-            yield
-    finally:
-        torch.set_num_threads(before)
 
 
 def ir_spikes(graph: Graph, x: np.ndarray, names: list[str]) -> dict[str, np.ndarray]:
