@@ -17,7 +17,6 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-import torch
 
 from snncc.errors import SnnccError
 from snncc.threads import one_thread
