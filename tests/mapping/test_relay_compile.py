@@ -10,7 +10,6 @@ from snncc.ir import LIF, Dense, Graph, Input, Output, Readout, save_graph, simu
 from snncc.targets.loihi import lower_model
 from snncc.targets.loihi.bundle import read_bundle
 from snncc.targets.loihi.check import check_model
-from snncc.targets.loihi.emulator import emulate
 from snncc.targets.loihi.relays import relay_agreement, relay_network
 
 N_IN, HIDDEN, OUT, STEPS = 4600, 4, 3, 30

@@ -3,11 +3,10 @@
 import json
 
 import numpy as np
-import pytest
 import torch
 
 from snncc.cli.main import run
-from snncc.models import LSTMClassifier, SpikingClassifier
+from snncc.models import LSTMClassifier
 from snncc.models.baselines import BufferedClassifier
 from snncc.training.trainer import build_model
 from snncc.training.ttc import prefix_predictions, time_to_classification, ttc_of
