@@ -78,21 +78,28 @@ def _add_synapses_delays(buf, t, ring, total, post_off, w, post, d, a, b):
 
 
 @njit(cache=True)
-def _deliver(buf, t, ring, total, k, post_off, m, w, d, base, uniform, sptr, spost, sp):
-    """Pre neuron k fired at step t: add its fan-out into the ring, from row k of the transposed
-    dense block at ``base`` or (``sp`` >= 0) from its synapses sptr[sp + k] .. sptr[sp + k + 1] - 1."""
-    if sp >= 0:
-        a, b = sptr[sp + k], sptr[sp + k + 1]
-        if uniform >= 0:
-            _add_synapses(buf, ((t + 1 + uniform) % ring) * total + post_off, w, spost, a, b)
-        else:
-            _add_synapses_delays(buf, t, ring, total, post_off, w, spost, d, a, b)
-        return
+def _deliver(buf, t, ring, total, k, post_off, m, w, d, base, uniform):
+    """Pre neuron k fired at step t: add row k of the transposed block at ``base`` into the ring."""
     src = base + k * m
     if uniform >= 0:
         _add_row(buf, ((t + 1 + uniform) % ring) * total + post_off, w, src, m)
     else:
         _add_row_delays(buf, t, ring, total, post_off, w, d, src, m)
+
+
+@njit(cache=True)
+def _deliver_sparse(buf, t, ring, total, spk, nspk, post_off, uniform, w, post, d, sptr, sp):
+    """The spikes spk[0:nspk] of step t through a sparse block whose pointers start at sptr[sp]:
+    source k adds its synapses sptr[sp + k] .. sptr[sp + k + 1] - 1, each to its own post neuron."""
+    if uniform >= 0:
+        dst = ((t + 1 + uniform) % ring) * total + post_off
+        for c in range(nspk):
+            k = spk[c]
+            _add_synapses(buf, dst, w, post, sptr[sp + k], sptr[sp + k + 1])
+    else:
+        for c in range(nspk):
+            k = spk[c]
+            _add_synapses_delays(buf, t, ring, total, post_off, w, post, d, sptr[sp + k], sptr[sp + k + 1])
 
 
 def _decay(x, keep, keep_f):
@@ -231,8 +238,8 @@ def _spike_list(fired, m, spk):
 
 
 @njit(cache=True)
-def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
-            ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts):
+def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v, keep_uf,
+            keep_vf, vth, bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts):
     """One sample from zero state (buffers reset here): the chip's rules, step by step, layer by layer.
 
     ``lay`` (L+1, 5) int64 per layer: ref_delay, vmin, vmax, weight shift, 1 if q and u stay in range.
@@ -255,11 +262,17 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spo
         for k in range(width):
             fired[k] = xs[k] != 0
         nspk = _spike_list(fired, width, spk)
-        for c in range(nspk):
-            k = spk[c]
+        if wsp[1] >= 0:
             if record_all:
-                all_s[b, t, k] = 1
-            _deliver(buf, t, ring, total, k, noff[1], n[1], wflat, dflat, woff[1], duni[1], sptr, spost, wsp[1])
+                for c in range(nspk):
+                    all_s[b, t, spk[c]] = 1
+            _deliver_sparse(buf, t, ring, total, spk, nspk, noff[1], duni[1], wflat, spost, dflat, sptr, wsp[1])
+        else:
+            for c in range(nspk):
+                k = spk[c]
+                if record_all:
+                    all_s[b, t, k] = 1
+                _deliver(buf, t, ring, total, k, noff[1], n[1], wflat, dflat, woff[1], duni[1])
         base = (t % ring) * total
         for i in range(1, n_layers):
             lo = noff[i]
@@ -289,14 +302,7 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spo
                 for c in range(nspk):
                     out_spikes[b, t, spk[c]] = 1
             if rsp[i] >= 0:                 # to itself (recurrent), sparse
-                sp = rsp[i]
-                for c in range(nspk):
-                    k = spk[c]
-                    if druni[i] >= 0:
-                        _add_synapses(buf, rec_dst, wflat, spost, sptr[sp + k], sptr[sp + k + 1])
-                    else:
-                        _add_synapses_delays(buf, t, ring, total, lo, wflat, spost, dflat, sptr[sp + k],
-                                             sptr[sp + k + 1])
+                _deliver_sparse(buf, t, ring, total, spk, nspk, lo, druni[i], wflat, spost, dflat, sptr, rsp[i])
             elif roff[i] >= 0:              # to itself (recurrent)
                 for c in range(nspk):
                     if druni[i] >= 0:
@@ -304,14 +310,8 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spo
                     else:
                         _add_row_delays(buf, t, ring, total, lo, wflat, dflat, roff[i] + spk[c] * m, m)
             if i < last and wsp[i + 1] >= 0:    # to the next layer, sparse
-                sp = wsp[i + 1]
-                for c in range(nspk):
-                    k = spk[c]
-                    if duni[i + 1] >= 0:
-                        _add_synapses(buf, nxt_dst, wflat, spost, sptr[sp + k], sptr[sp + k + 1])
-                    else:
-                        _add_synapses_delays(buf, t, ring, total, noff[i + 1], wflat, spost, dflat, sptr[sp + k],
-                                             sptr[sp + k + 1])
+                _deliver_sparse(buf, t, ring, total, spk, nspk, noff[i + 1], duni[i + 1], wflat, spost, dflat, sptr,
+                                wsp[i + 1])
             elif i < last:                  # to the next layer
                 for c in range(nspk):
                     if duni[i + 1] >= 0:
