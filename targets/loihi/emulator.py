@@ -233,6 +233,17 @@ class SparseBlock:
     w: np.ndarray            # (nnz,) int64, chip units
     delay: np.ndarray        # (nnz,) int64
 
+    def dense_transposed(self) -> tuple[np.ndarray, np.ndarray]:
+        """(weights, delays) as dense (n_pre, n_post) int64 arrays, zeros where there is no synapse
+        (for comparisons with dense code, e.g. an earlier kernel; the kernel itself never densifies)."""
+        pre = np.repeat(np.arange(self.n_pre), np.diff(self.ptr))
+        w = np.zeros((self.n_pre, self.n_post), np.int64)
+        uniform = self.delay.size and np.all(self.delay == self.delay[0])
+        d = np.full((self.n_pre, self.n_post), int(self.delay[0]) if uniform else 0, np.int64)
+        w[pre, self.post] = self.w
+        d[pre, self.post] = self.delay
+        return w, d
+
 
 def _sparse_eligible(weight) -> bool:
     w = np.asarray(weight)
