@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import inspect
 import json
 import os
 import platform
@@ -232,10 +233,14 @@ def main(argv=None) -> dict:
         same = bool(np.array_equal(old.output_spikes, reference.output_spikes)
                     and old.overflow == reference.overflow)
         base_kernel = {}
+        # a kernel whose run_flat takes ``threads`` (else it uses numba's thread count, set here)
+        own_threads = "threads" in inspect.signature(mod.run_flat).parameters
         for n_threads in sorted({1, cores}):
-            t = with_threads(n_threads, lambda: timed(lambda: mod.run_flat(flat, drive, "outputs"), args.repeat))
+            kw = {"threads": n_threads} if own_threads else {}
+            t = with_threads(n_threads, lambda: timed(lambda: mod.run_flat(flat, drive, "outputs", **kw), args.repeat))
             base_kernel[str(n_threads)] = {"samples_per_s": rate_of(t, len(x)), **t}
-        tb1 = timed(lambda: [mod.run_flat(flat, net.drive(s[None]), "outputs") for s in single], args.repeat)
+        one = {"threads": 1} if own_threads else {}
+        tb1 = timed(lambda: [mod.run_flat(flat, net.drive(s[None]), "outputs", **one) for s in single], args.repeat)
         baseline = {"rev": sha, "identical_results": same, "kernel_by_threads": base_kernel,
                     "batch1_ms_per_sample": ms_per(tb1, len(single))}
 

@@ -7,14 +7,18 @@ Per sample and step t, layer by layer:
 2. the marks become a list of spiking neurons (64 at a time, through bit masks);
 3. each spike of neuron k adds its row of weights into the ring slot ``t + 1 + delay`` of every
    layer it projects to (itself when recurrent, the next layer), so the work per step is
-   (compartment updates) + (spikes x fan-out), as on the chip.
+   (compartment updates) + (spikes x fan-out), as on the chip. A sparse projection (``SparseBlock``:
+   a large mostly-zero matrix such as a folded convolution) keeps only its synapses, grouped by
+   source neuron (ptr / post / w, as the chip stores them per input axon): a spike adds just its
+   synapses, each to its post neuron, so its cost is its real fan-out, not a whole dense row.
 
 Exactness of the narrow types (checked when the program is flattened, never assumed):
 
 * weights are stored as ``w_chip >> shift`` (``shift``: the trailing zero bits common to every
   chip weight into a layer, so the shift loses nothing) in the narrowest of int8 .. int64 that
-  holds them; q accumulates in the narrowest type in which sum_i |w_chip[j, i] >> shift| over
-  all synapses into any neuron fits. A ring slot holds at most one delivery per synapse, so no
+  holds them (dense rows and sparse synapses alike); q accumulates in the narrowest type in which
+  sum_i |w_chip[j, i] >> shift| over all synapses into any neuron (feed-forward and recurrent,
+  dense or sparse) fits. A ring slot holds at most one delivery per synapse, so no
   partial sum overflows, and q = acc << shift exactly.
 * u, v, refractory counters are int32 when every layer's [vmin, vmax] fits 32 bits (u is wrapped
   to 24 bits, v clipped): arithmetic is done in int64 and stored back exactly, the decays through
@@ -60,6 +64,20 @@ def _add_row_delays(buf, t, ring, total, post_off, w, d, src, m):
 
 
 @njit(cache=True)
+def _add_synapses(buf, dst, w, post, a, b):
+    """Synapses a..b-1 of a sparse block (one spike's): buf[dst + post[s]] += w[s]."""
+    for s in range(a, b):
+        buf[dst + post[s]] += w[s]
+
+
+@njit(cache=True)
+def _add_synapses_delays(buf, t, ring, total, post_off, w, post, d, a, b):
+    """Sparse synapses a..b-1 with a delay each: synapse s goes to ring slot (t + 1 + d[s]) mod ring."""
+    for s in range(a, b):
+        buf[((t + 1 + d[s]) % ring) * total + post_off + post[s]] += w[s]
+
+
+@njit(cache=True)
 def _deliver(buf, t, ring, total, k, post_off, m, w, d, base, uniform):
     """Pre neuron k fired at step t: add row k of the transposed block at ``base`` into the ring."""
     src = base + k * m
@@ -67,6 +85,21 @@ def _deliver(buf, t, ring, total, k, post_off, m, w, d, base, uniform):
         _add_row(buf, ((t + 1 + uniform) % ring) * total + post_off, w, src, m)
     else:
         _add_row_delays(buf, t, ring, total, post_off, w, d, src, m)
+
+
+@njit(cache=True)
+def _deliver_sparse(buf, t, ring, total, spk, nspk, post_off, uniform, w, post, d, sptr, sp):
+    """The spikes spk[0:nspk] of step t through a sparse block whose pointers start at sptr[sp]:
+    source k adds its synapses sptr[sp + k] .. sptr[sp + k + 1] - 1, each to its own post neuron."""
+    if uniform >= 0:
+        dst = ((t + 1 + uniform) % ring) * total + post_off
+        for c in range(nspk):
+            k = spk[c]
+            _add_synapses(buf, dst, w, post, sptr[sp + k], sptr[sp + k + 1])
+    else:
+        for c in range(nspk):
+            k = spk[c]
+            _add_synapses_delays(buf, t, ring, total, post_off, w, post, d, sptr[sp + k], sptr[sp + k + 1])
 
 
 def _decay(x, keep, keep_f):
@@ -205,11 +238,13 @@ def _spike_list(fired, m, spk):
 
 
 @njit(cache=True)
-def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
-            ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts):
+def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v, keep_uf,
+            keep_vf, vth, bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts):
     """One sample from zero state (buffers reset here): the chip's rules, step by step, layer by layer.
 
     ``lay`` (L+1, 5) int64 per layer: ref_delay, vmin, vmax, weight shift, 1 if q and u stay in range.
+    ``wsp[i]`` / ``rsp[i]``: where layer i's feed-forward / recurrent pointers start in ``sptr``
+    when that block is sparse, else -1 (dense rows at ``woff[i]`` / ``roff[i]``).
     """
     steps, width = x.shape[1], x.shape[2]
     n_layers = n.shape[0]
@@ -227,11 +262,17 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, k
         for k in range(width):
             fired[k] = xs[k] != 0
         nspk = _spike_list(fired, width, spk)
-        for c in range(nspk):
-            k = spk[c]
+        if wsp[1] >= 0:
             if record_all:
-                all_s[b, t, k] = 1
-            _deliver(buf, t, ring, total, k, noff[1], n[1], wflat, dflat, woff[1], duni[1])
+                for c in range(nspk):
+                    all_s[b, t, spk[c]] = 1
+            _deliver_sparse(buf, t, ring, total, spk, nspk, noff[1], duni[1], wflat, spost, dflat, sptr, wsp[1])
+        else:
+            for c in range(nspk):
+                k = spk[c]
+                if record_all:
+                    all_s[b, t, k] = 1
+                _deliver(buf, t, ring, total, k, noff[1], n[1], wflat, dflat, woff[1], duni[1])
         base = (t % ring) * total
         for i in range(1, n_layers):
             lo = noff[i]
@@ -260,13 +301,18 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, k
             if i == last:
                 for c in range(nspk):
                     out_spikes[b, t, spk[c]] = 1
-            if roff[i] >= 0:                # to itself (recurrent)
+            if rsp[i] >= 0:                 # to itself (recurrent), sparse
+                _deliver_sparse(buf, t, ring, total, spk, nspk, lo, druni[i], wflat, spost, dflat, sptr, rsp[i])
+            elif roff[i] >= 0:              # to itself (recurrent)
                 for c in range(nspk):
                     if druni[i] >= 0:
                         _add_row(buf, rec_dst, wflat, roff[i] + spk[c] * m, m)
                     else:
                         _add_row_delays(buf, t, ring, total, lo, wflat, dflat, roff[i] + spk[c] * m, m)
-            if i < last:                    # to the next layer
+            if i < last and wsp[i + 1] >= 0:    # to the next layer, sparse
+                _deliver_sparse(buf, t, ring, total, spk, nspk, noff[i + 1], duni[i + 1], wflat, spost, dflat, sptr,
+                                wsp[i + 1])
+            elif i < last:                  # to the next layer
                 for c in range(nspk):
                     if duni[i + 1] >= 0:
                         _add_row(buf, nxt_dst, wflat, woff[i + 1] + spk[c] * nxt_m, nxt_m)
@@ -279,8 +325,8 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, k
 
 
 @njit(cache=True, nogil=True)
-def _chunk(lo_b, hi_b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, keep_v, keep_uf, keep_vf, vth,
-           bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, acc_proto, state_proto):
+def _chunk(lo_b, hi_b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v,
+           keep_uf, keep_vf, vth, bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, acc_proto, state_proto):
     """Samples lo_b..hi_b-1 one after another, with state allocated once for the chunk.
 
     Runs without the GIL: ``run_flat`` runs chunks of a batch on several Python threads."""
@@ -293,8 +339,8 @@ def _chunk(lo_b, hi_b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, k
     spk = np.zeros(fired.shape[0] + 8, np.int32)
     counts = np.zeros(3, np.int64)
     for b in range(lo_b, hi_b):
-        _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
-                ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts)
+        _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v, keep_uf,
+                keep_vf, vth, bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts)
 
 
 def _uniform(d: np.ndarray) -> int:
@@ -337,73 +383,99 @@ def narrowest_int(lo: int, hi: int):
     return np.int64
 
 
-def _dense_program(prog):
-    """``prog`` with any SparseBlock (a large mostly-zero projection) as the dense transposed arrays
-    this kernel scatters from: the same synapses, so the same integer sums."""
-    from dataclasses import replace
-
+def _is_sparse(block) -> bool:
     from snncc.targets.loihi.emulator import SparseBlock
 
-    def dense(blocks, delays):
-        out_w, out_d = [], []
-        for w, d in zip(blocks, delays):
-            if isinstance(w, SparseBlock):
-                w, d = w.dense_transposed()
-            out_w.append(w)
-            out_d.append(d)
-        return out_w, out_d
+    return isinstance(block, SparseBlock)
 
-    if not any(isinstance(b, SparseBlock) for b in list(prog.wt) + list(prog.wr)):
-        return prog
-    wt, dt_ = dense(prog.wt, prog.dt_)
-    wr, dr = dense(prog.wr, prog.dr)
-    return replace(prog, wt=wt, dt_=dt_, wr=wr, dr=dr)
+
+def _present(block) -> bool:
+    """A projection exists (a SparseBlock, or a dense array that is not the (0, 0) placeholder)."""
+    return _is_sparse(block) or block.size > 0
+
+
+def _chip_values(block) -> np.ndarray:
+    """Every stored chip weight of a block (a sparse block's synapses, a dense block's entries)."""
+    return block.w if _is_sparse(block) else block
+
+
+def _fan_in_abs(block, shift: int, n_post: int) -> np.ndarray:
+    """sum over a block's synapses into each post neuron j of |w_chip >> shift|, as int64 (n_post,).
+
+    Sparse: a bincount in float64, exact since every term is below 2**31 and a neuron has far
+    fewer than 2**22 synapses (the total is checked against 2**53)."""
+    if not _is_sparse(block):
+        return np.abs(block >> shift).sum(axis=0).astype(np.int64)
+    mag = np.abs(block.w >> shift)
+    if int(mag.sum(dtype=np.int64)) >= 1 << 53:
+        raise SnnccError("a sparse projection's weights sum beyond 2**53", field="weight")
+    return np.bincount(block.post, weights=mag.astype(np.float64), minlength=n_post).astype(np.int64)
 
 
 class Flat:
     """A program flattened once into the kernel's arrays.
 
-    Weights of every block (layer i's feed-forward, then its recurrent) are stored transposed
-    (row k = pre neuron k's fan-out) in one vector, divided by 2**shift of their layer, in the
-    narrowest type that holds them; q accumulates in the narrowest type that holds the largest
-    per-neuron sum of |w| (``narrowest_int``).
+    Weights of every block (layer i's feed-forward, then its recurrent), divided by 2**shift of
+    their layer, in one vector ``wflat`` in the narrowest type that holds them: the synapses of
+    the sparse blocks first (grouped by source neuron; ``spost`` = their post neuron, within the
+    layer; source k of the block whose pointers start at p owns synapses sptr[p + k] ..
+    sptr[p + k + 1] - 1), then the dense blocks, transposed (row k = pre neuron k's fan-out).
+    ``dflat`` holds the delays beside ``wflat`` (empty when every block has one delay). q
+    accumulates in the narrowest type that holds the largest per-neuron sum of |w|
+    (``narrowest_int``).
     """
 
     def __init__(self, prog):
-        self.prog = prog                  # as given (dense or SparseBlock projections)
-        prog = _dense_program(prog)       # what this kernel scatters from
+        self.prog = prog
         layers = len(prog.n)
         woff = np.full(layers, -1, np.int64)
         roff = np.full(layers, -1, np.int64)
+        wsp = np.full(layers, -1, np.int64)
+        rsp = np.full(layers, -1, np.int64)
         duni = np.zeros(layers, np.int64)
         druni = np.zeros(layers, np.int64)
         shift = np.zeros(layers, np.int64)
         in_range = np.zeros(layers, np.int64)
         bound = 0
-        scaled_w, blocks_d = [], []
+        entries = []                      # (layer, recurrent?, block, delays)
         for i in range(1, layers):
-            blocks = [prog.wt[i]] + ([prog.wr[i]] if prog.wr[i].size else [])
-            shift[i] = _common_shift(blocks)
-            fan_in_abs = sum(np.abs(w >> shift[i]).sum(axis=0) for w in blocks)
+            blocks = [prog.wt[i]] + ([prog.wr[i]] if _present(prog.wr[i]) else [])
+            shift[i] = _common_shift([_chip_values(w) for w in blocks])
+            n_post = int(prog.n[i])
+            fan_in_abs = sum(_fan_in_abs(w, int(shift[i]), n_post) for w in blocks)
             bound = max(bound, int(np.max(fan_in_abs, initial=0)))
-            cells = slice(int(prog.noff[i]), int(prog.noff[i] + prog.n[i]))
-            in_range[i] = int(q_u_in_range(fan_in_abs.astype(np.int64) << shift[i], prog.keep_u[cells]))
-            scaled_w.append(blocks[0] >> shift[i])
-            woff[i] = sum(w.size for w in scaled_w[:-1])
-            blocks_d.append(prog.dt_[i])
-            duni[i] = _uniform(prog.dt_[i])
-            if prog.wr[i].size:
-                scaled_w.append(prog.wr[i] >> shift[i])
-                roff[i] = sum(w.size for w in scaled_w[:-1])
-                blocks_d.append(prog.dr[i])
-                druni[i] = _uniform(prog.dr[i])
-        flat_w = np.concatenate([w.ravel() for w in scaled_w]) if scaled_w else np.zeros(0, np.int64)
+            cells = slice(int(prog.noff[i]), int(prog.noff[i] + n_post))
+            in_range[i] = int(q_u_in_range(np.asarray(fan_in_abs, np.int64) << shift[i], prog.keep_u[cells]))
+            entries.append((i, False, prog.wt[i], prog.dt_[i]))
+            if _present(prog.wr[i]):
+                entries.append((i, True, prog.wr[i], prog.dr[i]))
+        scaled_w, blocks_d, ptrs, posts = [], [], [], []
+        size = ptr_size = 0
+        for i, rec, w, d in sorted(entries, key=lambda e: not _is_sparse(e[2])):   # sparse blocks first
+            delays = w.delay if _is_sparse(w) else d
+            (druni if rec else duni)[i] = _uniform(delays)
+            (roff if rec else woff)[i] = size
+            if _is_sparse(w):
+                (rsp if rec else wsp)[i] = ptr_size
+                ptrs.append(w.ptr + size)
+                posts.append(w.post)
+                ptr_size += w.ptr.size
+                scaled_w.append(w.w >> shift[i])
+            else:
+                scaled_w.append((w >> shift[i]).ravel())
+            blocks_d.append(np.ravel(delays))
+            size += scaled_w[-1].size
+        flat_w = np.concatenate(scaled_w) if scaled_w else np.zeros(0, np.int64)
         self.acc_dtype = narrowest_int(-bound, bound)
         w_type = narrowest_int(int(flat_w.min(initial=0)), int(flat_w.max(initial=0)))
         self.wflat = np.ascontiguousarray(flat_w, dtype=w_type)
-        flat_d = np.concatenate([d.ravel() for d in blocks_d]) if blocks_d else np.zeros(0, np.int64)
+        per_synapse = np.any(duni[1:] < 0) or np.any(druni[1:] < 0)
+        flat_d = np.concatenate(blocks_d) if blocks_d and per_synapse else np.zeros(0, np.int64)
         self.dflat = np.ascontiguousarray(flat_d, dtype=np.int64)
+        self.sptr = np.ascontiguousarray(np.concatenate(ptrs) if ptrs else np.zeros(0, np.int64), np.int64)
+        self.spost = np.ascontiguousarray(np.concatenate(posts) if posts else np.zeros(0, np.int32), np.int32)
         self.woff, self.roff, self.duni, self.druni, self.shift = woff, roff, duni, druni, shift
+        self.wsp, self.rsp = wsp, rsp
         self.in_range = in_range
         self.keep_u = np.ascontiguousarray(prog.keep_u, np.int64)
         self.keep_v = np.ascontiguousarray(prog.keep_v, np.int64)
@@ -456,7 +528,7 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads
     narrow = bool(np.all(lay[1:, 1] >= INT32_MIN) and np.all(lay[1:, 2] <= INT32_MAX))
     state_proto = np.zeros(0, np.int32 if narrow else np.int64)
     args = (np.ascontiguousarray(x), prog.n, prog.noff, lay, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni,
-            flat.druni, flat.keep_u, flat.keep_v, flat.keep_uf, flat.keep_vf, flat.vth, flat.bias, int(prog.ring),
+            flat.druni, flat.sptr, flat.spost, flat.wsp, flat.rsp, flat.keep_u, flat.keep_v, flat.keep_uf, flat.keep_vf, flat.vth, flat.bias, int(prog.ring),
             record_all, out, all_s, all_u, all_v, ovf, wraps, np.zeros(0, flat.acc_dtype), state_proto)
     workers = max(1, min(batch, config.NUMBA_NUM_THREADS if threads is None else int(threads)))
     if workers == 1:

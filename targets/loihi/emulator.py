@@ -210,9 +210,10 @@ class _Program:
     n: np.ndarray            # (L+1,) neurons per layer, layer 0 = inputs
     noff: np.ndarray         # (L+1,) offset of each layer in the flat neuron arrays
     wt: list                 # per layer: feed-forward weights transposed (n_pre, n) int64, chip units,
-                             # or a SparseBlock (large mostly-zero projections: only their synapses)
+                             # or a SparseBlock (large mostly-zero projections: only their synapses,
+                             # delivered synapse by synapse by the kernel, never densified)
     dt_: list                # per layer: per-synapse delays transposed (n_pre, n) int64 (None when sparse)
-    wr: list                 # recurrent (n, n) transposed, or a (0, 0) array
+    wr: list                 # recurrent (n, n) transposed, a SparseBlock, or a (0, 0) array
     dr: list
     params: np.ndarray       # (L+1, 7) int64 per layer: 4096 - iDecay, 4096 - vDecay, vThMant * 2**6 (when
                              # one profile), ref_delay, vmin, vmax, 1 if one profile for the layer else 0
@@ -244,7 +245,8 @@ class SparseBlock:
     delay: np.ndarray        # (nnz,) int64
 
     def dense_transposed(self) -> tuple[np.ndarray, np.ndarray]:
-        """(weights, delays) as dense (n_pre, n_post) int64 arrays, zeros where there is no synapse."""
+        """(weights, delays) as dense (n_pre, n_post) int64 arrays, zeros where there is no synapse
+        (for comparisons with dense code, e.g. an earlier kernel; the kernel itself never densifies)."""
         pre = np.repeat(np.arange(self.n_pre), np.diff(self.ptr))
         w = np.zeros((self.n_pre, self.n_post), np.int64)
         uniform = self.delay.size and np.all(self.delay == self.delay[0])
