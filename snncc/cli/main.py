@@ -26,6 +26,7 @@ from snncc.cli import (  # noqa: E402,F401  (imported for their registrations)
     data_cmd,
     train_cmd,
     bench_cmd,
+    hpo_cmd,
 )
 
 
