@@ -50,7 +50,7 @@ class HpoRequest:
 
 def _anneal_plan(req: HpoRequest, source) -> StudyPlan:
     ranges = list(req.ranges)
-    if source.fixed_bin_ms is not None:   # an encoded .npz: its bin is the only time_bin_size
+    if source is not None and source.fixed_bin_ms is not None:   # an encoded .npz: its bin is the only time_bin_size
         if any(r.split("=", 1)[0].strip() == "time_bin_size" for r in ranges):
             raise SnnccError(f"this .npz is binned at {source.fixed_bin_ms:g} ms; time_bin_size cannot be searched "
                              "(give a directory of published Braille files)", file=source.path, field="--range")
@@ -83,7 +83,7 @@ def run_hpo(req: HpoRequest, view_factory: Callable | None = None) -> list:
     from snncc.hpo.data import load_source
 
     check_request(req)
-    search_space(req.ranges)          # bad ranges fail before anything is opened or loaded
+    _anneal_plan(req, None).check()   # bad settings and ranges fail before anything is opened or loaded
     url = req.storage or default_url(req.workdir)
     if req.storage is None:
         Path(req.workdir).mkdir(parents=True, exist_ok=True)

@@ -9,12 +9,14 @@ so a finished trial is never run twice and a killed one is not lost.
 from __future__ import annotations
 
 import re
+import time
 import warnings
 from pathlib import Path
 
 from snncc.errors import SnnccError
 
 SQLITE_TIMEOUT_S = 60          # writers wait this long for SQLite's lock (several local workers)
+CREATE_RETRIES = 6
 
 
 def default_url(workdir: str | Path) -> str:
@@ -48,17 +50,28 @@ def open_storage(url: str, heartbeat: int = 30, grace: int | None = None):
         kwargs = {"connect_args": {"timeout": SQLITE_TIMEOUT_S}}
     else:
         kwargs = {"pool_pre_ping": True}
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ExperimentalWarning)
-            return optuna.storages.RDBStorage(
-                url, engine_kwargs=kwargs, heartbeat_interval=int(heartbeat), grace_period=int(grace),
-                heartbeat_stale_trial_callback=optuna.storages.RetryHeartbeatStaleTrialCallback())
-    except ImportError as ex:
-        missing = getattr(ex.__cause__, "name", None) or type(ex).__name__
-        raise SnnccError(f"no database driver for {scheme!r} URLs (missing {missing}; PostgreSQL: "
-                         "pip install 'snncc[postgres]')", file=redact(url), field="--storage") from None
-    except Exception as ex:  # sqlalchemy: bad URL, unreachable server, bad credentials
-        first = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
-        raise SnnccError(f"cannot open the storage ({type(ex).__name__}: {first[:160]})", file=redact(url),
-                         field="--storage") from None
+    for attempt in range(CREATE_RETRIES):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ExperimentalWarning)
+                return optuna.storages.RDBStorage(
+                    url, engine_kwargs=kwargs, heartbeat_interval=int(heartbeat), grace_period=int(grace),
+                    heartbeat_stale_trial_callback=optuna.storages.RetryHeartbeatStaleTrialCallback())
+        except ImportError as ex:
+            missing = getattr(ex.__cause__, "name", None) or type(ex).__name__
+            raise SnnccError(f"no database driver for {scheme!r} URLs (missing {missing}; PostgreSQL: "
+                             "pip install 'snncc[postgres]')", file=redact(url), field="--storage") from None
+        except Exception as ex:  # sqlalchemy: bad URL, unreachable server, bad credentials, a creation race
+            if _creation_race(ex) and attempt + 1 < CREATE_RETRIES:
+                time.sleep(0.5 * (attempt + 1))   # another worker is creating the tables this instant
+                continue
+            first = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
+            raise SnnccError(f"cannot open the storage ({type(ex).__name__}: {first[:160]})", file=redact(url),
+                             field="--storage") from None
+    raise AssertionError("unreachable")
+
+
+def _creation_race(ex: Exception) -> bool:
+    """Two workers creating a fresh storage's tables at once: one of them sees a duplicate."""
+    text = str(ex).lower()
+    return type(ex).__name__ == "IntegrityError" or "already exists" in text or "database is locked" in text

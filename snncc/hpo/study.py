@@ -308,9 +308,14 @@ def _requeue(study, number: int) -> None:
             pass
     if number in retried_numbers(study.get_trials(deepcopy=False)):
         return
-    study._storage.set_trial_system_attr(trial._trial_id, INTERRUPTED_ATTR, True)
     trial = study._storage.get_trial(trial._trial_id)
-    optuna.storages.RetryHeartbeatStaleTrialCallback()(study, trial)
+    history = list(trial.system_attrs.get("retry_history", [])) + [trial.number]
+    system_attrs = {k: v for k, v in trial.system_attrs.items() if k not in ("fixed_params",)}
+    system_attrs.update(failed_trial=trial.system_attrs.get("failed_trial", trial.number), retry_history=history)
+    system_attrs[INTERRUPTED_ATTR] = True
+    # the same record Optuna's RetryHeartbeatStaleTrialCallback queues for a stale trial
+    study.add_trial(optuna.create_trial(state=TrialState.WAITING, params=trial.params, distributions=trial.distributions,
+                                        user_attrs=trial.user_attrs, system_attrs=system_attrs))
 
 
 def fail_stale(study) -> None:
@@ -334,7 +339,7 @@ def run_study(plan: StudyPlan, storage, objective_factory: Callable, view=None, 
     """
     import optuna
 
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    optuna.logging.set_verbosity(optuna.logging.ERROR)   # failures are reported by the view
 
     def enqueue_preset(study):
         if plan.step == "anneal" and plan.enqueue_preset:
@@ -357,28 +362,29 @@ def run_study(plan: StudyPlan, storage, objective_factory: Callable, view=None, 
         return objective(trial)
 
     catch = (SnnccError,)
-    while True:
-        fail_stale(study)
-        b = budget(study, plan.n_trials)
-        if view is not None:
-            view.study_update(b)
-        if b.done or (not b.may_start and b.running == 0):
-            break
-        if not b.may_start:
+    try:
+        while True:
+            fail_stale(study)
+            b = budget(study, plan.n_trials)
             if view is not None:
-                view.waiting(b)
-            time.sleep(poll_s)
-            continue
-        current["trial"] = None
-        try:
+                view.study_update(b)
+            if b.done or (not b.may_start and b.running == 0):
+                break
+            if not b.may_start:
+                if view is not None:
+                    view.waiting(b)
+                time.sleep(poll_s)
+                continue
+            current["trial"] = None
             study.optimize(tracked, n_trials=1, catch=catch, gc_after_trial=False)
-        except KeyboardInterrupt:
-            n = current["trial"]
-            if n is not None:
-                _requeue(study, n)
-            raise Interrupted(plan.name, n) from None
-        if current["trial"] is not None:
-            ran.append(current["trial"])
+            if current["trial"] is not None:
+                ran.append(current["trial"])
+                current["trial"] = None
+    except KeyboardInterrupt:
+        n = current["trial"]
+        if n is not None:
+            _requeue(study, n)
+        raise Interrupted(plan.name, n) from None
     b = budget(study, plan.n_trials)
     if view is not None:
         view.study_update(b)
