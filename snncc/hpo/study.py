@@ -17,12 +17,11 @@ import socket
 import time
 import warnings
 from dataclasses import asdict, dataclass, field, fields
-from pathlib import Path
 from typing import Callable
 
 from snncc.errors import SnnccError
 from snncc.hpo.objectives import DIRECTIONS, TrialOutcome
-from snncc.hpo.space import GRID_KEYS, Range, grid_around, preset_in_space, space_as_dict, space_from_dict
+from snncc.hpo.space import GRID_KEYS, Range, grid_around, preset_in_space, space_from_dict
 
 STEPS = ("anneal", "grid")
 SELECT = ("val", "test")

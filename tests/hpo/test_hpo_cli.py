@@ -9,7 +9,7 @@ import signal
 import optuna
 import pytest
 
-from tests.hpo.conftest import run, start, tiny_args, trials, wait_until
+from tests.hpo.helpers import run, start, states, tiny_args, trials, wait_until
 
 COMPLETE, RUNNING, FAIL = optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.RUNNING, optuna.trial.TrialState.FAIL
 optuna.logging.set_verbosity(optuna.logging.ERROR)
@@ -23,18 +23,25 @@ def test_interrupted_killed_and_resumed_study_loses_and_repeats_nothing(braille_
     from snncc.cli.main import run as cli
 
     work = tmp_path / "w"
-    args = ["hpo", "run", "s", "--step", "anneal", "--trials", "3", "--epochs", "2", "--objectives", "pareto",
+    args = ["hpo", "run", "s", "--step", "anneal", "--trials", "3", "--epochs", "3", "--pruner", "none",
             *tiny_args(braille_dir, work)]
+
+    def midway(min_complete):
+        """``min_complete`` trials done and one RUNNING with an epoch reported (so it has >= 1 epoch to go)."""
+        rows = states(work)
+        return sum(state == "COMPLETE" for _, state, _ in rows) >= min_complete and any(
+            state == "RUNNING" and epoch is not None and epoch < 3 for _, state, epoch in rows)
+
     # 1) Ctrl-C in the middle of a trial, after one finished: one line, exit 130, the trial re-queued
     p = start(args)
-    wait_until(lambda: len(_state(trials(work, "s"), COMPLETE)) >= 1 and _state(trials(work, "s"), RUNNING), p)
+    wait_until(lambda: midway(1), p)
     p.send_signal(signal.SIGINT)
     out, err = p.communicate(timeout=120)
     assert p.returncode == 130, err
     assert err.strip().count("\n") == 0 and err.startswith("snncc: interrupted"), err
     # 2) SIGKILL in the middle of a later trial: it stays RUNNING until its heartbeat is stale
     p = start(args)
-    wait_until(lambda: len(_state(trials(work, "s"), COMPLETE)) >= 2 and _state(trials(work, "s"), RUNNING), p)
+    wait_until(lambda: midway(2), p)
     p.kill()
     p.wait(timeout=30)
     assert _state(trials(work, "s"), RUNNING)
@@ -45,7 +52,7 @@ def test_interrupted_killed_and_resumed_study_loses_and_repeats_nothing(braille_
     done = _state(ts, COMPLETE)
     assert len(done) == 3 and not _state(ts, RUNNING) and not _state(ts, optuna.trial.TrialState.WAITING)
     failed = _state(ts, FAIL)
-    assert len(failed) >= 1                                # the killed one (and the Ctrl-C'd one, unless it had just ended)
+    assert len(failed) == 2                                # the Ctrl-C'd one and the killed one
     for f in failed:                                       # every interrupted trial was run again exactly once, to the end
         retries = [t for t in ts if t.system_attrs.get("retry_history", [None])[-1] == f.number]
         assert len(retries) == 1 and retries[0].params == f.params
