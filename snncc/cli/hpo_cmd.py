@@ -18,10 +18,19 @@ hpo_app = typer.Typer(
         "for Loihi (cores, synaptic ops, ESTIMATED energy and delay). Studies resume where they "
         "stopped; several workers can share one storage."
     ),
-    no_args_is_help=True,
+    invoke_without_command=True,
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 app.add_typer(hpo_app, name="hpo")
+
+
+@hpo_app.callback()
+def _hpo_group(ctx: typer.Context) -> None:
+    if ctx.invoked_subcommand is None:  # `snncc hpo` alone: the help, exit 0
+        from snncc.cli.output import console
+
+        console.print(ctx.get_help())
+        raise typer.Exit(0)
 
 
 def _storage_url(storage: Optional[str], workdir: Path) -> str:

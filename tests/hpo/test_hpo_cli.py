@@ -123,3 +123,13 @@ def test_unknown_study_is_one_line_and_exit_2(braille_dir, tmp_path, capsys):
     assert cli(["hpo", "report", "nope", "--dir", str(work)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "no such study" in err and "other" in err
+
+
+def test_hpo_alone_shows_help_and_space_lists_the_ranges_and_presets(capsys):
+    from snncc.cli.main import run as cli
+
+    capsys.readouterr()
+    assert cli(["hpo"]) == 0 and "report" in capsys.readouterr().out
+    assert cli(["hpo", "space", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert set(d["space"]) == set(d["paper_presets"]["1"]) and "choice" in d["note"]
