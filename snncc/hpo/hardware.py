@@ -55,6 +55,8 @@ def hardware_figures(checkpoint: str | Path, inputs: np.ndarray, labels: np.ndar
                      emulate_samples: int = 0, timing: str = "exact", scale: str = "auto") -> HardwareFigures:
     """Compile ``checkpoint`` for Loihi; estimate on the first ``energy_samples`` of ``inputs`` (B, T, 24).
 
+    The caller orders ``inputs`` (the trial objective shuffles its held-out samples with the plan's seed).
+
     ``emulate_samples`` > 0: also the bit-exact emulated accuracy (and the float model's) on the first
     that many samples, through ``snncc check``'s runs.
     """

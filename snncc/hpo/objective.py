@@ -84,6 +84,8 @@ class TrialObjective:
         # held-out samples of this trial's own split: the selection split (validation, or test)
         meta = load_torch_file(str(ckpt)).get("metadata", {})
         held = assigned(meta["split_assignment"], plan.select)
+        # a seeded shuffle: the estimate and the emulation see a mix of classes, not the first few (sorted) ones
+        held = held[np.random.default_rng(plan.seed).permutation(held.size)]
         inputs = data.inputs[held].numpy()
         labels = data.labels[held].numpy()
         if self.view is not None:
