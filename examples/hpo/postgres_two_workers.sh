@@ -81,5 +81,5 @@ for name in ("pg-demo", "pg-demo-grid"):
           f"{len(params)} distinct parameter sets among {states['COMPLETE']} complete")
     assert states["COMPLETE"] == len(params), "a trial ran twice"
 PY
-snncc hpo report pg-demo --storage "$URL" --plot "$WORK/run/pg-demo-front.png"
+snncc hpo report pg-demo --storage "$URL" -o "$WORK/run/pg-demo-front.png"
 echo "recipe OK (server $("$BIN/postgres" --version | awk '{print $3}'), storage $URL)"

@@ -118,7 +118,7 @@ def hpo_report(
     study: str = typer.Argument(..., help="Study name."),
     storage: Optional[str] = typer.Option(None, "--storage", help="Optuna storage URL (default: the SQLite file in --dir)."),
     workdir: Path = typer.Option(Path("hpo"), "--dir", help="Directory of the default SQLite storage."),
-    plot: Optional[Path] = typer.Option(None, "--plot", help="Figure to write (PNG; default DIR/STUDY-front.png)."),
+    plot: Optional[Path] = typer.Option(None, "--output", "-o", help="Figure to write (PNG; default DIR/STUDY-front.png)."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Do not draw the figure."),
     json_out: bool = typer.Option(False, "--json", help="Print the report as JSON."),
 ) -> None:
