@@ -33,6 +33,8 @@ def benches(quick: bool) -> list[tuple[str, list[str], Path | None]]:
         ("energy", ["bench_energy.py", "--json"] + (["--samples", "8"] if quick else []), None),
         ("nir_loihi_agreement", ["nir_loihi_agreement.py", "--json"]
          + (["--samples", "50", "--seeds", "0", "--no-trained"] if quick else []), None),
+        ("cnn_sinabs_agreement", ["cnn_sinabs_agreement.py", "--json"]
+         + (["--samples", "8", "--steps", "40", "--density", "0.05"] if quick else []), None),
     ]
 
 

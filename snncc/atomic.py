@@ -1,17 +1,41 @@
-"""Atomic output: write to a temporary sibling, rename into place only on success.
+"""Output that never loses a file: atomic writes, guarded destinations, crash-safe replacement.
 
-A crash, an error or Ctrl-C never leaves a half-written file or directory at the destination.
+Rules every snncc writer follows (files through :func:`atomic_path`, directories through
+:func:`atomic_dir`):
+
+* the new content is written to a hidden sibling ``.NAME.PID.XXXX.part`` and renamed into place
+  only once complete, so a crash, an error, a full disk or Ctrl-C never leaves a half-written
+  output at the destination;
+* a destination that resolves (after symlinks) to an input of the running command, or a directory
+  that contains one, is refused (:func:`protecting` declares the inputs);
+* ``.``/``..``, the current directory or one of its parents, and an existing directory named as a
+  file output are refused;
+* an existing directory is replaced only if the caller recognises it as its own earlier output
+  (``replaceable``); the swap is one atomic ``renameat2(RENAME_EXCHANGE)`` where the kernel has it,
+  so a kill at any moment leaves either the old or the new directory complete at the path;
+* leftovers of killed snncc runs (``.part``/``.old`` siblings whose process is gone) are cleaned on
+  the next write to the same destination; an ``.old`` directory left by a kill between the two
+  renames of the fallback swap is first put back in place.
 """
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
+import ctypes
+import errno
 import hashlib
 import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterable, Iterator
+
+from snncc.errors import SnnccError
+
+_PROTECTED: contextvars.ContextVar[tuple[Path, ...]] = contextvars.ContextVar("snncc_protected", default=())
+_LEFTOVER = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.[^.]*\.(?P<kind>part|old)$")
 
 
 def _default_mode(base: int) -> int:
@@ -22,11 +46,92 @@ def _default_mode(base: int) -> int:
 
 
 @contextlib.contextmanager
-def atomic_path(dest: str | os.PathLike) -> Iterator[Path]:
-    """Yield a temporary path in ``dest``'s directory; rename it to ``dest`` if the block succeeds."""
+def protecting(paths: Iterable[str | os.PathLike]) -> Iterator[None]:
+    """Within the block, no atomic write may replace any of ``paths`` (the command's inputs)."""
+    resolved = tuple(Path(p).resolve() for p in paths)
+    token = _PROTECTED.set(_PROTECTED.get() + resolved)
+    try:
+        yield
+    finally:
+        _PROTECTED.reset(token)
+
+
+def check_destination(dest: str | os.PathLike, *, directory: bool = False) -> Path:
+    """``dest`` as a path, after refusing one that would destroy an input or name a working directory."""
     dest = Path(dest)
+    shown = str(dest)
+    if dest.name in ("", ".", ".."):
+        raise SnnccError("names a directory ('.' or '..'), not a new output; give a name", file=shown, field="output")
+    resolved = dest.resolve()
+    cwd = Path.cwd().resolve()
+    if resolved == cwd or resolved in cwd.parents:
+        raise SnnccError("is the current directory or one of its parents; give a new output name", file=shown,
+                         field="output")
+    for protected in _PROTECTED.get():
+        if resolved == protected:
+            raise SnnccError("is an input of this command; writing the output there would destroy it",
+                             file=shown, field="output")
+        if directory and resolved in protected.parents:
+            raise SnnccError(f"contains an input of this command ({protected}); replacing it would delete that input",
+                             file=shown, field="output")
+    return dest
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
+
+
+def clean_leftovers(dest: Path) -> None:
+    """Remove ``.part``/``.old`` siblings of ``dest`` left by snncc processes that no longer run.
+
+    If ``dest`` itself is missing and a dead run's ``.old`` copy exists, that copy is the last
+    complete output (a kill fell between the two renames of the fallback swap): it is put back.
+    """
+    parent = dest.parent
+    if not parent.is_dir():
+        return
+    for entry in parent.iterdir():
+        match = _LEFTOVER.match(entry.name)
+        if not match or match["name"] != dest.name or _pid_alive(int(match["pid"])):
+            continue
+        if match["kind"] == "old" and not os.path.lexists(dest):
+            os.rename(entry, dest)
+            continue
+        _remove(entry)
+
+
+def _prepare(dest: Path, directory: bool) -> None:
+    check_destination(dest, directory=directory)
+    if not directory and dest.is_dir():
+        raise SnnccError("is a directory; this output is a file, give a file name", file=str(dest), field="output")
+    if directory and dest.exists() and not dest.is_dir():
+        raise SnnccError("this output is a directory, and a file of that name exists", file=str(dest), field="output")
     dest.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".part", dir=dest.parent)
+    clean_leftovers(dest)
+
+
+@contextlib.contextmanager
+def atomic_path(dest: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path beside ``dest``; rename it to ``dest`` if the block succeeds."""
+    dest = Path(dest)
+    _prepare(dest, directory=False)
+    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.{os.getpid()}.", suffix=".part", dir=dest.parent)
     os.close(fd)
     tmp_path = Path(tmp)
     try:
@@ -40,23 +145,61 @@ def atomic_path(dest: str | os.PathLike) -> Iterator[Path]:
         raise
 
 
+_RENAME_EXCHANGE = 2
+_AT_FDCWD = -100
+
+
+def exchange(a: Path, b: Path) -> bool:
+    """Atomically swap two existing paths (Linux ``renameat2(RENAME_EXCHANGE)``); False if unsupported."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (errno.ENOSYS, errno.EINVAL, errno.ENOTSUP):
+        return False  # kernel or file system without the exchange flag: the caller falls back
+    raise OSError(err, os.strerror(err), str(b))
+
+
+def _replace_directory(new: Path, dest: Path, swap: Callable[[Path, Path], bool]) -> None:
+    """Put the complete directory ``new`` at ``dest`` (which exists), then delete the old one."""
+    if swap(new, dest):
+        shutil.rmtree(new, ignore_errors=True)  # ``new`` now holds the old directory
+        return
+    old = dest.with_name(f".{dest.name}.{os.getpid()}.x.old")
+    os.rename(dest, old)    # a kill here leaves the old copy at .old: clean_leftovers puts it back
+    os.rename(new, dest)
+    shutil.rmtree(old, ignore_errors=True)
+
+
 @contextlib.contextmanager
-def atomic_dir(dest: str | os.PathLike) -> Iterator[Path]:
-    """Yield an empty temporary directory beside ``dest``; it replaces ``dest`` if the block succeeds."""
+def atomic_dir(dest: str | os.PathLike, replaceable: Callable[[Path], str | None] | None = None,
+               swap: Callable[[Path, Path], bool] = exchange) -> Iterator[Path]:
+    """Yield an empty temporary directory beside ``dest``; it becomes ``dest`` if the block succeeds.
+
+    An existing ``dest`` is replaced only if ``replaceable(dest)`` returns None (it is the caller's
+    own earlier output); otherwise the string it returns is the reason for refusing. Without
+    ``replaceable`` an existing directory is always refused.
+    """
     dest = Path(dest)
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".part", dir=dest.parent))
+    _prepare(dest, directory=True)
+    if dest.exists():
+        why = "snncc replaces only a directory it wrote itself" if replaceable is None else replaceable(dest)
+        if why is not None:
+            raise SnnccError(f"exists and is not replaceable: {why}; choose a new name or remove it yourself",
+                             file=str(dest), field="output")
+    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.{os.getpid()}.", suffix=".part", dir=dest.parent))
     try:
         yield tmp
         os.chmod(tmp, _default_mode(0o777))
         if dest.exists():
-            old = dest.with_name(f".{dest.name}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            os.replace(dest, old)
-            os.replace(tmp, dest)
-            shutil.rmtree(old, ignore_errors=True)
+            _replace_directory(tmp, dest, swap)
         else:
-            os.replace(tmp, dest)
+            os.rename(tmp, dest)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

@@ -14,6 +14,27 @@ from snncc.targets.base import Artefact, Target
 GROUP = "snncc.targets"
 
 
+# user-facing target options (key in the options dict -> command-line flag); each target lists the
+# keys it uses in ``accepts``, and a key given for a target that does not use it is refused
+OPTION_FLAGS = {
+    "timing": "--timing",
+    "scale": "--scale",
+    "allow_reset_change": "--allow-reset-change",
+    "stream": "--stream",
+    "jetpack": "--jetpack",
+    "time_steps": "--time-steps",
+}
+
+
+def check_target_options(target, options: dict | None) -> None:
+    """Refuse a user-given option (not None, not False) that ``target`` does not use."""
+    accepts = tuple(getattr(target, "accepts", ()))
+    for key, value in (options or {}).items():
+        if key in OPTION_FLAGS and key not in accepts and value is not None and value is not False:
+            takes = ", ".join(OPTION_FLAGS[k] for k in accepts if k in OPTION_FLAGS) or "no target options"
+            raise SnnccError(f"does not apply to --target {target.name} (it takes {takes})", field=OPTION_FLAGS[key])
+
+
 def available_targets() -> list[str]:
     return sorted({ep.name for ep in entry_points(group=GROUP)})
 
@@ -25,4 +46,4 @@ def get_target(name: str) -> Target:
     raise SnnccError(f"unknown target {name!r} (installed: {', '.join(available_targets()) or 'none'})", field="--target")
 
 
-__all__ = ["Target", "Artefact", "get_target", "available_targets"]
+__all__ = ["Target", "Artefact", "get_target", "available_targets", "check_target_options", "OPTION_FLAGS"]

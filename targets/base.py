@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
-from snncc.ir.graph import Graph
+if TYPE_CHECKING:
+    from snncc.ir.graph import Graph
 
 
 class Artefact(Protocol):

@@ -3,11 +3,14 @@
 
     python examples/braille/run_pipeline.py                # small settings: a few minutes on 2 CPU cores
     python examples/braille/run_pipeline.py --full         # the paper's settings (300 epochs: days on a CPU)
+    python examples/braille/run_pipeline.py --baselines    # + FCN, ResNet, Encoder, TCNN, Inception, TTC, latency
 
 Steps: generate (snncc data synth) -> encode (events th 1 at 5 ms, frames) -> train RSNN th1, LSTM,
 eLSTM (snncc train) -> quantization-aware fine-tuning of the RSNN -> compile for Loihi and Jetson
 (snncc compile) -> measure what each target loses (snncc check) -> a results table beside the
-paper's numbers (results.md and results.json in the output directory).
+paper's numbers (results.md and results.json in the output directory). ``--baselines`` adds the
+time-series classifiers (train, compile for Jetson), time to classification of every model
+(snncc analyse ttc, ttc.png) and their batch-1 Jetson-artefact latency in one snncc bench run.
 
 A step whose snncc verb or target is not built in this version is reported as *unavailable*;
 nothing is faked. The data are synthetic, so the numbers are not the paper's and are labelled so.
@@ -31,9 +34,18 @@ PAPER = {  # real data, the paper's figures (accuracy, %)
     "lstm_frames": 96.92,
     "elstm_events": 82.31,
 }
+PAPER_BASELINES = {  # kind -> (label, test accuracy %, trainable parameters as the paper states them)
+    "resnet": ("ResNet", 98.2, "516k"),
+    "inception": ("Inception", 97.8, "452k"),
+    "fcn": ("FCN", 97.7, "280k"),
+    "encoder": ("Encoder", 93.9, "~10x FCN"),
+    "tcnn": ("TCNN", 83.4, "2,673"),
+}
 
 SMALL = {"repetitions": 40, "rsnn_epochs": 3, "lstm_epochs": 15, "elstm_epochs": 3, "qat_epochs": 1}
 FULL = {"repetitions": 200, "rsnn_epochs": 300, "lstm_epochs": 300, "elstm_epochs": 300, "qat_epochs": 10}
+BASELINE_SMALL = {"baseline_epochs": 5}
+BASELINE_FULL = {"baseline_epochs": 300}
 
 
 @dataclass
@@ -120,6 +132,29 @@ def write_test_split(checkpoint: Path, encoded: Path, dest: Path) -> None:
     save_dataset(dest, inputs[test], labels[test], dict(meta, source=f"{meta.get('source')} (test split of {checkpoint.name})"))
 
 
+def baselines(p: Pipeline, out: Path, frames: Path, events: Path, seed: str) -> None:
+    """Train and compile the time-series classifiers; TTC of every trained model; one latency run."""
+    for kind in PAPER_BASELINES:
+        p.snncc(f"train {kind}", "train", kind, "--data", str(frames), "--epochs", str(p.settings["baseline_epochs"]),
+                "-o", str(out / f"{kind}.pt"), "--seed", seed, "--json", needs=("encode frames",))
+        p.snncc(f"compile {kind} Jetson", "compile", str(out / f"{kind}.pt"), "--target", "jetson",
+                "-o", str(out / f"{kind}_jetson"), "--json", needs=(f"train {kind}",))
+    trained = [(name, ckpt) for name, ckpt in (("train RSNN th1", "rsnn_th1.pt"), ("train LSTM", "lstm.pt"),
+                                               ("train eLSTM", "elstm.pt"))
+               + tuple((f"train {k}", f"{k}.pt") for k in PAPER_BASELINES) if p.status(name) == "ok"]
+    if trained:
+        p.snncc("TTC", "analyse", "ttc", *[str(out / c) for _, c in trained], "--data", str(frames), "--data",
+                str(events), "--figure", str(out / "ttc.png"), "-o", str(out / "ttc.json"), "--json",
+                needs=tuple(n for n, _ in trained))
+    compiled = [(name, art) for name, art in (("compile RSNN Jetson", "rsnn_th1_jetson"),
+                                              ("compile LSTM Jetson", "lstm_jetson"))
+                + tuple((f"compile {k} Jetson", f"{k}_jetson") for k in PAPER_BASELINES) if p.status(name) == "ok"]
+    if compiled:
+        p.snncc("bench Jetson artefacts", "bench", *[str(out / a) for _, a in compiled], "--samples", "32",
+                "--repeats", "3", "--warmup-passes", "1", "--timed-passes", "2", "--json",
+                needs=tuple(n for n, _ in compiled))
+
+
 def pct(x) -> str:
     return "—" if x is None else f"{x:.2f} %"
 
@@ -150,7 +185,24 @@ def results(p: Pipeline) -> dict:
         {"model": "LSTM, Jetson (ONNX Runtime)", "ours_percent": percent(check_acc("check LSTM Jetson", "accuracy_artefact")), "paper_percent": None},
         {"model": "eLSTM on events th1", "ours_percent": percent(train_acc("train eLSTM")), "paper_percent": PAPER["elstm_events"]},
     ]
+    for kind, (label, paper_acc, paper_params) in PAPER_BASELINES.items():
+        r = p.record(f"train {kind}")
+        if p.status(f"train {kind}") == "missing":
+            continue
+        params = "?" if r is None else f"{r['parameters']:,}"
+        rows.append({"model": f"{label} on frames ({params} params; paper {paper_params})",
+                     "ours_percent": percent(train_acc(f"train {kind}")), "paper_percent": paper_acc})
+    extra = {}
+    ttc = p.record("TTC")
+    if ttc is not None:
+        extra["ttc"] = [{k: m[k] for k in ("model", "kind", "method", "final_accuracy", "mean_ttc", "median_ttc",
+                                          "never_correct_share", "samples")} for m in ttc["models"]]
+    bench = p.record("bench Jetson artefacts")
+    if bench is not None:
+        extra["latency"] = [{k: m[k] for k in ("artefact", "kind", "median_ms", "spread_ms", "ratio_to_reference")}
+                            for m in bench["models"]]
     return {
+        **extra,
         "data": "SYNTHETIC Braille set (snncc data synth), NOT the paper's recordings: compare trends, not values",
         "settings": p.settings,
         "selection": "training accuracies are of the best TEST epoch, as the authors selected (optimistic)",
@@ -165,6 +217,22 @@ def markdown(res: dict) -> str:
              "| model | this run (synthetic) | paper (real data) |", "|---|---|---|"]
     for r in res["rows"]:
         lines.append(f"| {r['model']} | {pct(r['ours_percent'])} | {pct(r['paper_percent'])} |")
+    if res.get("ttc"):
+        lines += ["", "Time to classification (share of the signal after which the prediction is right for good; "
+                  "mean over the test samples classified right at the end; buffered classifiers: zero-padded "
+                  "truncated input):", "", "| model | kind | accuracy | mean TTC | median TTC | no TTC |",
+                  "|---|---|---|---|---|---|"]
+        for m in res["ttc"]:
+            f = lambda v: "—" if v is None else f"{v:.3f}"  # noqa: E731
+            lines.append(f"| {m['model']} | {m['kind']} | {100 * m['final_accuracy']:.1f} % | {f(m['mean_ttc'])} | "
+                         f"{f(m['median_ttc'])} | {100 * m['never_correct_share']:.1f} % |")
+    if res.get("latency"):
+        lines += ["", "Jetson artefacts, batch-1 latency in ONNX Runtime on THIS machine's CPU (not a Jetson; "
+                  "noisy on a shared machine), ratios to the first:", "",
+                  "| artefact | kind | median ms | spread ms | x first |", "|---|---|---|---|---|"]
+        for m in res["latency"]:
+            lines.append(f"| {Path(m['artefact']).name} | {m['kind']} | {m['median_ms']:.3f} | {m['spread_ms']:.3f} | "
+                         f"{m['ratio_to_reference']:.2f} |")
     lines += ["", "| step | status | seconds | message |", "|---|---|---|---|"]
     for s in res["steps"]:
         lines.append(f"| {s['name']} | {s['status']} | {s['seconds']} | {s['message'].replace('|', '/')} |")
@@ -176,10 +244,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--full", action="store_true", help="the paper's settings (200 repetitions, 300 epochs)")
     ap.add_argument("--out", type=Path, default=Path("braille_run"), help="output directory (default ./braille_run)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--baselines", action="store_true",
+                    help="also train and compile FCN, ResNet, Encoder, TCNN, Inception; TTC of every model; latency")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=N",
                     help=f"override one setting ({', '.join(SMALL)}), e.g. --set rsnn_epochs=5")
     args = ap.parse_args(argv)
     settings = dict(FULL if args.full else SMALL)
+    if args.baselines:
+        settings.update(BASELINE_FULL if args.full else BASELINE_SMALL)
     for item in args.set:
         key, _, value = item.partition("=")
         if key not in settings or not value.isdigit() or int(value) < 1:
@@ -230,6 +302,8 @@ def main(argv: list[str] | None = None) -> int:
         p.snncc(name, "check", str(out / model), "--target", target, "--data", str(out / test), *extra, "--json",
                 needs=(needs, f"test split {test}"))
 
+    if args.baselines:
+        baselines(p, out, frames, events, seed)
     res = results(p)
     from snncc.atomic import write_text_atomic
 

@@ -8,7 +8,7 @@ three times (median and spread). ``--power`` samples the main rail (VDD_IN) from
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import List, Optional
 
 import numpy as np
 import typer
@@ -31,7 +31,7 @@ def synthetic_inputs(manifest: dict, samples: int, seed: int) -> np.ndarray:
 
 @app.command("bench")
 def bench_command(
-    artefact: Path = typer.Argument(..., help="Jetson artefact directory."),
+    artefacts: List[Path] = typer.Argument(..., help="Jetson artefact directory; several are timed in one run, side by side (ratios to the first)."),
     data: Optional[Path] = typer.Option(None, "--data", help="Data set .npz (inputs, labels, meta); without it, seeded synthetic inputs (labelled so)."),
     samples: int = typer.Option(64, "--samples", help="Synthetic samples when no --data is given."),
     power: bool = typer.Option(False, "--power", help="Sample the INA3221 main rail (VDD_IN) every 50 ms during timing."),
@@ -52,6 +52,11 @@ def bench_command(
     for name, value in (("--repeats", repeats), ("--warmup-passes", warmup_passes + 1), ("--timed-passes", timed_passes), ("--samples", samples)):
         if value < 1:
             raise SnnccError("must be >= 1 (warm-up passes >= 0)", field=name)
+    if len(artefacts) > 1:
+        if power:
+            raise SnnccError("power is sampled for one artefact at a time", field="--power")
+        return _bench_many(artefacts, data, samples, backend, repeats, warmup_passes, timed_passes, stream, json_out)
+    artefact = artefacts[0]
     runner = open_runner(artefact, backend)
     labels = None
     if data is not None:
@@ -90,3 +95,38 @@ def bench_command(
                       f"energy per sample {p['energy_per_sample_uj']:.0f} uJ (spread {p['energy_spread_uj']:.0f})")
     for note in record.notes:
         console.print(f"note: {note}")
+
+
+def _bench_many(artefacts, data, samples, backend, repeats, warmup_passes, timed_passes, stream, json_out) -> None:
+    """Several artefacts with the same protocol; each takes --data when its channels fit, else seeded inputs."""
+    from snncc.targets.jetson.benchmark import compare_protocol
+    from snncc.targets.jetson.runner import RunnerError
+
+    loaded = None
+    if data is not None:
+        from snncc.data.dataset import load_dataset
+
+        loaded = load_dataset(data)
+    entries = []
+    for artefact in artefacts:
+        runner = open_runner(artefact, backend)
+        channels = runner.manifest["input"]["channels"]
+        if loaded is not None and loaded[0].shape[2] == channels and (
+                runner.manifest["time_axis"] == "dynamic" or loaded[0].shape[1] == runner.manifest["time_steps"]):
+            inputs, labels = loaded[0], loaded[1]
+            label = f"{data} ({'synthetic' if loaded[2].get('synthetic') else 'recorded'} data, {len(labels)} samples)"
+        else:
+            inputs, labels = synthetic_inputs(runner.manifest, samples, seed=0), None
+            label = f"synthetic random inputs ({samples} samples, seed 0): latency only"
+        entries.append((runner, inputs, labels, label))
+    try:
+        record = compare_protocol(entries, warmup_passes=warmup_passes, timed_passes=timed_passes, repeats=repeats,
+                                  stream=stream)
+    except RunnerError as ex:
+        raise SnnccError(ex.rule, file=str(data or artefacts[0]), field=ex.field) from None
+    if json_out:
+        print_json(record.as_dict())
+        return
+    console.print(record.table(), markup=False, soft_wrap=True)
+    console.print("note: batch-1 latency, the paper's protocol; ratios are to the first artefact; power not sampled",
+                  soft_wrap=True)

@@ -9,9 +9,7 @@ import typer
 
 from snncc.cli.app import app
 from snncc.cli.output import console, print_json
-from snncc.cli.render import print_graph_summary, print_import_notes
-from snncc.frontends import LoadOptions, load_model
-from snncc.targets import available_targets, get_target
+from snncc.targets import available_targets
 
 
 def compile_options(**kwargs) -> dict:
@@ -27,21 +25,28 @@ def compile_command(
     params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file (key value per line) for a SpyTorch weight list."),
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
     reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR): zero | subtract | zero-delayed (snnTorch's one-step-late zero reset)."),
-    timing: str = typer.Option("exact", "--timing", help="Loihi: 'exact' lowers the IR's delays and refractory period; 'paper' reproduces the authors' export (refDelay 1, no delays)."),
-    scale: str = typer.Option("auto", "--scale", help="Loihi weight scale rule: 'global' (the paper's), 'per-layer', 'split' (per-layer, outlier weights in a second synapse format with a coarser exponent), or 'auto' (the paper's unless outliers make it lossy; then chosen by measured error)."),
+    timing: Optional[str] = typer.Option(None, "--timing", help="Loihi: 'exact' (default) lowers the IR's delays and refractory period; 'paper' reproduces the authors' export (refDelay 1, no delays)."),
+    scale: Optional[str] = typer.Option(None, "--scale", help="Loihi weight scale rule: 'global' (the paper's), 'per-layer', 'split' (per-layer, outlier weights in a second synapse format with a coarser exponent), 'fine' (each synapse its finest exponent), or 'auto' (default: the paper's unless outliers make it lossy; then the candidate with the smallest measured error)."),
     allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: accept compiling a subtract-reset model with reset to zero (snncc check reports the cost)."),
-    jetpack: str = typer.Option("4.6", "--jetpack", help="Jetson: JetPack version of the board; selects the ONNX opset (4.6 -> 13, 5.x/6.0 -> 17, 6.1+ -> 20)."),
-    time_steps: Optional[int] = typer.Option(None, "--time-steps", help="Jetson: time steps T of the unrolled sequence model (default: recording length / dt)."),
+    jetpack: Optional[str] = typer.Option(None, "--jetpack", help="Jetson: JetPack version of the board (default 4.6); selects the ONNX opset (4.6 -> 13, 5.x/6.0 -> 17, 6.1/6.2 -> 20)."),
+    time_steps: Optional[int] = typer.Option(None, "--time-steps", help="Time steps per sample (default: recording length / dt). Jetson: T of the unrolled sequence model; Loihi: tSample."),
     json_out: bool = typer.Option(False, "--json", help="Print the compile report as JSON."),
 ) -> None:
     """Compile a trained model for a target. Every artefact is checked against the IR reference."""
-    graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
-    tgt = get_target(target)
-    options = compile_options(timing=timing, scale=scale, allow_reset_change=allow_reset_change,
+    from snncc.cli.render import print_graph_summary, print_import_notes
+    from snncc.frontends import LoadOptions, load_model
+    from snncc.frontends.buffered import compile_buffered  # buffered classifiers have no IR graph
+    from snncc.targets import get_target
+
+    options = compile_options(timing=timing, scale=scale, allow_reset_change=allow_reset_change or None,
                               jetpack=jetpack, source=str(model), time_steps=time_steps)
-    artefact = tgt.lower(graph, options)
+    artefact, graph = compile_buffered(model, target, options), None
+    if artefact is None:
+        graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
+        artefact = get_target(target).lower(graph, options)
     artefact.write(output)
-    print_import_notes(graph)
+    if graph is not None:
+        print_import_notes(graph)
     summary = artefact.summary()
     if json_out:
         print_json({"target": target, "output": str(output), **summary})

@@ -129,89 +129,6 @@ def synth_cmd(
 # --------------------------------------------------------------------------- encode
 
 
-def _load_events_for(src: Path, threshold: Optional[float], prefer: str, record_ms_opt: Optional[float]):
-    """Events, labels, threshold, record length (ms), source description."""
-    from snncc.data import formats, sources
-    from snncc.data.binning import record_ms
-    from snncc.data.sigma_delta import encode
-
-    sources.require_exists(src)
-    ev_path = None
-    raw_path = None
-    if src.is_dir():
-        if threshold is None:
-            raise SnnccError("give --threshold to pick the events of a directory", field="--threshold")
-        if prefer in ("auto", "events"):
-            ev_path = sources.events_file(src, threshold)
-        if ev_path is None:
-            if prefer == "events":
-                raise SnnccError(f"no {formats.events_name(threshold)} here", file=str(src))
-            raw_path = sources.raw_file(src)
-            if raw_path is None:
-                raise SnnccError(f"neither {formats.events_name(threshold)} nor {formats.RAW_NAME} here",
-                                 file=str(src))
-    else:
-        kind = formats.sniff(src)
-        if kind == "events":
-            if prefer == "raw":
-                raise SnnccError("--from raw needs a raw-frame file", file=str(src))
-            ev_path = src
-            from_name = sources.threshold_from_name(src)
-            if threshold is None:
-                threshold = from_name
-            elif from_name is not None and float(threshold) != from_name:
-                raise SnnccError(f"the file name says threshold {from_name:g}, --threshold says {threshold:g}",
-                                 file=str(src), field="--threshold")
-            if threshold is None:
-                raise SnnccError("cannot tell the threshold of this event file; give --threshold",
-                                 file=str(src), field="--threshold")
-        else:
-            raw_path = src
-            if threshold is None:
-                raise SnnccError("give --threshold to encode raw frames", field="--threshold")
-    if ev_path is not None:
-        es = formats.load_events(ev_path)
-        rec = record_ms_opt
-        if rec is None:
-            # the recording length comes from the raw frames beside the events (release 1: 54 frames,
-            # release 2: 51); without them, the paper's 1350 ms
-            beside = ev_path.parent / formats.RAW_NAME
-            rec = float(record_ms(formats.load_raw(beside).raw.shape[1])) if beside.is_file() else 1350.0
-        return es.events, es.labels, float(threshold), rec, str(ev_path)
-    rs = formats.load_raw(raw_path)
-    rec = record_ms_opt if record_ms_opt is not None else float(record_ms(rs.raw.shape[1]))
-    return encode(rs.inverted(), threshold), rs.labels, float(threshold), rec, str(raw_path)
-
-
-def _meta(kind: str, src: Path, source: str, threshold, bin_ms, dt_s: float, n_steps: int, extra: dict) -> dict:
-    from snncc.data.letters import CLASSES
-    from snncc.data.sources import synthetic_info
-
-    syn = synthetic_info(Path(source))
-    meta = {"kind": kind, "threshold": threshold, "time_bin_size_ms": bin_ms, "dt_s": dt_s,
-            "n_steps": int(n_steps), "classes": list(CLASSES), "synthetic": syn is not None,
-            "source": source, "seed": syn.get("seed") if syn else None}
-    meta.update(extra)
-    return meta
-
-
-def _write_with_split(out: Path, inputs: np.ndarray, labels: np.ndarray, meta: dict,
-                      split_test: Optional[float], seed: int) -> list[str]:
-    from snncc.data.dataset import save_dataset, stratified_split
-
-    split = stratified_split(labels, split_test, seed) if split_test is not None else None
-    save_dataset(out, inputs, labels, meta)
-    written = [str(out)]
-    if split is not None:
-        tr, te = split
-        for name, idx in (("train", tr), ("test", te)):
-            p = out.with_name(f"{out.stem}_{name}{out.suffix or '.npz'}")
-            save_dataset(p, inputs[idx], labels[idx], dict(meta, split=name, split_seed=seed,
-                                                             split_test_fraction=split_test))
-            written.append(str(p))
-    return written
-
-
 @data_app.command("encode")
 def encode_cmd(
     src: Path = typer.Argument(..., help="A directory with the published files, or one .pkl (raw frames or events)."),
@@ -240,37 +157,24 @@ def encode_cmd(
     numpy.round(1000*t/bin) (round half to even), binary, channel = 2*taxel + polarity, 24
     channels, input copies NOT applied (the training code tiles them).
     """
-    from snncc.data.binning import bin_events, n_bins_for
+    from snncc.data.encoding import encode_events, write_with_split
 
-    if prefer not in ("auto", "events", "raw"):
-        raise SnnccError(f"expected auto, events or raw, got {prefer!r}", field="--from")
-    if not np.isfinite(bin_ms) or bin_ms <= 0:
-        raise SnnccError(f"time_bin_size must be a positive number of ms, got {bin_ms}", field="--bin")
     with _progress(not json_out) as bar:
         task = bar.add_task("loading / encoding", total=2)
-        events, labels, th, rec_ms, source = _load_events_for(src, threshold, prefer, record_ms_opt)
+        encoded = encode_events(src, threshold, bin_ms, prefer, record_ms_opt, progress=lambda: bar.advance(task))
         bar.advance(task)
-        n_bins = n_bins_for(rec_ms, bin_ms)
-        try:
-            inputs = bin_events(events, bin_ms, n_bins)
-        except SnnccError as err:
-            raise err.with_file(source)
-        bar.advance(task)
-    meta = _meta("events", src, source, th, bin_ms, bin_ms / 1000.0, n_bins,
-                 {"record_ms": rec_ms, "events_before_binning": len(events),
-                  "events_after_binning": int(inputs.sum())})
-    written = _write_with_split(out, inputs, labels, meta, split_test, seed)
-    record = {"out": written, "samples": int(inputs.shape[0]), "n_steps": n_bins, "channels": int(inputs.shape[2]),
-              "threshold": th, "time_bin_size_ms": bin_ms, "events": len(events),
-              "events_after_binning": int(inputs.sum()), "synthetic": meta["synthetic"], "source": source}
+    written = write_with_split(out, encoded, split_test, seed)
+    record = encoded.summary(written)
     if json_out:
         print_json(record)
-    else:
-        console.print(f"{inputs.shape[0]} samples x {n_bins} bins x 24 channels (th {th:g}, bin {bin_ms:g} ms) "
-                      f"-> {', '.join(written)}")
-        lost = 100.0 * (1 - inputs.sum() / len(events)) if len(events) else 0.0
-        console.print(f"events: {len(events)} before binning, {int(inputs.sum())} after ({lost:.1f} % merged)"
-                      + ("   (synthetic data)" if meta["synthetic"] else ""))
+        return
+    inputs, meta = encoded.inputs, encoded.meta
+    console.print(f"{inputs.shape[0]} samples x {inputs.shape[1]} bins x 24 channels (th {meta['threshold']:g}, "
+                  f"bin {bin_ms:g} ms) -> {', '.join(written)}")
+    before, after = meta["events_before_binning"], meta["events_after_binning"]
+    lost = 100.0 * (1 - after / before) if before else 0.0
+    console.print(f"events: {before} before binning, {after} after ({lost:.1f} % merged)"
+                  + ("   (synthetic data)" if meta["synthetic"] else ""))
 
 
 @data_app.command("frames")
@@ -283,22 +187,15 @@ def frames_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
     """Write the inverted frames (0 = rest, 255 = full load) as a frame data set for the LSTM."""
-    from snncc.data import formats, sources
+    from snncc.data.encoding import frame_set, write_with_split
 
-    sources.require_exists(src)
-    raw_path = sources.raw_file(src)
-    if raw_path is None:
-        raise SnnccError(f"no {formats.RAW_NAME} here", file=str(src))
-    rs = formats.load_raw(raw_path)
-    inputs = rs.inverted().astype(np.float32)
-    meta = _meta("frames", src, str(raw_path), None, 25.0, 0.025, inputs.shape[1], {})
-    written = _write_with_split(out, inputs, rs.labels, meta, split_test, seed)
-    record = {"out": written, "samples": int(inputs.shape[0]), "n_steps": int(inputs.shape[1]),
-              "channels": 12, "synthetic": meta["synthetic"], "source": str(raw_path)}
+    encoded = frame_set(src)
+    written = write_with_split(out, encoded, split_test, seed)
     if json_out:
-        print_json(record)
+        print_json(encoded.summary(written))
     else:
-        console.print(f"{inputs.shape[0]} samples x {inputs.shape[1]} frames x 12 taxels -> {', '.join(written)}")
+        n, t = encoded.inputs.shape[:2]
+        console.print(f"{n} samples x {t} frames x 12 taxels -> {', '.join(written)}")
 
 
 # --------------------------------------------------------------------------- analyse

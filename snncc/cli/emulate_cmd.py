@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 import typer
@@ -44,7 +45,7 @@ def emulate_command(
     output: Path = typer.Option(..., "--output", "-o", help="Result .npz (written atomically)."),
     record: str = typer.Option("outputs", "--record", help="'outputs' or 'all' (every layer's spikes, voltage, current)."),
     stream: bool = typer.Option(False, "--stream", help="The paper's protocol: one continuous run, --gap blank steps between samples."),
-    gap: int = typer.Option(100, "--gap", help="Blank steps between samples in --stream mode."),
+    gap: Optional[int] = typer.Option(None, "--gap", help="Blank steps between samples in --stream mode (default 100)."),
     json_out: bool = typer.Option(False, "--json", help="Print a summary as JSON."),
 ) -> None:
     """Run a Loihi bundle bit-exactly (integer u, v; truncating decays; wrap and clip counted)."""
@@ -68,7 +69,7 @@ def emulate_command(
                       console=err_console, disable=json_out or x.shape[0] <= CHUNK, transient=True) as bar:
             task = bar.add_task("emulate", total=x.shape[0])
             for start in range(0, x.shape[0], CHUNK):
-                parts.append(emulate(network, x[start:start + CHUNK], record=record))
+                parts.append(emulate(network, x[start:start + CHUNK], record=record, gap=gap))
                 bar.advance(task, min(CHUNK, x.shape[0] - start))
         result = _merge(parts)
     arrays = {"output_spikes": result.output_spikes, "counts": result.counts, "prediction": result.prediction,

@@ -8,10 +8,8 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
-from snncc.cli.render import print_import_notes
 from snncc.cli.output import console, print_json
 from snncc.errors import SnnccError
-from snncc.frontends import LoadOptions, load_model
 
 FORMATS = ("nir",)
 
@@ -32,8 +30,10 @@ def export_command(
     itself restores the identical IR from the exported file."""
     if to not in FORMATS:
         raise SnnccError(f"unknown export format {to!r}; choose one of {', '.join(FORMATS)}", field="--to")
+    from snncc.cli.render import print_import_notes
     from snncc.exporters.nir import export_nir
-    
+    from snncc.frontends import LoadOptions, load_model
+
     graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
     report = export_nir(graph, output, step=nir_dt)
     print_import_notes(graph)

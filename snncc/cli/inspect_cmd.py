@@ -9,9 +9,6 @@ import typer
 
 from snncc.cli.app import app
 from snncc.cli.output import print_json
-from snncc.cli.render import print_graph_summary, print_import_notes
-from snncc.frontends import LoadOptions, load_model
-from snncc.ir.summary import graph_summary
 
 
 @app.command("inspect")
@@ -23,6 +20,10 @@ def inspect_command(
     json_out: bool = typer.Option(False, "--json", help="Print as JSON."),
 ) -> None:
     """Load a model, validate its IR and print it: nodes, sizes, time constants, delays, reset."""
+    from snncc.cli.render import print_graph_summary, print_import_notes
+    from snncc.frontends import LoadOptions, load_model
+    from snncc.ir.summary import graph_summary
+
     graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
     summary = graph_summary(graph)
     print_import_notes(graph)

@@ -1,77 +1,147 @@
 """Entry point of the ``snncc`` command: registers every verb and turns errors into one line.
 
-Exit status: 0 success, 2 bad input (one line ``snncc: error: file: field: rule``), 1 internal
-error, 130 interrupted. ``--debug`` anywhere on the command line shows tracebacks instead.
+Exit status: 0 success, 2 bad input, bad usage or an operating-system refusal (one line
+``snncc: error: <file>: <field>: <rule>``), 1 internal error (a bug: one line, ``--debug`` for the
+traceback), 130 interrupted. ``--debug`` anywhere on the command line shows tracebacks instead.
+
+Every existing path named on the command line, except the value of ``-o``/``--output``, is an
+input of the command: no output may be written over it (``snncc.atomic.protecting``).
 """
 
 from __future__ import annotations
 
+import errno
+import os
 import sys
 
-import typer
-
-from snncc.cli.app import app
-from snncc.errors import SnnccError
-
-# Each module registers its verb(s) on ``app`` when imported.
-from snncc.cli import (  # noqa: E402,F401  (imported for their registrations)
-    compile_cmd,
-    inspect_cmd,
-    emulate_cmd,
-    check_cmd,
-    map_cmd,
-    report_cmd,
-    export_cmd,
-    run_cmd,
-    data_cmd,
-    train_cmd,
-    bench_cmd,
-    hpo_cmd,
+# Each module registers its verb(s) on the typer app when imported; they import only typer,
+# rich and the standard library at module level, so ``snncc --help`` starts at once.
+VERB_MODULES = (
+    "compile_cmd", "inspect_cmd", "emulate_cmd", "check_cmd", "map_cmd", "report_cmd", "export_cmd",
+    "run_cmd", "data_cmd", "train_cmd", "bench_cmd", "analyse_cmd", "hpo_cmd",
 )
-
-
-# typer >= 0.29 bundles its own click; older typer re-exports the real one. Either way its usage
-# errors derive from the ClickException found behind typer.BadParameter, so no click import.
-_CLICK_EXCEPTION = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
+OUTPUT_OPTIONS = ("-o", "--output")
+INTERRUPTED = "snncc: interrupted; no partial output was left behind"
 
 
 def _say(line: str) -> None:
     print(line, file=sys.stderr)
 
 
-def run(argv: list[str] | None = None) -> int:
-    """Run the CLI; return (and exit with) its status."""
-    args = list(sys.argv[1:] if argv is None else argv)
-    debug = "--debug" in args
-    if debug:
-        args = [a for a in args if a != "--debug"]
+def build_app():
+    """The typer app with every verb registered."""
+    import importlib
+
+    from snncc.cli.app import app
+
+    for name in VERB_MODULES:
+        importlib.import_module(f"snncc.cli.{name}")
+    return app
+
+
+def named_inputs(args: list[str]) -> list[str]:
+    """Existing paths on the command line other than the output's value (the command's inputs)."""
+    inputs, skip = [], False
+    for arg in args:
+        if skip:
+            skip = False
+            continue
+        if arg in OUTPUT_OPTIONS:
+            skip = True
+            continue
+        if arg.startswith("-"):
+            name, eq, value = arg.partition("=")
+            if not eq or name in OUTPUT_OPTIONS or name.startswith("-o"):
+                continue
+            arg = value
+        if arg and os.path.exists(arg):
+            inputs.append(arg)
+    return inputs
+
+
+def _usage_line(ex) -> str:
+    """``<command>: <option>: <message>`` from a (typer-bundled or real) click usage error."""
+    ctx = getattr(ex, "ctx", None)
+    where = ctx.command_path if ctx is not None and getattr(ctx, "command_path", None) else "snncc"
+    param = getattr(ex, "param", None)
+    opts = getattr(param, "opts", None) or ([getattr(param, "name", None)] if param is not None else [])
+    message = " ".join(ex.format_message().split())
+    return ": ".join([where] + [o for o in opts[:1] if o] + [message or "bad usage (see --help)"])
+
+
+def _os_error_line(ex: OSError) -> str:
+    code = errno.errorcode.get(ex.errno or 0, "OSError")
+    target = ex.filename if ex.filename is not None else "snncc"
+    reason = (ex.strerror or str(ex)).rstrip(".")
+    return f"{target}: {code}: {reason.lower()}"
+
+
+def _dispatch(args: list[str], debug: bool) -> int:
+    import typer
+
+    from snncc.atomic import protecting
+    from snncc.errors import SnnccError
+
+    # typer >= 0.29 bundles its own click, older typer re-exports the real one; either way usage
+    # errors derive from the ClickException behind typer.BadParameter (no direct click import).
+    click_exception = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
     try:
-        result = app(args=args, prog_name="snncc", standalone_mode=False)
+        app = build_app()
+        with protecting(named_inputs(args)):
+            result = app(args=args, prog_name="snncc", standalone_mode=False)
         code = result if isinstance(result, int) else 0
+        if code == 130:  # typer >= 0.29 turns Ctrl-C inside a command into a silent Exit(130)
+            _say(INTERRUPTED)
+        return code
     except SnnccError as err:
         if debug:
             raise
         _say(f"snncc: error: {err.line()}")
-        code = 2
+        return 2
     except typer.Exit as ex:
-        code = ex.exit_code
+        if ex.exit_code == 130:
+            _say(INTERRUPTED)
+        return ex.exit_code
     except typer.Abort:
-        _say("snncc: aborted")
-        code = 130
-    except _CLICK_EXCEPTION as ex:
+        _say(INTERRUPTED)
+        return 130
+    except click_exception as ex:
         if debug:
             raise
-        _say(f"snncc: error: {ex.format_message()}")
-        code = ex.exit_code
-    except KeyboardInterrupt:
-        _say("snncc: interrupted; no partial output was left behind")
-        code = 130
+        if type(ex).__name__ == "NoArgsIsHelpError":  # bare ``snncc`` or ``snncc data``: the help
+            _say(ex.format_message())
+            return 2
+        _say(f"snncc: error: {_usage_line(ex)}")
+        return 2
+    except OSError as ex:
+        if debug:
+            raise
+        _say(f"snncc: error: {_os_error_line(ex)}")
+        return 2
+    except MemoryError:
+        if debug:
+            raise
+        _say("snncc: error: memory: this input needs more memory than the machine has; use a smaller batch or input")
+        return 2
     except Exception as ex:  # the last line of defence: never a traceback without --debug
         if debug:
             raise
         first = str(ex).strip().splitlines()[0] if str(ex).strip() else ""
         _say(f"snncc: internal error: {type(ex).__name__}: {first} (rerun with --debug for the traceback)")
-        code = 1
+        return 1
+
+
+def run(argv: list[str] | None = None) -> int:
+    """Run the CLI; return (and, called without ``argv``, exit with) its status."""
+    try:
+        args = list(sys.argv[1:] if argv is None else argv)
+        debug = "--debug" in args
+        if debug:
+            args = [a for a in args if a != "--debug"]
+        code = _dispatch(args, debug)
+    except KeyboardInterrupt:
+        _say(INTERRUPTED)
+        code = 130
     if argv is None:
         sys.exit(code)
     return code

@@ -14,8 +14,9 @@ from snncc.errors import SnnccError
 MODEL_SUFFIXES = (".pt", ".pth", ".ckpt", ".snnir", ".nir")
 
 
-def load_network(source: Path, timing: str = "exact", scale: str = "auto"):
-    """A LoihiNetwork from a bundle, or from a model file lowered with the Loihi target."""
+def load_network(source: Path, timing: str | None = None, scale: str | None = None):
+    """A LoihiNetwork from a bundle, or from a model file lowered with the Loihi target
+    (``timing``/``scale`` apply only to lowering a model file: given with a bundle, they are refused)."""
     import h5py
 
     if not source.is_file():
@@ -23,6 +24,10 @@ def load_network(source: Path, timing: str = "exact", scale: str = "auto"):
     if h5py.is_hdf5(str(source)):
         from snncc.targets.loihi.bundle import read_bundle
 
+        for flag, value in (("--timing", timing), ("--scale", scale)):
+            if value is not None:
+                raise SnnccError("does not apply to a Loihi bundle (its timing and weight scale are fixed); "
+                                 "it applies only when map lowers a model file", file=str(source), field=flag)
         return read_bundle(source)
     if source.suffix.lower() not in MODEL_SUFFIXES:
         raise SnnccError(f"expected a Loihi bundle (HDF5) or a model file ({', '.join(MODEL_SUFFIXES)})",
@@ -31,7 +36,8 @@ def load_network(source: Path, timing: str = "exact", scale: str = "auto"):
     from snncc.targets import get_target
 
     graph = load_model(source)
-    artefact = get_target("loihi").lower(graph, {"timing": timing, "scale": scale, "source": str(source)})
+    given = {"timing": timing, "scale": scale}
+    artefact = get_target("loihi").lower(graph, {**{k: v for k, v in given.items() if v is not None}, "source": str(source)})
     return artefact.network
 
 
@@ -40,8 +46,8 @@ def map_command(
     source: Path = typer.Argument(..., help="Loihi bundle (HDF5) or a model file (.pt/.pth/.ckpt/.snnir/.nir), lowered with the Loihi target first."),
     json_out: bool = typer.Option(False, "--json", help="Print the core map as JSON."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw utilisation per core as a PNG (written atomically)."),
-    timing: str = typer.Option("exact", "--timing", help="For a model file: Loihi timing 'exact' or 'paper' (the authors' export)."),
-    scale: str = typer.Option("auto", "--scale", help="For a model file: Loihi weight scale rule (auto | global | per-layer | split)."),
+    timing: Optional[str] = typer.Option(None, "--timing", help="For a model file: Loihi timing 'exact' (default) or 'paper' (the authors' export)."),
+    scale: Optional[str] = typer.Option(None, "--scale", help="For a model file: Loihi weight scale rule (auto (default) | global | per-layer | split)."),
 ) -> None:
     """Place every population on Loihi 1 cores under all per-core limits; print the core map."""
     from snncc.targets.loihi.partition import map_network

@@ -7,11 +7,11 @@ from typing import Any
 
 from rich.console import Console
 
-from snncc.records import to_jsonable
-
 console = Console(highlight=False)
 err_console = Console(stderr=True, highlight=False)
 
 
 def print_json(record: Any) -> None:
+    from snncc.records import to_jsonable   # numpy-aware; imported only when JSON is printed
+
     print(json.dumps(to_jsonable(record), indent=2, sort_keys=False))

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 from typing import Any
 
+from typing import TYPE_CHECKING
+
 from rich.table import Table
 
-from snncc.ir.graph import Graph
+if TYPE_CHECKING:
+    from snncc.ir.graph import Graph
 
 from snncc.cli.output import console, err_console
 

@@ -45,9 +45,9 @@ def report_command(
     data: Optional[Path] = typer.Option(None, "--data", help="Data set (.npz with inputs, labels, meta) to emulate."),
     input_file: Optional[Path] = typer.Option(None, "--input", help="Spike input .npy, (T, C) or (B, T, C)."),
     limit: Optional[int] = typer.Option(None, "--limit", help="Use the first N samples only."),
-    samples: int = typer.Option(8, "--samples", help="Without data: how many random input samples."),
-    rate: float = typer.Option(0.05, "--rate", help="Without data: spike probability per input channel and step."),
-    seed: int = typer.Option(0, "--seed", help="Without data: random seed."),
+    samples: Optional[int] = typer.Option(None, "--samples", help="Without data: how many random input samples (default 8)."),
+    rate: Optional[float] = typer.Option(None, "--rate", help="Without data: spike probability per input channel and step (default 0.05)."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Without data: random seed (default 0)."),
     json_out: bool = typer.Option(False, "--json", help="Print the report as JSON."),
 ) -> None:
     """ESTIMATE (not a measurement) of energy and delay per sample, beside the paper's measurement."""
@@ -63,6 +63,11 @@ def report_command(
         raise SnnccError("give --data or --input, not both", field="--input")
     if limit is not None and limit < 1:
         raise SnnccError("must be >= 1", field="--limit")
+    if data is not None or input_file is not None:
+        for flag, value in (("--samples", samples), ("--rate", rate), ("--seed", seed)):
+            if value is not None:
+                raise SnnccError("applies only to random inputs, not with --data or --input", field=flag)
+    samples, rate, seed = 8 if samples is None else samples, 0.05 if rate is None else rate, 0 if seed is None else seed
     network = load_network(bundle)
     if data is not None:
         from snncc.data.dataset import load_dataset
@@ -80,6 +85,11 @@ def report_command(
     else:
         if not 0.0 <= rate <= 1.0 or samples < 1:
             raise SnnccError("need 0 <= --rate <= 1 and --samples >= 1", field="--rate/--samples")
+        from snncc.limits import check_memory
+
+        check_memory(8 * samples * network.t_sample * network.input_width,
+                     f"{samples:,} random samples of {network.t_sample} steps x {network.input_width} channels",
+                     field="--samples")
         rng = np.random.default_rng(seed)
         x = (rng.random((samples, network.t_sample, network.input_width)) < rate).astype(np.uint8)
         source = "<random>"

@@ -54,10 +54,11 @@ def run_command(
     json_out: bool = typer.Option(False, "--json", help="Print the result summary as JSON."),
 ) -> None:
     """Run a Jetson artefact on inputs: the whole-sequence model, or the step model with --stream."""
+    from snncc.inputs import check_batch
     from snncc.targets.jetson.runner import RunnerError
 
     runner = open_runner(artefact, backend)
-    x = load_array(input)
+    x = check_batch(load_array(input), spikes=runner.manifest["input"]["signal"] == "spikes", source=str(input))
     try:
         res = runner.stream(x) if stream else runner.run(x)
         used = runner.session("step" if stream else "sequence").backend

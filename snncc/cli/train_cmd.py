@@ -6,15 +6,12 @@ from enum import Enum
 from pathlib import Path
 from typing import List, Optional
 
-import torch
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from snncc.cli.app import app
 from snncc.cli.output import console, err_console, print_json
 from snncc.errors import SnnccError
-from snncc.training.pipeline import TrainRequest, TrainResult, finetune, train
-from snncc.training.presets import parse_overrides
 
 
 class ModelKind(str, Enum):
@@ -22,6 +19,11 @@ class ModelKind(str, Enum):
     ffsnn = "ffsnn"
     lstm = "lstm"
     elstm = "elstm"
+    fcn = "fcn"
+    resnet = "resnet"
+    encoder = "encoder"
+    tcnn = "tcnn"
+    inception = "inception"
 
 
 class Order(str, Enum):
@@ -34,7 +36,7 @@ def _progress(quiet: bool) -> Progress:
                     TimeRemainingColumn(), console=err_console, disable=quiet, transient=False)
 
 
-def render_result(result: TrainResult) -> None:
+def render_result(result) -> None:
     h = result.history
     console.print(f"[bold]{result.kind}[/bold]: {result.parameters:,} trainable parameters; "
                   f"{result.data['samples']} samples of {result.data['encoding']} ({result.data['steps']} steps x "
@@ -57,7 +59,7 @@ def render_result(result: TrainResult) -> None:
 
 @app.command("train")
 def train_command(
-    model: ModelKind = typer.Argument(..., help="rsnn | ffsnn | lstm (frames) | elstm (events)."),
+    model: ModelKind = typer.Argument(..., help="rsnn | ffsnn | lstm (frames) | elstm (events) | fcn | resnet | encoder | tcnn | inception (frames, buffered)."),
     data: Path = typer.Option(..., "--data", help="Encoded data set (.npz from snncc data encode) or a directory of published-format pickles (encoded on the fly)."),
     output: Path = typer.Option(..., "--output", "-o", help="Checkpoint to write (snncc format; snncc compile takes it directly)."),
     threshold: int = typer.Option(1, "--threshold", help="Sigma-delta threshold of the events (1, 2, 5, 10): selects the paper's preset."),
@@ -70,23 +72,29 @@ def train_command(
     qat_epochs: int = typer.Option(3, "--qat-epochs", help="Epochs of quantization-aware fine-tuning."),
     overrides: Optional[List[str]] = typer.Option(None, "--set", help="Override a preset value, KEY=VALUE (e.g. tau_mem=0.05); repeatable."),
     params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file instead of the preset."),
-    batch_size: int = typer.Option(128, "--batch-size", help="Batch size (paper: 128)."),
+    batch_size: Optional[int] = typer.Option(None, "--batch-size", help="Batch size (default: the paper's 128; the baselines: their family's, see docs/baselines.md)."),
+    lr: Optional[float] = typer.Option(None, "--lr", help="Learning rate (default: the paper's Adamax 0.0015; the baselines: their family's Adam rate)."),
     device: str = typer.Option("auto", "--device", help="Where to train: auto (CUDA when available, else CPU), cpu, cuda or cuda:N. Checkpoints are always saved on the CPU."),
     threads: int = typer.Option(1, "--threads", help="Torch CPU threads (the per-step loop gains little from more; 1 avoids contention)."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bars."),
     json_out: bool = typer.Option(False, "--json", help="Print the training record as JSON."),
 ) -> None:
     """Train one of the paper's models with its per-threshold preset and write a checkpoint."""
+    import torch
+
+    from snncc.training.pipeline import TrainRequest, finetune, train
+    from snncc.training.presets import parse_overrides
+
     if threads < 1:
         raise SnnccError("must be >= 1", field="--threads")
-    if batch_size < 1:
+    if batch_size is not None and batch_size < 1:
         raise SnnccError("must be >= 1", field="--batch-size")
     torch.set_num_threads(threads)
     req = TrainRequest(kind=model.value, data=str(data), output=str(output), threshold=threshold, epochs=epochs,
                        subset=subset, seed=seed, order=order.value, val_fraction=val_fraction, batch_size=batch_size,
                        overrides=parse_overrides(overrides), params_file=str(params) if params else None,
                        qat_from=str(qat_from) if qat_from else None, qat_epochs=qat_epochs,
-                       device=device)
+                       device=device, lr=lr)
     progress = _progress(quiet or json_out)  # started by the trainer once the data are loaded and checked
     result = finetune(req, progress) if req.qat_from else train(req, progress)
     if json_out:

@@ -116,14 +116,3 @@ def load_dataset(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, dict[
     _validate(inputs, labels, meta, f)
     return inputs, labels, meta
 
-
-def stratified_split(labels: np.ndarray, test_fraction: float = 0.2, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Stratified train/test indices (scikit-learn ``train_test_split``), sorted."""
-    from sklearn.model_selection import train_test_split
-
-    idx = np.arange(len(labels))
-    try:
-        tr, te = train_test_split(idx, test_size=test_fraction, stratify=labels, random_state=seed)
-    except ValueError as ex:  # too few samples per class for a stratified split
-        raise SnnccError(f"cannot split stratified: {ex}", field="--split-test") from None
-    return np.sort(tr), np.sort(te)

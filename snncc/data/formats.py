@@ -11,9 +11,10 @@ Layouts (spec: braille.md, "Published file formats"):
 
 Label = index in ``['Space', 'A', ..., 'Z']``. Extra columns (e.g. ``timestamp``) are ignored.
 
-Security: the published files are pickles, so they are read with ``pandas.read_pickle`` (which can
-run code embedded in a malicious pickle). Only load data files you trust, exactly as with the
-authors' own scripts. snncc never unpickles model files this way.
+Security: the published files are pickles. They are read with a restricted unpickler
+(:mod:`snncc.data.safe_pickle`) that rebuilds only lists, dicts, numpy arrays and pandas DataFrames
+and refuses any other name a pickle asks for, before calling it: a file from the internet cannot
+run code through snncc.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from snncc.atomic import atomic_path
+from snncc.data.safe_pickle import load_published_pickle
 from snncc.data.letters import CLASSES, N_TAXELS, label_of
 from snncc.data.sigma_delta import Events
 from snncc.errors import SnnccError
@@ -63,24 +65,6 @@ class EventSet:
 
 
 # --------------------------------------------------------------------------- reading
-
-
-def _read_pickle(path: Path) -> Any:
-    if not path.exists():
-        raise SnnccError("file not found", file=str(path))
-    if path.is_dir():
-        raise SnnccError("expected a .pkl file, got a directory", file=str(path))
-    try:
-        import pandas as pd
-
-        return pd.read_pickle(path)
-    except SnnccError:
-        raise
-    except Exception as ex:  # any unpickling failure is a bad file, never a traceback
-        raise SnnccError(
-            f"not a readable pickle of the published Braille format ({type(ex).__name__})",
-            file=str(path),
-        ) from None
 
 
 def _records(obj: Any, path: Path, needed: str) -> tuple[list, list, int]:
@@ -132,7 +116,7 @@ def _labels(letters: Sequence, f: str) -> np.ndarray:
 def _samples(path: str | os.PathLike, key: str) -> tuple[np.ndarray, Sequence, str]:
     """(labels, per-sample ``key`` payloads, release) of a published pickle; no samples is an error."""
     path = Path(path)
-    letters, payload, release = _records(_read_pickle(path), path, key)
+    letters, payload, release = _records(load_published_pickle(path), path, key)
     if not letters:
         raise SnnccError("no samples", file=str(path), field=key)
     return _labels(letters, str(path)), payload, release
@@ -218,7 +202,7 @@ def sniff(path: str | os.PathLike) -> str:
     import pandas as pd
 
     path = Path(path)
-    obj = _read_pickle(path)
+    obj = load_published_pickle(path)
     if isinstance(obj, pd.DataFrame):
         cols = set(map(str, obj.columns))
     elif isinstance(obj, dict):

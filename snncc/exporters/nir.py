@@ -16,6 +16,8 @@ the readout, node order, graph metadata -- is stored as JSON under the graph-met
 
 from __future__ import annotations
 
+import io
+
 import json
 import math
 from dataclasses import dataclass, field
@@ -24,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from snncc.atomic import atomic_path
+from snncc.atomic import write_bytes_atomic
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
@@ -206,8 +208,11 @@ def export_nir(graph: Graph, path: str | Path, step: float | None = None) -> Exp
 
     nir_graph, report = graph_to_nir(graph, step=step)
     path = Path(path)
-    with atomic_path(path) as tmp:
-        nir.write(str(tmp), nir_graph)
+    # Serialised in memory first: HDF5 writing straight to a file crashes the process (SIGSEGV)
+    # when the disk fills; a plain write of the finished bytes fails cleanly with ENOSPC instead.
+    buf = io.BytesIO()
+    nir.write(buf, nir_graph)
+    write_bytes_atomic(path, buf.getvalue())
     report.output = str(path)
     return report
 

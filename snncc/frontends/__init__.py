@@ -30,6 +30,22 @@ class LoadOptions:
 
 Loader = Callable[[Path, LoadOptions], Graph]
 
+# which input formats each load option applies to (a given option the file cannot use is refused)
+OPTION_USE = {
+    "params": ("--params", "a SpyTorch weight list (the authors' [W_in, W_out(, V_rec)])"),
+    "dt": ("--dt", "NIR graphs (NIR stores no time step)"),
+    "reset": ("--reset", "NIR graphs (NIR does not say whether a reset subtracts)"),
+}
+
+
+def refuse_options(options: LoadOptions | None, accepted: tuple[str, ...], what: str, path: str | Path) -> None:
+    """Refuse every load option given by the user that a file of kind ``what`` cannot use."""
+    if options is None:
+        return
+    for key, (flag, applies_to) in OPTION_USE.items():
+        if key not in accepted and getattr(options, key) is not None:
+            raise SnnccError(f"does not apply to {what}; it applies only to {applies_to}", file=str(path), field=flag)
+
 # suffix -> "module:function" (imported on first use) or a callable
 _LOADERS: dict[str, str | Loader] = {
     ".snnir": "snncc.frontends.ir_file:load",
@@ -71,9 +87,33 @@ def load_model(path: str | Path, options: LoadOptions | None = None) -> Graph:
         validate(graph)
     except SnnccError as err:
         raise err.with_file(str(path)) from None
+    check_loaded(graph, str(path))
     graph.metadata.setdefault("source_file", path.name)
     graph.metadata["source_sha256"] = file_sha256(path)
     return graph
+
+
+def check_loaded(graph: Graph, source: str) -> None:
+    """Rules every loader shares after validation: the sample length is bounded, all-zero weights noted.
+
+    An all-zero network is legal (it never spikes from its input), so it is accepted by every
+    loader with a note rather than refused by some and not others.
+    """
+    from snncc.ir.nodes import LSTM, Dense
+    from snncc.limits import check_time_steps
+
+    length = graph.metadata.get("recording_length_s")
+    if isinstance(length, (int, float)) and not isinstance(length, bool) and length > 0:
+        check_time_steps(float(length) / graph.dt, f"dt = {graph.dt:g} s over the {length:g} s recording",
+                         file=source, field="dt")
+    weights = [op.weight for _, op in graph.items() if isinstance(op, Dense)]
+    weights += [w for _, op in graph.items() if isinstance(op, LSTM) for w in (op.weight_ih, op.weight_hh)]
+    if weights and not any(w.any() for w in weights):
+        note = ("all weights are zero: the network is legal but its output never depends on its input "
+                "(a Loihi bundle stores it with the smallest weight scale)")
+        notes = graph.metadata.setdefault("import_notes", [])
+        if note not in notes:
+            notes.append(note)
 
 
 def graph_from_object(obj: Any, source: str = "<object>", options: LoadOptions | None = None) -> Graph:

@@ -42,6 +42,9 @@ per-neuron differing delays are refused). Every other edge is delay 0 (snnTorch 
 evaluate a feed-forward chain within one step), except that a cycle with no Delay node on it gets
 delay 1 on the edge leaving its last neuron population before the loop closes -- snnTorch's
 RSynaptic/RLeaky and Norse's recurrent cells feed back the PREVIOUS step's spikes.
+Convolutional nodes (Conv1d, Conv2d, SumPool2d, AvgPool2d) become IR Conv nodes and Flatten is the
+identity: ``frontends/nir_conv.py`` states the rules. A graph whose neurons are all IF/I (no time
+constant) and that states no dt runs at dt = 1 (one NIR time unit per step), said in its notes.
 Sub-graphs (nested NIRGraph nodes, edges addressed as ``sub`` or ``sub.node``) are flattened;
 node names become dotted paths (snnTorch's RSynaptic sub-graph "lif1" gives "lif1.lif", "lif1.w_rec").
 """
@@ -57,15 +60,17 @@ from typing import Any
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.frontends import nir_conv
+from snncc.limits import check_real
 from snncc.ir.graph import Graph
-from snncc.ir.nodes import LIF, RESETS, Dense, Input, Output, Readout
+from snncc.ir.nodes import LIF, RESETS, Conv, Dense, Input, Output, Readout
 
 SNNCC_KEY = "snncc"          # graph-metadata key of the record snncc's exporter writes
 RECORD_FORMAT = "snncc-nir"
 GAIN_SNAP = 1e-9             # |gain - 1| below this is float noise of an r = tau/dt export
 NO_LEAK_TAU = 1e30           # IF/I: 1 - dt/1e30 == 1.0 exactly in float64
 SUPPORTED = ("Input", "Output", "Affine", "Linear", "Scale", "Delay", "Flatten", "LIF", "CubaLIF",
-             "LI", "CubaLI", "I", "IF", "Threshold", "NIRGraph")
+             "LI", "CubaLI", "I", "IF", "Threshold", "NIRGraph") + nir_conv.KINDS
 PASS_THROUGH = ("Delay", "Flatten", "SubInput", "SubOutput")
 RESET_CHOICES = RESETS + ("zero-delayed",)   # zero-delayed: snnTorch's default late zero reset
 
@@ -140,6 +145,7 @@ def _arr(node: Any, attr: str, name: str) -> np.ndarray:
     value = getattr(node, attr, None)
     if value is None:
         raise SnnccError(f"missing parameter {attr}", field=f"node '{name}'.{attr}")
+    check_real(value, field=f"node '{name}'.{attr}")
     arr = np.asarray(value, dtype=np.float64).reshape(-1)
     if not np.all(np.isfinite(arr)) and attr not in ("v_threshold", "threshold"):
         raise SnnccError("contains NaN or Inf", field=f"node '{name}'.{attr}")
@@ -304,6 +310,9 @@ class _Builder:
                 width = int(np.prod(np.asarray(node.output_type["output"]).reshape(-1)))
                 self.ops[name] = Output(width=width)
             elif kind in ("Affine", "Linear"):
+                check_real(node.weight, field=f"node '{name}'.weight")
+                if kind == "Affine" and node.bias is not None:
+                    check_real(node.bias, field=f"node '{name}'.bias")
                 w = np.asarray(node.weight, dtype=np.float64)
                 if w.ndim != 2:
                     raise SnnccError(f"weight must be 2-D (out, in), got shape {w.shape}", field=f"node '{name}'.weight")
@@ -313,6 +322,8 @@ class _Builder:
                 self.ops[name] = Dense(weight=w, bias=bias)
             elif kind == "Scale":
                 self.ops[name] = Dense(weight=np.diag(_arr(node, "scale", name)))
+            elif kind in nir_conv.KINDS:
+                self.ops[name] = nir_conv.convert(name, kind, node, self.flat.nodes, self.flat.kinds, self._preds())
             elif kind == "Delay":
                 self.through[name] = _delay_steps(name, node, self.dt)
             elif kind in ("Flatten", "SubInput", "SubOutput"):
@@ -320,6 +331,12 @@ class _Builder:
             else:
                 neuron = _neuron(name, kind, node, self.dt, self.reset, self.check_step)
                 self.ops[name], self.ports[name], self.gains[name] = neuron.lif, neuron.port, neuron.gain
+
+    def _preds(self) -> dict[str, list[str]]:
+        preds: dict[str, list[str]] = {}
+        for u, v in self.flat.edges:
+            preds.setdefault(v, []).append(u)
+        return preds
 
     def contract(self) -> None:
         """Edges between IR nodes, summing the delays of the pass-through nodes on each path."""
@@ -377,8 +394,11 @@ class _Builder:
                     continue
                 op = self.ops[u]
                 sole = [w for (x, w) in self.edges if x == u] == [name]
+                scaled = nir_conv.scaled_rows(op, gain) if isinstance(op, Conv) and sole else None
                 if isinstance(op, Dense) and sole:
                     self.ops[u] = Dense(weight=gain[:, None] * op.weight, bias=None if op.bias is None else gain * op.bias)
+                elif scaled is not None:
+                    self.ops[u] = scaled
                 else:
                     gname = f"{name}.gain_from_{u}"
                     self.ops[gname] = Dense(weight=np.diag(gain))
@@ -487,6 +507,9 @@ def graph_from_nir(nir_graph: Any, dt: float | None = None, reset: str | None = 
     elif _graph_meta_dt(nir_graph) is not None:
         step = _graph_meta_dt(nir_graph)
         notes.append(f"dt = {step:g} s taken from the graph's metadata")
+    elif nir_conv.non_leaky_only(flat.kinds):
+        step = 1.0
+        notes.append(nir_conv.NON_LEAKY_DT_NOTE)
     else:
         step = infer_dt(flat)
         notes.append(f"dt = {step:g} s inferred from the snnTorch convention r = tau_mem/dt (pass --dt to override)")
@@ -544,17 +567,49 @@ def graph_from_nir(nir_graph: Any, dt: float | None = None, reset: str | None = 
     return g
 
 
+def check_declared_sizes(path: Path) -> None:
+    """Refuse a NIR file whose HDF5 datasets declare more bytes than fit in memory, before nir.read
+    allocates them (a small file can declare a huge dataset that is never written)."""
+    import h5py
+
+    from snncc.limits import check_memory
+
+    try:
+        f = h5py.File(path, "r")
+    except (OSError, RuntimeError, ValueError):
+        return   # nir.read reports what the file is not
+    with f:
+        sizes: list[tuple[str, int]] = []
+        f.visititems(lambda key, obj: sizes.append((key, int(obj.size) * obj.dtype.itemsize))
+                     if isinstance(obj, h5py.Dataset) else None)
+    for key, n_bytes in sizes:
+        check_memory(n_bytes, f"the declared dataset /{key}", file=str(path), field=f"/{key}")
+    check_memory(sum(n for _, n in sizes), "the file's declared datasets together", file=str(path), field="/")
+
+
 def load(path: Path, options: Any) -> Graph:
     """Frontend entry for ``.nir`` files (``load_model`` validates the result)."""
     import nir
 
+    from snncc.frontends import refuse_options
+
+    refuse_options(options, ("dt", "reset"), "a NIR graph", path)
+    check_declared_sizes(path)
+    legacy_notes: list[str] = []
     try:
         nir_graph = nir.read(str(path), type_check=False)
     except Exception as ex:  # the nir/h5py readers raise assorted types on damaged files
+        from snncc.frontends.nir_legacy import read_legacy
+
         detail = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
-        raise SnnccError(f"not a readable NIR graph ({detail})", file=str(path), field="format") from None
+        try:
+            nir_graph, legacy_notes = read_legacy(path)   # an older NIR file whose meaning is unambiguous
+        except SnnccError:
+            raise SnnccError(f"not a readable NIR graph ({detail})", file=str(path), field="format") from None
     try:
-        return graph_from_nir(nir_graph, dt=options.dt, reset=options.reset, source=str(path))
+        g = graph_from_nir(nir_graph, dt=options.dt, reset=options.reset, source=str(path))
+        g.metadata["import_notes"] = legacy_notes + list(g.metadata.get("import_notes", []))
+        return g
     except (ValueError, TypeError, AttributeError, KeyError, IndexError) as ex:  # malformed node fields
         detail = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
         raise SnnccError(f"malformed NIR graph ({type(ex).__name__}: {detail})", file=str(path), field="graph") from None

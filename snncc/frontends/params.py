@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from snncc.errors import SnnccError
+from snncc.limits import check_time_steps
 
 KEYS = ("scale", "time_bin_size", "nb_input_copies", "tau_mem", "tau_ratio",
         "fwd_weight_scale", "weight_scale_factor", "reg_spikes", "reg_neurons")
@@ -76,6 +77,9 @@ def parse_params(text: str, source: str = "<params>") -> PaperParams:
     for key in ("fwd_weight_scale", "weight_scale_factor", "reg_spikes", "reg_neurons"):
         if values[key] < 0:
             raise SnnccError("must not be negative", file=source, field=key)
+    check_time_steps(RECORDING_LENGTH_S * 1000.0 / values["time_bin_size"],
+                     f"time_bin_size {values['time_bin_size']:g} ms over the {RECORDING_LENGTH_S} s Braille recording",
+                     file=source, field="time_bin_size")
     copies = values["nb_input_copies"]
     if copies != int(copies):
         raise SnnccError("must be a whole number", file=source, field="nb_input_copies")

@@ -15,6 +15,7 @@ import numpy as np
 import torch
 
 from snncc.errors import SnnccError
+from snncc.limits import check_real
 from snncc.frontends.builders import BRAILLE_CLASSES, snn_graph
 from snncc.frontends.params import RECORDING_LENGTH_S, PaperParams, load_params
 from snncc.ir.graph import Graph
@@ -29,6 +30,7 @@ def is_weight_list(obj: Any) -> bool:
 def weight_list_to_graph(weights: list, params: PaperParams, source: str = "<weights>", order: str = "spytorch") -> Graph:
     arrays = []
     for name, t in zip(NAMES, weights):
+        check_real(t, file=source, field=name)
         a = t.detach().to("cpu", torch.float64).numpy()
         if a.ndim != 2:
             raise SnnccError(f"must be a 2-D matrix, got shape {tuple(a.shape)}", file=source, field=name)
@@ -46,8 +48,6 @@ def weight_list_to_graph(weights: list, params: PaperParams, source: str = "<wei
     k = params.nb_input_copies
     if n_in % k:
         raise SnnccError(f"W_in has {n_in} inputs, not a multiple of nb_input_copies = {k}", file=source, field="W_in")
-    if all(not np.any(a) for a in arrays):
-        raise SnnccError("all weights are zero", file=source, field="weights")
     n_out = w_out.shape[1]
     meta = {
         "source_format": "spytorch-weight-list",

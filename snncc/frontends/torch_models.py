@@ -13,15 +13,26 @@ from snncc.frontends.module import graph_from_module
 from snncc.frontends.spytorch import is_weight_list, load_weight_list
 from snncc.frontends.torchfile import load_torch_file
 from snncc.ir.graph import Graph
+from snncc.models.baselines import BufferedClassifier
 
 
 def from_object(obj: Any, path: Path, options) -> Graph:
+    from snncc.frontends import refuse_options
+
     if isinstance(obj, torch.nn.Module):
+        refuse_options(options, (), "an snncc model, whose architecture states dt and reset", path)
         return graph_from_module(obj)
     if is_checkpoint(obj):
+        refuse_options(options, (), "an snncc checkpoint, whose architecture record states dt and reset", path)
         module = module_from_checkpoint(obj, source=str(path))
+        if isinstance(module, BufferedClassifier):
+            raise SnnccError(f"a {module.config.kind} (convolutional, buffered) has no IR graph: compile it with "
+                             "--target jetson (checked against PyTorch in ONNX Runtime)", file=str(path),
+                             field="architecture.kind")
         return graph_from_module(module, metadata={**model_metadata(obj), "source_format": "snncc-checkpoint"})
     if is_weight_list(obj):
+        refuse_options(options, ("params",), "a SpyTorch weight list, whose parameters file (--params) states dt "
+                       "and whose reset is the authors' (to zero)", path)
         return load_weight_list(obj, path, options.params)
     if isinstance(obj, dict) and all(isinstance(v, torch.Tensor) for v in obj.values()):
         raise SnnccError("a bare state dict has no architecture record; save an snncc checkpoint "

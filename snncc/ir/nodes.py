@@ -94,6 +94,72 @@ class Dense(Node):
         return int(self.weight.shape[1])
 
 
+def _ints(value: Any, dims: int, name: str) -> tuple[int, ...]:
+    """A per-dimension integer parameter: one int for every spatial dimension, or one each."""
+    arr = np.asarray(value).reshape(-1)
+    if arr.size == 1 and dims != 1:
+        arr = np.repeat(arr, dims)
+    if arr.size != dims or not np.all(np.equal(np.mod(arr, 1), 0)):
+        raise ValueError(f"{name} must be {dims} integer(s), got {value!r}")
+    return tuple(int(a) for a in arr)
+
+
+@dataclass(eq=False)
+class Conv(Node):
+    """Convolution over a C-order flattened (C, *spatial) map, 1 to 3 spatial dims (PyTorch's convNd:
+    cross-correlation, zero padding, no kernel flip).
+
+    y[o, p] = b[o] + sum_{c < C/groups} sum_k W[o, c, k] * x[g(o)*C/groups + c, p*stride - padding + k*dilation]
+    with g(o) = o // (O/groups), x = 0 outside the input, per spatial dim
+    out = floor((in + 2*padding - dilation*(kernel - 1) - 1) / stride) + 1.
+    ``in_shape`` = (C, *spatial). Pooling is this node with a fixed kernel (sum: ones, one group per
+    channel; average: 1/kernel size, zero padding counted, as PyTorch's count_include_pad).
+    """
+
+    kind: ClassVar[str] = "Conv"
+    weight: np.ndarray                      # (O, C/groups, *kernel)
+    in_shape: tuple = ()
+    stride: tuple = ()
+    padding: tuple = ()
+    dilation: tuple = ()
+    groups: int = 1
+    bias: np.ndarray | None = None          # (O,)
+
+    def __post_init__(self) -> None:
+        self.weight = _matrix(self.weight)
+        self.in_shape = tuple(int(v) for v in np.asarray(self.in_shape).reshape(-1))
+        dims = max(self.weight.ndim - 2, 0)
+        self.stride = _ints(self.stride if np.size(self.stride) else 1, dims, "stride")
+        self.padding = _ints(self.padding if np.size(self.padding) else 0, dims, "padding")
+        self.dilation = _ints(self.dilation if np.size(self.dilation) else 1, dims, "dilation")
+        self.groups = int(self.groups)
+        if self.bias is not None:
+            self.bias = _vector(self.bias, self.weight.shape[0] if self.weight.ndim else 1)
+
+    @property
+    def spatial_dims(self) -> int:
+        return self.weight.ndim - 2
+
+    @property
+    def kernel(self) -> tuple[int, ...]:
+        return tuple(int(k) for k in self.weight.shape[2:])
+
+    @property
+    def out_shape(self) -> tuple[int, ...]:
+        spatial = tuple(
+            (n + 2 * p - d * (k - 1) - 1) // max(s, 1) + 1   # (stride 0 is refused by validation)
+            for n, p, d, k, s in zip(self.in_shape[1:], self.padding, self.dilation, self.kernel, self.stride))
+        return (int(self.weight.shape[0]),) + spatial
+
+    @property
+    def size(self) -> int:
+        return int(np.prod(self.out_shape))
+
+    @property
+    def in_size(self) -> int:
+        return int(np.prod(self.in_shape))
+
+
 @dataclass(eq=False)
 class LIF(Node):
     """Current-based leaky integrate-and-fire population, integrate then fire.
@@ -206,11 +272,12 @@ class Output(Node):
 
 
 NODE_TYPES: dict[str, type[Node]] = {
-    cls.kind: cls for cls in (Input, Dense, LIF, LSTM, Readout, Output)
+    cls.kind: cls for cls in (Input, Dense, Conv, LIF, LSTM, Readout, Output)
 }
 STATEFUL = (LIF, LSTM)
+LINEAR = (Dense, Conv)   # stateless linear maps: y[t] = A x[t] (+ b)
 
 __all__ = [
-    "Node", "Input", "Dense", "LIF", "LSTM", "Readout", "Output", "NODE_TYPES", "STATEFUL",
+    "Node", "Input", "Dense", "Conv", "LINEAR", "LIF", "LSTM", "Readout", "Output", "NODE_TYPES", "STATEFUL",
     "RESETS", "DISCRETISATIONS", "BIAS_PLACEMENTS", "READOUT_MODES", "INPUT_KINDS",
 ]

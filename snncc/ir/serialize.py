@@ -15,6 +15,7 @@ import numpy as np
 
 from snncc.atomic import atomic_path
 from snncc.errors import SnnccError
+from snncc.limits import check_memory, check_real, whole_number
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import NODE_TYPES
 
@@ -66,9 +67,16 @@ def graph_from_record(record: dict[str, Any], arrays: dict[str, np.ndarray]) -> 
                     raise SnnccError("array missing from file", field=value["array"])
                 value = arrays[value["array"]]
             kwargs[key] = value
+        for key in ("n", "width"):
+            if key in kwargs:
+                count = whole_number(kwargs[key], field=f"node {entry.get('name')!r}.{key}")
+                check_memory(8 * count, f"a node of {count:,} units", field=f"node {entry.get('name')!r}.{key}")
+        for key, value in kwargs.items():
+            if isinstance(value, np.ndarray):
+                check_real(value, field=f"node {entry.get('name')!r}.{key}")
         try:
             op = cls(**kwargs)
-        except TypeError as ex:
+        except (TypeError, ValueError) as ex:
             raise SnnccError(f"fields do not match a {cls.kind} node ({ex})", field=f"node {entry.get('name')!r}") from None
         g.add(entry["name"], op)
     for e in record["edges"]:
@@ -96,6 +104,10 @@ def load_graph(path: str | Path) -> Graph:
     path = Path(path)
     try:
         with zipfile.ZipFile(path) as zf:
+            for info in zf.infolist():
+                check_memory(info.file_size, f"the archive member {info.filename} (unpacked)", field=info.filename)
+            check_memory(sum(i.file_size for i in zf.infolist()), "the archive's members together (unpacked)",
+                         field="graph.json")
             record = json.loads(zf.read("graph.json"))
             arrays = {}
             for item in zf.namelist():

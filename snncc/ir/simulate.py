@@ -8,8 +8,10 @@ output of step t - d (zeros before t = 0). Node equations are those in ``snncc.i
           s = V > theta;  V <- 0 | V - theta where s;  refractory counter <- r - 1 where s
     LSTM: PyTorch's cell, gate order i, f, g, o
 
-Parts of the graph fed only by inputs through Dense nodes (no state) are computed for the
-whole sequence at once before the time loop.
+    Dense: y = W x (+b);  Conv: PyTorch's convNd on the C-order flattened map (``snncc.ir.conv``)
+
+Parts of the graph fed only by inputs through linear nodes (Dense, Conv; no state) are computed
+for the whole sequence at once before the time loop.
 """
 
 from __future__ import annotations
@@ -22,7 +24,8 @@ import torch
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
+from snncc.ir.conv import conv_apply
+from snncc.ir.nodes import LIF, LINEAR, LSTM, Conv, Dense, Input, Output, Readout
 
 RECORD_CHOICES = ("outputs", "spikes", "all")
 
@@ -65,13 +68,29 @@ def _schedule(g: Graph) -> list[str]:
 
 
 def _static_nodes(g: Graph) -> set[str]:
-    """Nodes whose output depends only on inputs through stateless Dense maps."""
+    """Nodes whose output depends only on inputs through stateless linear maps."""
     static: set[str] = set()
-    for name in nx.topological_sort(g.nx.subgraph([n for n, op in g.items() if isinstance(op, (Input, Dense))])):
+    for name in nx.topological_sort(g.nx.subgraph([n for n, op in g.items() if isinstance(op, (Input,) + LINEAR)])):
         op = g.node(name)
         if isinstance(op, Input) or all(p in static for p in g.predecessors(name)):
             static.add(name)
     return static
+
+
+SPARSE_MIN_SIZE = 1 << 20      # Dense weights this large and at most a quarter nonzero run as sparse
+SPARSE_MAX_DENSITY = 0.25      # products (same sums, another summation order)
+
+
+def _weight_tensor(op, dtype: torch.dtype) -> torch.Tensor:
+    w = torch.as_tensor(op.weight, dtype=dtype)
+    if isinstance(op, Dense) and w.numel() >= SPARSE_MIN_SIZE and \
+            int(torch.count_nonzero(w)) <= SPARSE_MAX_DENSITY * w.numel():
+        import warnings
+
+        with warnings.catch_warnings():   # torch calls its sparse CSR support beta; products are plain
+            warnings.simplefilter("ignore", UserWarning)
+            return w.to_sparse_csr()
+    return w
 
 
 def _shift(x: torch.Tensor, d: int) -> torch.Tensor:
@@ -91,9 +110,9 @@ class _Runner:
         self.static = _static_nodes(g)
         self.t_ = {}  # torch copies of parameters
         for name, op in g.items():
-            if isinstance(op, Dense):
+            if isinstance(op, LINEAR):
                 self.t_[name] = (
-                    torch.as_tensor(op.weight, dtype=dtype),
+                    _weight_tensor(op, dtype),
                     None if op.bias is None else torch.as_tensor(op.bias, dtype=dtype),
                 )
             elif isinstance(op, LIF):
@@ -113,6 +132,19 @@ class _Runner:
                     torch.as_tensor(b, dtype=dtype),
                 )
 
+    def linear(self, name: str, x: torch.Tensor) -> torch.Tensor:
+        """A Dense or Conv node applied to (..., in) -> (..., out)."""
+        op = self.g.node(name)
+        w, b = self.t_[name]
+        if isinstance(op, Conv):
+            return conv_apply(op, x, w, b)
+        if w.layout == torch.sparse_csr:    # y^T = W x^T, W sparse (a folded convolution)
+            flat = x.reshape(-1, x.shape[-1])
+            y = (w @ flat.T).T.reshape(tuple(x.shape[:-1]) + (w.shape[0],))
+        else:
+            y = x @ w.T
+        return y if b is None else y + b
+
     def run(self, inputs: dict[str, torch.Tensor]) -> SimulationResult:
         g = self.g
         batch, steps = next(iter(inputs.values())).shape[:2]
@@ -125,9 +157,7 @@ class _Runner:
                 full[name] = inputs[name]
             else:
                 (src,) = g.predecessors(name)
-                w, b = self.t_[name]
-                y = _shift(full[src], g.delay(src, name)) @ w.T
-                full[name] = y if b is None else y + b
+                full[name] = self.linear(name, _shift(full[src], g.delay(src, name)))
 
         dynamic = [n for n in self.order if n not in self.static]
         # per-step histories of dynamic nodes' outputs: hist[(node, port)][t]
@@ -146,7 +176,7 @@ class _Runner:
                 z = torch.zeros(batch, op.hidden_size, dtype=self.dtype)
                 state[name] = {"h": z, "c": z.clone()}
             static_preds = [p for p in g.predecessors(name) if p in self.static]
-            if static_preds and isinstance(op, (LIF, Readout, Output, Dense, LSTM)):
+            if static_preds and isinstance(op, (LIF, Readout, Output, LSTM) + LINEAR):
                 static_drive[name] = sum(_shift(full[p], g.delay(p, name)) for p in static_preds)
 
         want_state = self.record == "all"
@@ -173,10 +203,8 @@ class _Runner:
         for t in range(steps):
             for name in dynamic:
                 op = g.node(name)
-                if isinstance(op, Dense):
-                    w, b = self.t_[name]
-                    y = drive(name, t, op.in_size) @ w.T
-                    out = {"spikes": y if b is None else y + b}
+                if isinstance(op, LINEAR):
+                    out = {"spikes": self.linear(name, drive(name, t, op.in_size))}
                 elif isinstance(op, LIF):
                     alpha, beta, theta, bias = self.t_[name]
                     st = state[name]

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from snncc.ir.graph import Graph
-from snncc.ir.nodes import LIF, LSTM, Dense, Input, Readout
+from snncc.ir.nodes import LIF, LSTM, Conv, Dense, Input, Readout
 
 
 def _uniform(arr: np.ndarray) -> float | list[float]:
@@ -21,6 +21,11 @@ def node_summary(g: Graph, name: str) -> dict[str, Any]:
         row["signal"] = op.signal
     elif isinstance(op, Dense):
         row.update(shape=list(op.weight.shape), parameters=int(op.weight.size + (0 if op.bias is None else op.bias.size)),
+                   max_abs_weight=float(np.max(np.abs(op.weight))), bias=op.bias is not None)
+    elif isinstance(op, Conv):
+        row.update(in_shape=list(op.in_shape), out_shape=list(op.out_shape), kernel=list(op.weight.shape),
+                   stride=list(op.stride), padding=list(op.padding), dilation=list(op.dilation), groups=op.groups,
+                   parameters=int(op.weight.size + (0 if op.bias is None else op.bias.size)),
                    max_abs_weight=float(np.max(np.abs(op.weight))), bias=op.bias is not None)
     elif isinstance(op, LIF):
         alpha, beta = op.decays(g.dt)

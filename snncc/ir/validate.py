@@ -21,6 +21,7 @@ from snncc.ir.nodes import (
     LSTM,
     READOUT_MODES,
     RESETS,
+    Conv,
     Dense,
     Input,
     Node,
@@ -125,9 +126,34 @@ def _check_readout(name: str, op: Readout) -> None:
         _fail(f"mode must be one of {READOUT_MODES}", f"node '{name}'.mode")
 
 
+def _check_conv(name: str, op: Conv) -> None:
+    where = f"node '{name}'"
+    dims = op.spatial_dims
+    if not 1 <= dims <= 3 or 0 in op.weight.shape:
+        _fail(f"weight must be (out, in/groups, *kernel) with 1 to 3 kernel dims, got shape {op.weight.shape}",
+              f"{where}.weight")
+    _finite(name, "weight", op.weight)
+    if len(op.in_shape) != dims + 1 or min(op.in_shape) < 1:
+        _fail(f"in_shape must be (channels, {dims} spatial size(s)), all >= 1, got {op.in_shape}", f"{where}.in_shape")
+    if op.groups < 1 or op.weight.shape[0] % op.groups:
+        _fail(f"groups must be >= 1 and divide the {op.weight.shape[0]} output channels", f"{where}.groups")
+    if op.in_shape[0] != op.weight.shape[1] * op.groups:
+        _fail(f"{op.in_shape[0]} input channels, but weight has {op.weight.shape[1]} per group x {op.groups} groups",
+              f"{where}.in_shape")
+    for fname, low in (("stride", 1), ("dilation", 1), ("padding", 0)):
+        if len(getattr(op, fname)) != dims or min(getattr(op, fname)) < low:
+            _fail(f"must be {dims} integer(s) >= {low}", f"{where}.{fname}")
+    if min(op.out_shape[1:]) < 1:
+        _fail(f"the kernel (dilated) does not fit the padded input: output shape {op.out_shape}", f"{where}.weight")
+    if op.bias is not None and op.bias.shape != (op.weight.shape[0],):
+        _fail(f"bias must have one value per output channel ({op.weight.shape[0]},)", f"{where}.bias")
+    _finite(name, "bias", op.bias)
+
+
 NODE_CHECKS: dict[type[Node], Callable] = {
     Input: _check_input,
     Dense: _check_dense,
+    Conv: _check_conv,
     LIF: _check_lif,
     LSTM: _check_lstm,
     Readout: _check_readout,
@@ -154,7 +180,7 @@ def rule_edge_delays(g: Graph) -> None:
 
 
 def rule_fan_in(g: Graph) -> None:
-    """Inputs have no predecessors; Dense, LSTM, Readout, Output have exactly one; LIF >= 1."""
+    """Inputs have no predecessors; Dense, Conv, LSTM, Readout, Output have exactly one; LIF >= 1."""
     for name, op in g.items():
         preds = g.predecessors(name)
         if isinstance(op, Input):
@@ -170,7 +196,7 @@ def rule_fan_in(g: Graph) -> None:
 
 
 def _expected_in_width(op: Node) -> int:
-    if isinstance(op, Dense):
+    if isinstance(op, (Dense, Conv)):
         return op.in_size
     if isinstance(op, LSTM):
         return op.input_size

@@ -9,6 +9,10 @@
     iDecay  = int(4096 * (1 - exp(-dt / tau_syn)))         exp discretisation ("euler": int(4096*dt/tau))
     vDecay  = int(4096 * (1 - exp(-dt / tau_mem)))
     tSample = ceil(T_record / dt)
+    fine:   s = min(256 / max theta, 254 * 2**7 / max|W into the layer|)  (vThMant ~ 256: a chip
+            threshold of 2**14 leaves 2**9 x threshold of headroom in u and v, 2**7 in q per step);
+            e per synapse = the smallest in [-6, 7] that fits (a float with an 8-bit mantissa:
+            relative error <= 1/128 above 128 * 2**-6 chip units), decay registers rounded to nearest
 
 ``s`` is the layer's scale (the network's w_scale under the paper's global rule). Spikes are
 binary, so each layer may carry its own scale without changing the next layer's input.
@@ -30,6 +34,7 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
+from snncc.ir.timebase import recording_steps
 from snncc.ir.nodes import LIF, Dense
 from snncc.passes.current_bias import BiasTerm, current_biases, max_abs_bias, restore_biases
 
@@ -39,7 +44,9 @@ DECAY_ONE = 4096
 WGT_EXP_MIN, WGT_EXP_MAX = -6, 7     # below -6 the chip weight w_q * 2**(6+e) stops being an integer
 BIAS_MANT_MAX = 2**12 - 1            # Loihi 1: 13-bit signed bias mantissa
 BIAS_EXP_MAX = 7
-SCALE_RULES = ("global", "per-layer", "split", "auto")
+SCALE_RULES = ("global", "per-layer", "split", "fine", "auto")
+FINE_V_TH_MANT = 256                 # the fine rule's threshold mantissa (chip threshold 2**14)
+FINE_STEPS = (1.0, 1.125, 1.25, 1.375, 1.5, 1.625, 1.75, 1.875)   # scale multipliers auto measures (one octave)
 OUTLIER_RATIO = 20.0                 # |W| above 20x the median |W != 0| is an outlier
 
 
@@ -68,6 +75,20 @@ def synapse_exponents(values: np.ndarray, scale: float, fine: int, coarse: int) 
     return np.where((r >= WEIGHT_MIN) & (r <= WEIGHT_MAX), fine, coarse).astype(np.int64)
 
 
+def finest_exponents(values: np.ndarray, scale: float, low: int = WGT_EXP_MIN, high: int = WGT_EXP_MAX) -> np.ndarray:
+    """Per synapse: the smallest e in [low, high] where round(W * s / 2**e / 2) * 2 fits [-256, 254]
+    (``high`` where none does: that weight is clipped, and counted as such)."""
+    v = np.asarray(values, np.float64)
+    out = np.full(v.shape, high, np.int64)
+    todo = np.ones(v.shape, bool)
+    for e in range(low, high + 1):
+        r = np.round(v * (float(scale) / 2.0 ** e) / 2.0) * 2.0
+        fits = todo & (r >= WEIGHT_MIN) & (r <= WEIGHT_MAX)
+        out[fits] = e
+        todo &= ~fits
+    return out
+
+
 def bulk_max(values: np.ndarray, ratio: float = OUTLIER_RATIO) -> float:
     """max |W| over the weights within ``ratio`` x the median |W != 0| (the projection without outliers)."""
     a = np.abs(np.asarray(values, np.float64)).reshape(-1)
@@ -83,14 +104,16 @@ def clipped_to_254(weight: np.ndarray, w_scale: float, wgt_exp: int = 0) -> int:
     return int(np.count_nonzero((scaled > WEIGHT_MAX) | (scaled < WEIGHT_MIN)))
 
 
-def decay_register(dt: float, tau: float, discretisation: str = "exp") -> int:
-    """int(4096 * (1 - exp(-dt/tau))) for "exp", int(4096 * dt/tau) for "euler" (truncation)."""
+def decay_register(dt: float, tau: float, discretisation: str = "exp", rounding: str = "truncate") -> int:
+    """int(4096 * (1 - exp(-dt/tau))) for "exp", int(4096 * dt/tau) for "euler" (the paper truncates;
+    ``rounding="nearest"`` rounds instead, halving the worst decay error)."""
     if not (tau > 0 and dt > 0):
         raise SnnccError("time constants and dt must be positive", field="tau")
+    to_int = int if rounding == "truncate" else round
     if discretisation == "euler":
-        value = int(DECAY_ONE * dt / tau)
+        value = int(to_int(DECAY_ONE * dt / tau))
     elif discretisation == "exp":
-        value = int(DECAY_ONE * (1.0 - math.exp(-dt / tau)))
+        value = int(to_int(DECAY_ONE * (1.0 - math.exp(-dt / tau))))
     else:
         raise SnnccError(f"unknown discretisation {discretisation!r}", field="discretisation")
     if not 0 <= value <= DECAY_ONE:
@@ -112,8 +135,7 @@ def samples_steps(graph: Graph, input_steps: int | None = None) -> tuple[int, st
     """tSample = ceil(T_record / dt) with T_record from metadata, else the input length (steps)."""
     t_record = graph.metadata.get("recording_length_s")
     if t_record is not None:
-        # the small epsilon keeps 1.35 / 0.005 = 270.00000000000006 from becoming 271
-        return int(math.ceil(float(t_record) / graph.dt - 1e-9)), f"ceil({t_record} s / {graph.dt} s)"
+        return recording_steps(t_record, graph.dt), f"ceil({t_record} s / {graph.dt} s)"
     if input_steps is not None:
         return int(input_steps), "the input length"
     raise SnnccError("tSample needs graph.metadata['recording_length_s'] or an input length", field="recording_length_s")
@@ -137,9 +159,13 @@ class ProjectionQuant:
     bias_max_error: float | None = None                     # max |b_q * 2**e / s - b| over those columns
     wgt_exp_outliers: int | None = None    # split: the coarse exponent of the outlier synapses (wgt_exp: the fine one)
     outliers: int = 0                      # split: synapses (bias columns included) at the coarse exponent
+    per_synapse: bool = False              # fine: each synapse its finest exponent (wgt_exp: the smallest used)
+    exponents_used: list[int] = field(default_factory=list)   # fine: the distinct exponents (synapse formats)
 
     def exponents(self, values: np.ndarray):
-        """The exponent of each synapse carrying ``values``: one int, or an int array when split."""
+        """The exponent of each synapse carrying ``values``: one int, or an int array when split or fine."""
+        if self.per_synapse:
+            return finest_exponents(values, self.scale)
         if self.wgt_exp_outliers is None:
             return self.wgt_exp
         return synapse_exponents(values, self.scale, self.wgt_exp, self.wgt_exp_outliers)
@@ -161,9 +187,10 @@ class LayerQuant:
 
 @dataclass
 class QuantizationRecord:
-    rule: str                           # "global" | "per-layer" | "split" (per-layer, some projections split)
+    rule: str                           # "global" | "per-layer" | "split" (per-layer, some projections split) | "fine"
     reason: str
     w_scale: int | None                 # the network's scale under the global rule
+    fine_step: float | None = None      # fine: the multiplier of the layers' scales (FINE_STEPS)
     projections: list[ProjectionQuant] = field(default_factory=list)
     layers: list[LayerQuant] = field(default_factory=list)
     clipped_total: int = 0
@@ -221,18 +248,32 @@ def exponent_for(max_abs: float, scale: float) -> int:
     return int(min(max(e, WGT_EXP_MIN), WGT_EXP_MAX))
 
 
-def layer_scales(graph: Graph, rule: str) -> tuple[dict[str, float], int | None]:
+def layer_scales(graph: Graph, rule: str, fine_step: float = 1.0) -> tuple[dict[str, float], int | None]:
     """Per-LIF scale s: the paper's single w_scale, or floor(256 / max|W| into that layer)."""
     pairs = projections(graph)
     if not pairs:
         raise SnnccError("the graph has no Dense -> LIF projection to quantize", field="graph")
     maxima = {dense: projection_max(graph, dense, lif) for dense, lif in pairs}
     if all(m == 0 for m in maxima.values()):
-        raise SnnccError("all weights are zero: w_scale = 256 / max|W| is undefined", field="weights")
+        # 256 / max|W| is undefined; every scale stores zeros exactly, so take the smallest (1):
+        # an all-zero network is legal, and every loader accepts it with a note
+        return {lif: 1.0 for _, lif in pairs}, (1 if rule == "global" else None)
     if rule == "global":
         w_scale = weight_scale(max(maxima.values()))
         return {lif: float(w_scale) for _, lif in pairs}, w_scale
     scales: dict[str, float] = {}
+    if rule == "fine":
+        for _, lif in pairs:
+            op = graph.node(lif)
+            top = float(np.max(op.threshold)) if np.all(np.isfinite(op.threshold)) else 1.0
+            s = FINE_V_TH_MANT * fine_step / top if top > 0 else 1.0
+            m = max(maxima[d] for d, l in pairs if l == lif)
+            if m > 0:
+                s = min(s, WEIGHT_MAX * 2.0 ** WGT_EXP_MAX / m)
+            if op.bias is not None and op.bias_placement == "voltage" and np.max(np.abs(op.bias)) > 0:
+                s = min(s, BIAS_MANT_MAX * 2.0 ** BIAS_EXP_MAX / (64.0 * float(np.max(np.abs(op.bias)))))
+            scales[lif] = s
+        return scales, None
     for _, lif in pairs:
         m = max(maxima[d] for d, l in pairs if l == lif)
         scales[lif] = float(math.floor(256.0 / m)) if 0 < m <= 256 else 1.0
@@ -245,19 +286,25 @@ def quantize_graph(
     *,
     split: set[str] | frozenset[str] = frozenset(),
     reason: str = "",
+    fine_step: float = 1.0,
 ) -> tuple[Graph, QuantizationRecord]:
     """Quantize every projection and LIF of ``graph``; return (graph in quantized float units, record).
 
-    ``rule``: "global" (the paper: one w_scale, wgtExp 0) or "per-layer" (each LIF its own
-    integer scale, each projection the smallest weight exponent that fits 8 bits). Denses in
+    ``rule``: "global" (the paper: one w_scale, wgtExp 0), "per-layer" (each LIF its own
+    integer scale, each projection the smallest weight exponent that fits 8 bits) or "fine" (each
+    LIF a scale that puts its threshold mantissa near 256, each synapse its finest exponent,
+    decay registers rounded to nearest; ``fine_step`` in [1, 2) multiplies those scales: within an
+    octave every scale keeps the same precision, but rounds each weight differently). Denses in
     ``split`` get two exponents (``synapse_exponents``): outliers keep the coarse one, the bulk a
     finer one; the record's rule is then "split" if any projection was split.
     """
-    if rule not in ("global", "per-layer"):
+    if rule not in ("global", "per-layer", "fine"):
         raise SnnccError(f"scale rule must be one of {SCALE_RULES}", field="--scale")
+    rounding = "nearest" if rule == "fine" else "truncate"
     g = graph.copy()
-    scales, w_scale = layer_scales(graph, rule)
-    record = QuantizationRecord(rule=rule, reason=reason, w_scale=w_scale)
+    scales, w_scale = layer_scales(graph, rule, fine_step)
+    record = QuantizationRecord(rule=rule, reason=reason, w_scale=w_scale,
+                                fine_step=float(fine_step) if rule == "fine" else None)
     for dense, lif in projections(graph):
         w = graph.node(dense).weight
         s = scales[lif]
@@ -266,7 +313,12 @@ def quantize_graph(
         carried = current_biases(graph, lif) if bias_carrier(graph, lif) == dense else []
         pq = ProjectionQuant(dense=dense, target=lif, scale=s, wgt_exp=e, max_abs=max_abs, clipped=0, zeroed=0,
                              rms_error=0.0, range_used=float(max_abs * s / 2.0 ** e / 256.0))
-        if dense in split:
+        if rule == "fine":
+            values = np.concatenate([w.reshape(-1)] + [t.vector for t in carried])
+            used = np.unique(finest_exponents(values[values != 0], s)) if np.any(values != 0) else np.array([e])
+            pq.per_synapse, pq.exponents_used = True, [int(u) for u in used]
+            pq.wgt_exp, pq.range_used = int(used.min()), float(max_abs * s / 2.0 ** int(used.max()) / 256.0)
+        elif dense in split:
             values = np.concatenate([w.reshape(-1)] + [t.vector for t in carried])
             fine = exponent_for(bulk_max(values), s)
             if fine < e:
@@ -307,8 +359,8 @@ def quantize_graph(
             raise SnnccError("a non-spiking integrator (threshold +inf) has no Loihi equivalent here: Loihi "
                              "reads out spikes", field=f"node '{name}'.threshold")
         vth = per_neuron(op.threshold, lambda th: threshold_mantissa(th, s, name))
-        i_dec = per_neuron(op.tau_syn, lambda tau: decay_register(graph.dt, tau, op.discretisation))
-        v_dec = per_neuron(op.tau_mem, lambda tau: decay_register(graph.dt, tau, op.discretisation))
+        i_dec = per_neuron(op.tau_syn, lambda tau: decay_register(graph.dt, tau, op.discretisation, rounding))
+        v_dec = per_neuron(op.tau_mem, lambda tau: decay_register(graph.dt, tau, op.discretisation, rounding))
         lq = LayerQuant(lif=name, scale=s, v_th_mant=register_value(vth), i_decay=register_value(i_dec),
                         v_decay=register_value(v_dec))
         q = g.node(name)

@@ -2,15 +2,12 @@
 
 Spiking models and the eLSTM take binary events (N, T, 24) binned at the preset's time_bin_size;
 the LSTM takes inverted frames (N, T, 12) at 40 Hz. A directory of pickles is encoded on the fly
-with ``snncc data encode`` into a temporary file (nothing is left behind).
+in memory, exactly as ``snncc data encode`` / ``snncc data frames`` would (nothing is written).
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
 import math
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -52,28 +49,20 @@ class TrainingData:
 
 
 def _load_npz(path: Path) -> tuple[np.ndarray, np.ndarray, dict]:
-    try:
-        from snncc.data.dataset import load_dataset
-    except ImportError:
-        raise SnnccError("the Braille data-set loader (snncc.data.dataset) is not built yet", file=str(path),
-                         field="data") from None
+    from snncc.data.dataset import load_dataset
+
     return load_dataset(path)
 
 
 def _encode_directory(path: Path, kind: str, threshold: int, time_bin_size: float) -> tuple[np.ndarray, np.ndarray, dict]:
-    """``snncc data encode`` (events) or ``snncc data frames`` on a directory, into a temporary .npz."""
-    from snncc.cli import main  # registers every verb on the app
+    """Events (``snncc data encode``) or frames (``snncc data frames``) of a directory of pickles."""
+    from snncc.data.encoding import encode_events, frame_set
 
-    with tempfile.TemporaryDirectory(prefix="snncc-train-") as tmp:
-        out = Path(tmp) / "encoded.npz"
-        if kind in EVENT_KINDS:
-            argv = ["data", "encode", str(path), "--threshold", f"{threshold:g}", "--bin", f"{time_bin_size:g}"]
-        else:
-            argv = ["data", "frames", str(path)]
-        argv += ["-o", str(out), "--json"]
-        with contextlib.redirect_stdout(io.StringIO()):   # their summary is not ours to print
-            main.app(args=argv, prog_name="snncc", standalone_mode=False)
-        return _load_npz(out)
+    if kind in EVENT_KINDS:
+        encoded = encode_events(path, threshold, time_bin_size)
+    else:
+        encoded = frame_set(path)
+    return encoded.inputs, encoded.labels, encoded.meta
 
 
 def load_training_data(path: str | Path, kind: str, threshold: int, time_bin_size: float) -> TrainingData:
@@ -100,8 +89,8 @@ def load_training_data(path: str | Path, kind: str, threshold: int, time_bin_siz
             raise SnnccError(f"events binned at {data_bin} ms but the preset uses time_bin_size {time_bin_size:g} ms; "
                              f"re-encode or pass --set time_bin_size={data_bin}", file=str(path), field="meta.time_bin_size_ms")
     elif channels != 12:
-        raise SnnccError(f"lstm needs frames (12 taxels); this set has {channels} channels "
-                         "(use elstm for events)", file=str(path), field="inputs")
+        raise SnnccError(f"{kind} needs frames (12 taxels); this set has {channels} channels "
+                         "(use elstm, rsnn or ffsnn for events)", file=str(path), field="inputs")
     x = torch.from_numpy(np.ascontiguousarray(inputs))
     if kind not in EVENT_KINDS:
         x = x.to(torch.float32)

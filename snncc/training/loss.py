@@ -6,7 +6,8 @@ SNN (the authors' SpyTorch code), with spike counts c = sum_t S_out[b, t, :]::
          + reg_spikes  * mean_(batch, neurons) (sum_t S_hidden)
          + reg_neurons * mean_neurons ((sum_(batch, t) S_hidden)^2)
 
-LSTM / eLSTM: cross-entropy on the class scores of the last step.
+LSTM / eLSTM: cross-entropy on the class scores of the last step; the buffered classifiers:
+cross-entropy on their scores, Time-CNN: MSE of sigmoid scores against one-hot labels.
 Prediction of an SNN: argmax of the output spike counts, ties to the lowest index.
 """
 
@@ -41,6 +42,13 @@ def lstm_loss(scores: torch.Tensor, labels: torch.Tensor) -> LossParts:
     """Cross-entropy on class scores (B, n_classes)."""
     ce = F.cross_entropy(scores, labels)
     return LossParts(ce, float(ce.detach()), 0.0, 0.0)
+
+
+def mse_sigmoid_loss(scores: torch.Tensor, labels: torch.Tensor) -> LossParts:
+    """Time-CNN's loss: mean squared error of sigmoid(scores) against one-hot labels."""
+    target = F.one_hot(labels, scores.shape[1]).to(scores.dtype)
+    mse = F.mse_loss(torch.sigmoid(scores), target)
+    return LossParts(mse, float(mse.detach()), 0.0, 0.0)
 
 
 def spike_count_prediction(out_spikes: torch.Tensor) -> torch.Tensor:

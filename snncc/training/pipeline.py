@@ -15,14 +15,16 @@ from snncc.frontends.checkpoint import is_checkpoint, module_from_checkpoint, sa
 from snncc.frontends.params import PaperParams, load_params
 from snncc.frontends.torchfile import load_torch_file
 from snncc.models import SpikingClassifier, count_trainable
+from snncc.models.baselines import BASELINE_KINDS
+from snncc.training.baseline_presets import FAMILY
 from snncc.training.device import resolve_device
 from snncc.training.data import EVENT_KINDS, FRAME_DT_S, TrainingData, load_training_data, subset_indices
 from snncc.training.presets import OptimiserSettings, paper_preset, with_overrides
 from snncc.training.qat import loihi_quantization, quantized_forward
-from snncc.training.split import Split, stratified_split
+from snncc.data.split import Split, stratified_split
 from snncc.training.trainer import History, TrainSettings, accuracy, build_model, train_model
 
-KINDS = ("rsnn", "ffsnn", "lstm", "elstm")
+KINDS = ("rsnn", "ffsnn", "lstm", "elstm") + BASELINE_KINDS
 N_SNN_OUTPUTS = 28   # 27 letters + 1 spare class (the authors' network)
 
 
@@ -37,7 +39,8 @@ class TrainRequest:
     seed: int = 0
     order: str = "spytorch"
     val_fraction: float = 0.0
-    batch_size: int = 128
+    batch_size: int | None = None     # None: 128 (the paper's) or the baseline family's own
+    lr: float | None = None           # None: the paper's (Adamax 0.0015) or the baseline family's own
     overrides: dict = field(default_factory=dict)
     params_file: str | None = None
     qat_from: str | None = None
@@ -116,15 +119,41 @@ def _new_model(req: TrainRequest, hp: PaperParams, data: TrainingData) -> torch.
                             tau_mem=hp.tau_mem, tau_syn=hp.tau_syn, dt=hp.dt, scale=hp.scale, order=req.order, **size)
         model.reset_parameters(hp.fwd_weight_scale, hp.weight_scale_factor)
         return model
+    if req.kind in BASELINE_KINDS:
+        return build_model(req.kind, n_inputs=channels, n_steps=int(data.inputs.shape[1]),
+                           n_outputs=max(n_classes, 27), dt=FRAME_DT_S)
     dt = hp.dt if req.kind == "elstm" else FRAME_DT_S
-    return build_model(req.kind, n_inputs=channels, n_outputs=max(n_classes, 27), dt=dt)
+    model = build_model(req.kind, n_inputs=channels, n_outputs=max(n_classes, 27), dt=dt)
+    if req.kind == "elstm":
+        model.init_for_events(int(data.inputs.shape[1]))   # see snncc.models.lstm: why the default does not learn
+    return model
+
+
+def batch_size_of(req: TrainRequest) -> int:
+    if req.batch_size is not None:
+        return req.batch_size
+    return FAMILY[req.kind].batch_size if req.kind in BASELINE_KINDS else OptimiserSettings().batch_size
+
+
+def optimiser_record(req: TrainRequest, epochs: int) -> dict:
+    """The optimiser and schedule used: the paper's (Adamax) or, for the baselines, their family's."""
+    if req.kind in BASELINE_KINDS:
+        fam = FAMILY[req.kind]
+        return {**fam.as_dict(), "lr": req.lr if req.lr is not None else fam.lr, "batch_size": batch_size_of(req),
+                "epochs": epochs}
+    opt = OptimiserSettings(epochs=epochs, batch_size=batch_size_of(req))
+    return {**opt.as_dict(), "lr": req.lr if req.lr is not None else opt.lr, "optimiser": "adamax"}
 
 
 def _settings(req: TrainRequest, hp: PaperParams, epochs: int) -> TrainSettings:
-    opt = OptimiserSettings()
+    rec = optimiser_record(req, epochs)
     spiking = req.kind in ("rsnn", "ffsnn")
-    return TrainSettings(epochs=epochs, batch_size=req.batch_size, lr=opt.lr, betas=opt.betas, seed=req.seed,
-                         reg_spikes=hp.reg_spikes if spiking else 0.0, reg_neurons=hp.reg_neurons if spiking else 0.0)
+    extra = {}
+    if req.kind in BASELINE_KINDS:
+        extra = {"optimiser": rec["optimiser"], "loss": rec["loss"], "plateau": rec["plateau"]}
+    return TrainSettings(epochs=epochs, batch_size=rec["batch_size"], lr=rec["lr"], betas=tuple(rec["betas"]),
+                         seed=req.seed, reg_spikes=hp.reg_spikes if spiking else 0.0,
+                         reg_neurons=hp.reg_neurons if spiking else 0.0, **extra)
 
 
 def _metadata(req, hp, data, split, history: History, extra=None) -> dict:
@@ -140,7 +169,7 @@ def _metadata(req, hp, data, split, history: History, extra=None) -> dict:
         "encoding": facts["encoding"],
         "preset": hp.as_dict(),
         "update_order": req.order if req.kind in ("rsnn", "ffsnn") else None,
-        "optimiser": OptimiserSettings(epochs=len(history.epochs), batch_size=req.batch_size).as_dict(),
+        "optimiser": optimiser_record(req, len(history.epochs)),
         "split_seed": req.seed,
         "subset": req.subset,
         "split": split.summary(),
@@ -166,6 +195,10 @@ def train(req: TrainRequest, progress=None, data: TrainingData | None = None, on
         raise SnnccError(f"unknown model {req.kind!r} (known: {', '.join(KINDS)})", field="model")
     if req.epochs < 1:
         raise SnnccError("must be >= 1", field="--epochs")
+    if req.batch_size is not None and req.batch_size < 1:
+        raise SnnccError("must be >= 1", field="--batch-size")
+    if req.lr is not None and not (0 < req.lr < 10):
+        raise SnnccError("must be > 0 and < 10", field="--lr")
     device = resolve_device(req.device)
     hp = hyper_parameters(req)
     if data is None:

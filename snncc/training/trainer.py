@@ -18,7 +18,7 @@ import torch
 from torch import nn
 
 from snncc.models import LSTMClassifier, SpikingClassifier
-from snncc.training.loss import LossParts, lstm_loss, snn_loss, spike_count_prediction
+from snncc.training.loss import LossParts, lstm_loss, mse_sigmoid_loss, snn_loss, spike_count_prediction
 
 Forward = Callable[[nn.Module, torch.Tensor], object]
 
@@ -39,6 +39,9 @@ class TrainSettings:
     seed: int = 0
     reg_spikes: float = 0.0
     reg_neurons: float = 0.0
+    optimiser: str = "adamax"              # "adamax" (the paper's SNNs/LSTMs) | "adam" (the time-series family)
+    loss: str = "cross_entropy"            # | "mse_sigmoid" (Time-CNN: MSE of sigmoid outputs vs one-hot)
+    plateau: tuple | None = None           # ReduceLROnPlateau on the training loss: (factor, patience, min_lr)
 
 
 @dataclass
@@ -83,6 +86,8 @@ def batch_loss(model: nn.Module, outputs, labels: torch.Tensor, settings: TrainS
     if is_spiking(model):
         out_spikes, hidden = outputs
         return snn_loss(out_spikes, hidden, labels, settings.reg_spikes, settings.reg_neurons)
+    if settings.loss == "mse_sigmoid":
+        return mse_sigmoid_loss(outputs, labels)
     return lstm_loss(outputs, labels)
 
 
@@ -122,7 +127,18 @@ def accuracy(model: nn.Module, inputs: torch.Tensor, labels: torch.Tensor, batch
 
 def make_optimiser(model: nn.Module, settings: TrainSettings) -> torch.optim.Optimizer:
     trainable = [p for p in model.parameters() if p.requires_grad]
+    if settings.optimiser == "adam":
+        return torch.optim.Adam(trainable, lr=settings.lr, betas=tuple(settings.betas))
     return torch.optim.Adamax(trainable, lr=settings.lr, betas=tuple(settings.betas))
+
+
+def make_scheduler(optimiser: torch.optim.Optimizer, settings: TrainSettings):
+    """ReduceLROnPlateau on the epoch's training loss (the time-series family's schedule), or None."""
+    if settings.plateau is None:
+        return None
+    factor, patience, min_lr = settings.plateau
+    return torch.optim.lr_scheduler.ReduceLROnPlateau(optimiser, mode="min", factor=factor, patience=int(patience),
+                                                      min_lr=min_lr)
 
 
 def train_model(
@@ -154,6 +170,7 @@ def train_model(
         select = "val" if val is not None and val[0].shape[0] > 0 else "test"
     history = History(selected_on=select, note=SELECTION_NOTES[select])
     optimiser = make_optimiser(model, settings)
+    scheduler = make_scheduler(optimiser, settings)
     n = x_train.shape[0]
     task = None
     if progress is not None:
@@ -161,7 +178,7 @@ def train_model(
         task = progress.add_task("training", total=settings.epochs * max(1, -(-n // settings.batch_size)))
     try:
         _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select,
-                keep_start, on_epoch)
+                keep_start, scheduler, on_epoch)
     finally:
         if progress is not None:
             progress.stop()
@@ -170,7 +187,7 @@ def train_model(
 
 
 def _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select,
-            keep_start=False, on_epoch=None):
+            keep_start=False, scheduler=None, on_epoch=None):
     n = x_train.shape[0]
     best_metric, best_state = -1.0, None
     if keep_start and select != "last":
@@ -206,6 +223,8 @@ def _epochs(model, x_train, y_train, test, val, settings, forward, progress, tas
         record = EpochRecord(epoch, total_loss / n, total_nll / n, correct / n, test_acc, val_acc,
                              hidden_spikes / n if is_spiking(model) else None, time.perf_counter() - started)
         history.epochs.append(record)
+        if scheduler is not None:
+            scheduler.step(record.loss)
         metric = {"test": test_acc, "val": val_acc, "last": float(epoch)}[select]
         if metric > best_metric:   # strict: ties keep the earlier epoch
             best_metric = metric
@@ -225,9 +244,13 @@ def _epochs(model, x_train, y_train, test, val, settings, forward, progress, tas
 
 
 def build_model(kind: str, **config) -> nn.Module:
-    """A zoo model by kind ("rsnn", "ffsnn", "lstm", "elstm") from config keyword arguments."""
+    """A zoo model by kind ("rsnn", "ffsnn", "lstm", "elstm", or a buffered classifier "fcn", "resnet",
+    "encoder", "tcnn", "inception") from config keyword arguments."""
     from snncc.models import LSTMConfig, SNNConfig
+    from snncc.models.baselines import BASELINE_KINDS, BaselineConfig, BufferedClassifier
 
+    if kind in BASELINE_KINDS:
+        return BufferedClassifier(BaselineConfig(kind=kind, **config))
     if kind in ("rsnn", "ffsnn"):
         return SpikingClassifier(SNNConfig(recurrent=(kind == "rsnn"), **config))
     return LSTMClassifier(LSTMConfig(signal="spikes" if kind == "elstm" else "analog", **config))

@@ -30,8 +30,12 @@ class IRTarget:
     name = "ir"
     description = "snncc's IR as a .snnir file (validated graph, explicit dt, delays, reset)"
     output_kind = "file"
+    accepts: tuple[str, ...] = ()
 
     def lower(self, graph: Graph, options: dict[str, Any]) -> IRArtefact:
+        from snncc.targets import check_target_options
+
+        check_target_options(self, options)
         return IRArtefact(graph.copy())
 
 

@@ -25,9 +25,10 @@ from snncc.atomic import atomic_dir
 from snncc.errors import SnnccError
 from snncc.frontends.params import RECORDING_LENGTH_S
 from snncc.ir.graph import Graph
+from snncc.ir.timebase import recording_steps
 from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
 from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
-from snncc.targets.jetson.manifest import build_manifest, manifest_bytes
+from snncc.targets.jetson.manifest import build_manifest, manifest_bytes, replace_refusal
 from snncc.targets.jetson.plan import GraphPlan, plan_graph
 from snncc.targets.jetson.recipe import build_engine_script
 from snncc.targets.jetson.validate import single_thread, validate_export
@@ -54,7 +55,7 @@ def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> int:
         if length is None and plan.has_lif:
             raise SnnccError("the unrolled SNN needs a number of time steps: pass --time-steps "
                              "(the graph's metadata has no recording_length_s)", field="--time-steps")
-        steps = int(round(float(length if length is not None else RECORDING_LENGTH_S) / g.dt))
+        steps = recording_steps(length if length is not None else RECORDING_LENGTH_S, g.dt)
         if steps < 1:
             raise SnnccError(f"recording_length_s / dt gives {steps} time steps; pass --time-steps",
                              field="--time-steps")
@@ -73,11 +74,7 @@ class JetsonArtefact:
     notes: list[str] = field(default_factory=list)
 
     def write(self, path: str | os.PathLike) -> None:
-        dest = Path(path)
-        if dest.exists() and not dest.is_dir():
-            raise SnnccError("the Jetson artefact is a directory, and a file of that name exists", file=str(dest),
-                             field="--output")
-        with atomic_dir(dest) as tmp:
+        with atomic_dir(Path(path), replaceable=replace_refusal) as tmp:
             for name, data in self.files.items():
                 (tmp / name).write_bytes(data)
                 if name in EXECUTABLE:
@@ -144,8 +141,12 @@ class JetsonTarget:
     name = "jetson"
     description = "NVIDIA Jetson: ONNX (sequence + streaming step) + TensorRT recipe, validated in ONNX Runtime"
     output_kind = "directory"
+    accepts = ("jetpack", "time_steps")
 
     def lower(self, graph: Graph, options: dict[str, Any]) -> JetsonArtefact:
+        from snncc.targets import check_target_options
+
+        check_target_options(self, options)
         options = dict(options or {})
         plan = plan_graph(graph.copy())
         steps = resolve_steps(plan, options)
@@ -170,6 +171,9 @@ class JetsonTarget:
 
     def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, options: dict[str, Any]) -> JetsonCheckRecord:
         """IR reference vs the ONNX Runtime artefact on a data set (see ``check.check_artefact``)."""
+        from snncc.targets import check_target_options
+
+        check_target_options(self, options)
         options = dict(options or {})
         progress = options.pop("progress", None)
         x = np.asarray(inputs)

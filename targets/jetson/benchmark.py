@@ -97,3 +97,39 @@ def run_protocol(runner, inputs: np.ndarray, labels: np.ndarray | None = None, *
             "energy_spread_uj": max(energies) - min(energies),
         }
     return record
+
+
+@dataclass
+class LatencyComparison:
+    """Several artefacts timed with the same protocol in one run; ratios to the first one's median."""
+
+    records: list = field(default_factory=list)     # BenchRecord per artefact, in the order given
+    kinds: list = field(default_factory=list)
+
+    def ratios(self) -> list[float]:
+        ref = self.records[0].median_ms if self.records else float("nan")
+        return [r.median_ms / ref if ref > 0 else float("nan") for r in self.records]
+
+    def as_dict(self) -> dict:
+        return {"reference": self.records[0].artefact if self.records else None,
+                "models": [{"kind": k, "ratio_to_reference": q, **r.as_dict()}
+                           for k, q, r in zip(self.kinds, self.ratios(), self.records)]}
+
+    def table(self) -> str:
+        lines = ["| artefact | kind | variant | backend | input (T x C) | median ms / sample | spread ms | x first |",
+                 "|---|---|---|---|---|---|---|---|"]
+        for k, q, r in zip(self.kinds, self.ratios(), self.records):
+            lines.append(f"| {r.artefact} | {k} | {r.variant} | {r.backend} | {r.time_steps} x {r.protocol.get('channels')} | "
+                         f"{r.median_ms:.3f} | {r.spread_ms:.3f} | {q:.2f} |")
+        return "\n".join(lines) + "\n"
+
+
+def compare_protocol(entries: list, progress: Callable[[str, int], None] | None = None, **protocol) -> LatencyComparison:
+    """``entries``: (runner, inputs, labels, data_label) per artefact; each is run with ``run_protocol``."""
+    out = LatencyComparison()
+    for runner, inputs, labels, label in entries:
+        record = run_protocol(runner, inputs, labels, data_label=label, progress=progress, **protocol)
+        record.protocol["channels"] = int(np.asarray(inputs).shape[2])
+        out.records.append(record)
+        out.kinds.append(runner.manifest["model"]["kind"])
+    return out

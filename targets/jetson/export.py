@@ -22,6 +22,8 @@ from snncc.targets.jetson.plan import GraphPlan
 from snncc.targets.jetson.torch_graph import StepModel, UnrolledModel, WholeSequenceModel
 
 DEFAULT_JETPACK = "4.6"
+# JetPack releases with a TensorRT this target knows the ONNX opset of (x.y; any x.y.z patch release)
+KNOWN_JETPACKS = ((4, 6), (5, 0), (5, 1), (6, 0), (6, 1), (6, 2))
 
 
 def opset_for_jetpack(jetpack: str | None) -> int:
@@ -31,6 +33,10 @@ def opset_for_jetpack(jetpack: str | None) -> int:
     if not m:
         raise SnnccError(f"not a JetPack version (expected e.g. 4.6, 5.1.2, 6.1), got {text!r}", field="--jetpack")
     major, minor = int(m.group(1)), int(m.group(2) or 0)
+    if (major, minor) not in KNOWN_JETPACKS and (major, minor) >= (4, 6):
+        known = ", ".join(f"{a}.{b}" for a, b in KNOWN_JETPACKS)
+        raise SnnccError(f"unknown JetPack version {text} (this snncc knows {known}, patch releases included)",
+                         field="--jetpack")
     if major == 4 and minor >= 6:
         return 13
     if major == 5 or (major == 6 and minor == 0):

@@ -101,3 +101,34 @@ def build_manifest(plan: GraphPlan, steps: int, opset: int, jetpack: str, valida
 
 def manifest_bytes(manifest: dict) -> bytes:
     return (json.dumps(manifest, indent=2, sort_keys=False) + "\n").encode("utf-8")
+
+
+MANIFEST = "manifest.json"
+WRITTEN_FILES = (MANIFEST, "build_engine.sh", "run.py")
+
+
+def replace_refusal(directory) -> str | None:
+    """None if ``directory`` is an earlier snncc Jetson artefact holding nothing else; else why not.
+
+    Its own files are the manifest, the files it lists (variants, recipe, runner) and the
+    ``.plan`` engines ``build_engine.sh`` writes beside them; anything else is a user's file.
+    """
+    from pathlib import Path
+
+    directory = Path(directory)
+    path = directory / MANIFEST
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return f"it has no readable {MANIFEST} of an snncc Jetson artefact"
+    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
+        return f"its {MANIFEST} is not an snncc Jetson manifest"
+    ours = set(WRITTEN_FILES)
+    for variant in manifest.get("variants") or []:
+        name = variant.get("file") if isinstance(variant, dict) else None
+        if isinstance(name, str):
+            ours |= {name, name.replace(".onnx", ".plan")}
+    foreign = sorted(p.name for p in directory.iterdir() if p.name not in ours)
+    if foreign:
+        return f"it holds files snncc did not write ({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''})"
+    return None

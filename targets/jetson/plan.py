@@ -15,7 +15,7 @@ import networkx as nx
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
+from snncc.ir.nodes import LIF, LSTM, Conv, Dense, Input, Output, Readout
 
 
 @dataclass
@@ -66,7 +66,7 @@ def plan_graph(g: Graph) -> GraphPlan:
         raise SnnccError(f"the Jetson target takes graphs with exactly one Output node, this one has {len(outputs)}",
                          field="graph")
     for name, op in g.items():
-        if not isinstance(op, (Input, Dense, LIF, LSTM, Readout, Output)):
+        if not isinstance(op, (Input, Dense, Conv, LIF, LSTM, Readout, Output)):
             raise SnnccError(f"node kind {type(op).__name__} has no Jetson lowering", field=f"node '{name}'")
     in_name, out_name = inputs[0], outputs[0]
     width = g.node(in_name).width

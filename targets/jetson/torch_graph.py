@@ -1,6 +1,6 @@
 """torch modules that compute exactly what the IR graph means, written so the legacy ONNX exporter
 traces them into plain, TensorRT-friendly operators (MatMul, Add, Mul, Greater, Cast, Where,
-Concat, Slice; the native LSTM op for whole-sequence LSTMs).
+Concat, Slice, Conv + Reshape for convolutions; the native LSTM op for whole-sequence LSTMs).
 
 Per LIF population and step (the reference simulator's equations, in its order):
     I = alpha*I + sum(in) (+b);  V = beta*V + I (+b);  V = 0 while ref > 0 (ref -= 1);
@@ -27,7 +27,7 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from snncc.ir.nodes import LIF, LSTM, Dense, Input
+from snncc.ir.nodes import LIF, LINEAR, LSTM, Conv, Dense, Input
 from snncc.targets.jetson.plan import GraphPlan
 
 
@@ -47,6 +47,10 @@ class NodeParams(nn.Module):
             self.key[name] = k
             if isinstance(op, Dense):
                 self.register_buffer(f"{k}_w", _t(op.weight.T.copy()))
+                if op.bias is not None:
+                    self.register_buffer(f"{k}_b", _t(op.bias))
+            elif isinstance(op, Conv):
+                self.register_buffer(f"{k}_w", _t(op.weight))
                 if op.bias is not None:
                     self.register_buffer(f"{k}_b", _t(op.bias))
             elif isinstance(op, LIF):
@@ -83,6 +87,20 @@ def dense(params: NodeParams, name: str, x: torch.Tensor, q=_same) -> torch.Tens
     y = q(x @ params.get(name, "w"))
     b = params.get(name, "b")
     return y if b is None else q(y + b)
+
+
+def conv(params: NodeParams, name: str, op: Conv, x: torch.Tensor, q=_same) -> torch.Tensor:
+    """(..., C*prod(spatial)) -> reshape (-1, C, *spatial) -> ONNX Conv -> (..., size), C order."""
+    fn = (F.conv1d, F.conv2d, F.conv3d)[op.spatial_dims - 1]
+    lead = x.shape[:-1]
+    y = fn(x.reshape((-1,) + op.in_shape), params.get(name, "w"), params.get(name, "b"), stride=op.stride,
+           padding=op.padding, dilation=op.dilation, groups=op.groups)
+    return q(y.reshape(tuple(lead) + (op.size,)))
+
+
+def linear(params: NodeParams, name: str, op, x: torch.Tensor, q=_same) -> torch.Tensor:
+    """A Dense or Conv node."""
+    return conv(params, name, op, x, q) if isinstance(op, Conv) else dense(params, name, x, q)
 
 
 def lif_step(params: NodeParams, name: str, op: LIF, i_syn, v, ref, drive, q=_same):
@@ -191,8 +209,8 @@ class UnrolledModel(nn.Module):
             if len(comp) == 1 and not g.nx.has_edge(name, name) and not isinstance(op, (LIF, LSTM)):
                 if isinstance(op, Input):
                     full[(name, "spikes")] = tile_copies(x, plan.input_copies)
-                elif isinstance(op, Dense):
-                    full[(name, "spikes")] = dense(p, name, self._drive(full, name))
+                elif isinstance(op, LINEAR):
+                    full[(name, "spikes")] = linear(p, name, op, self._drive(full, name))
                 else:  # Readout, Output: pass through
                     full[(name, "spikes")] = self._drive(full, name)
             else:
@@ -230,8 +248,8 @@ class UnrolledModel(nn.Module):
                     total = v if total is None else total + v
                 if total is None:
                     total = x.new_zeros((batch, 1, _in_width(op)))
-                if isinstance(op, Dense):
-                    hist[(n, "spikes")].append(dense(p, n, total))
+                if isinstance(op, LINEAR):
+                    hist[(n, "spikes")].append(linear(p, n, op, total))
                 elif isinstance(op, LIF):
                     i_syn, v, ref, fired_before = state[n]
                     i_syn, v, ref, s, fired = lif_step_unrolled(p, n, op, i_syn, v, ref, fired_before, total)
@@ -250,7 +268,7 @@ class UnrolledModel(nn.Module):
 
 
 def _in_width(op) -> int:
-    if isinstance(op, Dense):
+    if isinstance(op, LINEAR):
         return op.in_size
     if isinstance(op, LSTM):
         return op.input_size
@@ -312,8 +330,8 @@ class WholeSequenceModel(nn.Module):
             for q in g.predecessors(name):
                 v = shift_time(full[q], g.delay(q, name))
                 total = v if total is None else total + v
-            if isinstance(op, Dense):
-                full[name] = dense(p, name, total)
+            if isinstance(op, LINEAR):
+                full[name] = linear(p, name, op, total)
             elif isinstance(op, LSTM):
                 full[name] = self.lstms[p.key[name]](total)[0]
             else:
@@ -382,8 +400,8 @@ class StepModel(nn.Module):
                 d, port = g.delay(src, name), g.port(src, name)
                 v = cur[(src, port)] if d == 0 else st[(src, f"hist:{port}")][:, d - 1]
                 total = v if total is None else q(total + v)
-            if isinstance(op, Dense):
-                cur[(name, "spikes")] = dense(p, name, total, q)
+            if isinstance(op, LINEAR):
+                cur[(name, "spikes")] = linear(p, name, op, total, q)
             elif isinstance(op, LIF):
                 ref = st.get((name, "ref"))
                 if ref is None:

@@ -3,7 +3,8 @@
 ``target.lower(graph, options)`` returns a ``LoihiArtefact`` that has already been checked
 against the IR reference (``validation.py``); ``target.check(...)`` measures the accuracy lost
 on a data set (``check.py``). Options: timing ("exact" | "paper"), scale ("auto" | "global" |
-"per-layer" | "split"), allow_reset_change (bool), source (model path).
+"per-layer" | "split" | "fine"), allow_reset_change (bool), source (model path), time_steps (tSample
+when the model states no recording length; --time-steps).
 """
 
 from __future__ import annotations
@@ -16,9 +17,11 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
+from snncc.passes.fold_linear import fold_linear
 from snncc.passes.quantize import samples_steps
 from snncc.passes.timing import lower_timing
 from snncc.targets.loihi.bundle import netx_compat, write_bundle
+from snncc.targets.loihi.chip_units import in_chip_units
 from snncc.targets.loihi.lowering import build_network, chain, lif_params_check
 from snncc.targets.loihi.network import LoihiNetwork
 from snncc.targets.loihi.partition import map_network
@@ -60,6 +63,7 @@ class LoihiArtefact:
                 for i, lay in enumerate(net.layers)
             ],
             "scale_rule": q["rule"], "scale_reason": q["reason"], "w_scale": q["w_scale"],
+            "scale_candidates": (q.get("calibration") or {}).get("errors", {}),
             "weights_clipped": q["clipped_total"],
             "timing": self.timing["mode"], "timing_changes": self.timing["changes"],
             "validation": self.validation,
@@ -73,6 +77,9 @@ class LoihiArtefact:
         console.print(f"[bold]Loihi bundle[/bold]: tSample {s['t_sample']}, timing '{s['timing']}', "
                       f"scale rule '{s['scale_rule']}'" + (f", w_scale {s['w_scale']}" if s["w_scale"] else ""))
         console.print(f"  scale: {s['scale_reason']}")
+        if s["scale_candidates"]:
+            console.print("  scale candidates, measured spike-count error on the calibration inputs (lower is better): "
+                          + ", ".join(f"{k} {v:.4f}" for k, v in s["scale_candidates"].items()))
         for lay in s["layers"]:
             sources = lay["bias_sources"]
             if lay["index"] == 0:
@@ -154,6 +161,7 @@ class LoweredModel:
     quant_record: Any
     timing_record: Any
     deployed: Graph | None = None   # ``trained`` with only the reset change (None: same as ``trained``)
+    notes: list[str] = field(default_factory=list)
 
 
 def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
@@ -161,8 +169,9 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     from snncc.targets.loihi import scaling
     from snncc.targets.loihi.validation import ir_spikes, lead_steps, loihi_spikes, pad, random_spikes
 
-    timing_mode = options.get("timing", "exact")
-    rule = options.get("scale", "auto")
+    timing_mode = options.get("timing") or "exact"
+    rule = options.get("scale") or "auto"
+    graph, fold = fold_linear(graph)     # Conv -> connection matrix; linear chains -> one projection
     layers = chain(graph)
     deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
     order, trec = lower_timing(deployed, timing_mode)
@@ -172,6 +181,10 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     steps = options.get("t_sample")
     if steps is not None:
         t_rule = "the input length"
+    elif options.get("time_steps") is not None:
+        steps, t_rule = options["time_steps"], "--time-steps"
+        if int(steps) != steps or steps < 1:
+            raise SnnccError(f"time steps must be a whole number >= 1, got {steps}", field="--time-steps")
     else:
         try:
             steps, t_rule = samples_steps(graph)
@@ -197,6 +210,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
 
     quantized, qrec = scaling.choose(order, rule, measure, f"{CALIBRATION_BATCH} seeded random spike trains "
                                      f"(p={CALIBRATION_RATE}, seed 1), {steps} steps")
+    quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
     meta = {
         "source_sha256": graph.metadata.get("source_sha256", ""),
         "source_file": graph.metadata.get("source_file", options.get("source", "")),
@@ -215,7 +229,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     }
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
     return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
-                        deployed=None if deployed is graph else deployed)
+                        deployed=None if deployed is graph else deployed, notes=fold.notes())
 
 
 def count_error(emulated, reference) -> float:
@@ -244,26 +258,50 @@ class LoihiTarget:
     name = "loihi"
     description = "Intel Loihi 1: HDF5 bundle (netx layout) checked by a bit-exact emulator"
     output_kind = "file"
+    accepts = ("timing", "scale", "allow_reset_change", "stream", "time_steps")
 
     def lower(self, graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
-        from snncc.targets.loihi.validation import validate_lowering
+        from snncc.targets import check_target_options
+        from snncc.targets.loihi.relays import needs_relays, relay_agreement, relay_network
+        from snncc.targets.loihi.validation import lead_steps, pad, random_spikes, validate_lowering
 
+        check_target_options(self, options)
         lowered = lower_model(graph, options)
-        notes: list[str] = []
-        attach_core_map(lowered.network)
+        notes: list[str] = list(lowered.notes)
+        network, plan = lowered.network, None
+        if needs_relays(lowered.network):
+            network, plan = relay_network(lowered.network)   # the mapper's relays: the bundle holds them
+        else:
+            attach_core_map(lowered.network)
         record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
                                    lowered.timing_record.shifts, lowered.timing_record.output_shift,
                                    batch=VALIDATION_BATCH)
-        notes.append(f"tSample {lowered.network.t_sample}: {lowered.network.metadata['t_sample_rule']}")
-        if lowered.timing_record.output_shift:
-            notes.append(f"outputs appear {lowered.timing_record.output_shift} step(s) later than in the IR; tSample "
+        validation = record.as_dict()
+        if plan is not None:
+            trec = lowered.timing_record
+            x = random_spikes(VALIDATION_BATCH, lowered.network.t_sample - trec.output_shift,
+                              lowered.network.input_width, 0.05, seed=0)
+            validation["relays"] = relay_agreement(lowered.network, network, plan,
+                                                   pad(x, lead_steps(trec.shifts, trec.output_shift)))
+            notes += plan.notes()
+            notes.append("relayed vs the same bundle without relays (itself checked against the IR above): spike "
+                         "agreement " + ", ".join(f"{k} {100 * v:.2f}%" for k, v in
+                                                  validation["relays"]["spike_agreement"].items())
+                         + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
+                         + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
+        notes.append(f"tSample {network.t_sample}: {lowered.network.metadata['t_sample_rule']}"
+                     + (f" + {plan.total_shift} relay step(s)" if plan is not None and plan.total_shift else ""))
+        if network.metadata.get("output_shift"):
+            notes.append(f"outputs appear {network.metadata['output_shift']} step(s) later than in the IR; tSample "
                          "includes them")
-        return LoihiArtefact(network=lowered.network, quantization=lowered.quant_record.as_dict(),
-                             timing=lowered.timing_record.as_dict(), validation=record.as_dict(), notes=notes)
+        return LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
+                             timing=lowered.timing_record.as_dict(), validation=validation, notes=notes)
 
     def check(self, graph: Graph, inputs, labels, options: dict[str, Any]):
+        from snncc.targets import check_target_options
         from snncc.targets.loihi.check import check_model
 
+        check_target_options(self, options)
         return check_model(graph, inputs, labels, options)
 
 

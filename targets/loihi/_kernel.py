@@ -3,6 +3,9 @@
 A spike of neuron k at step t adds its row of chip weights into a ring buffer slot
 (t + 1 + delay) of the layer it projects to, so the work per step is (neuron updates) +
 (spikes x fan-out), as on the chip. Samples of a batch run in parallel (``prange``).
+A large mostly-zero projection (a folded convolution, a relay layer) is stored as its synapses
+per source neuron (``SparseBlock``): a spike then adds only its nonzero weights, in the same
+integer arithmetic, so the result is identical.
 """
 
 from __future__ import annotations
@@ -31,20 +34,43 @@ def _scatter(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform):
             buf[slot, post_off + j] += wflat[row + j]
 
 
+@njit(cache=True)
+def _scatter_sparse(buf, ring, t, k, post_off, sptr, spost, sw, sd, pbase, uniform):
+    """Add pre neuron k's synapses (entries sptr[pbase + k] .. sptr[pbase + k + 1] - 1) into the ring."""
+    lo = sptr[pbase + k]
+    hi = sptr[pbase + k + 1]
+    if uniform >= 0:
+        slot = (t + 1 + uniform) % ring
+        for m in range(lo, hi):
+            buf[slot, post_off + spost[m]] += sw[m]
+    else:
+        for m in range(lo, hi):
+            buf[(t + 1 + sd[m]) % ring, post_off + spost[m]] += sw[m]
+
+
+@njit(cache=True, inline="always")
+def _deliver(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform, sparse_base, sptr, spost, sw, sd):
+    """A spike of pre neuron k into one projection: dense block at ``base`` or sparse at ``sparse_base``."""
+    if sparse_base >= 0:
+        _scatter_sparse(buf, ring, t, k, post_off, sptr, spost, sw, sd, sparse_base, uniform)
+    else:
+        _scatter(buf, ring, t, k, n_post, post_off, wflat, dflat, base, uniform)
+
+
 @njit(cache=True, parallel=True)
 def _run(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-         out_spikes, all_s, all_u, all_v, ovf, wraps):
+         out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd):
     for b in prange(x.shape[0]):
         _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-                out_spikes, all_s, all_u, all_v, ovf, wraps)
+                out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd)
 
 
 @njit(cache=True)
 def _run_serial(x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-                out_spikes, all_s, all_u, all_v, ovf, wraps):
+                out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd):
     for b in range(x.shape[0]):
         _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-                out_spikes, all_s, all_u, all_v, ovf, wraps)
+                out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd)
 
 
 @njit(cache=True, inline="always")
@@ -115,7 +141,7 @@ def _update_profiles(qrow, u, v, ref, fired, bias, cells, ref_delay, vmin, vmax,
 
 @njit(cache=True)
 def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, cells, ring, record_all,
-            out_spikes, all_s, all_u, all_v, ovf, wraps):
+            out_spikes, all_s, all_u, all_v, ovf, wraps, wsp, rsp, sptr, spost, sw, sd):
     """One sample from zero state: the chip's rules, step by step, layer by layer."""
     steps, width = x.shape[1], x.shape[2]
     n_layers = n.shape[0]
@@ -134,7 +160,7 @@ def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, 
             if x[b, t, k]:
                 if record_all:
                     all_s[b, t, k] = 1
-                _scatter(buf, ring, t, k, n[1], noff[1], wflat, dflat, woff[1], duni[1])
+                _deliver(buf, ring, t, k, n[1], noff[1], wflat, dflat, woff[1], duni[1], wsp[1], sptr, spost, sw, sd)
         for i in range(1, n_layers):
             lo = noff[i]
             hi = lo + n[i]
@@ -156,10 +182,12 @@ def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, 
                 if fired[lo + k]:
                     if i == last:
                         out_spikes[b, t, k] = 1
-                    if roff[i] >= 0:
-                        _scatter(buf, ring, t, k, n[i], lo, wflat, dflat, roff[i], druni[i])
+                    if roff[i] >= 0 or rsp[i] >= 0:
+                        _deliver(buf, ring, t, k, n[i], lo, wflat, dflat, roff[i], druni[i], rsp[i],
+                                 sptr, spost, sw, sd)
                     if i < last:
-                        _scatter(buf, ring, t, k, n[i + 1], noff[i + 1], wflat, dflat, woff[i + 1], duni[i + 1])
+                        _deliver(buf, ring, t, k, n[i + 1], noff[i + 1], wflat, dflat, woff[i + 1], duni[i + 1],
+                                 wsp[i + 1], sptr, spost, sw, sd)
     ovf[b, 0] = counts[0]
     ovf[b, 1] = counts[1]
     ovf[b, 2] = counts[2]
@@ -167,13 +195,23 @@ def _sample(b, x, n, noff, wflat, dflat, woff, roff, duni, druni, params, bias, 
 
 def _fits_int32(prog) -> bool:
     """True when sum_i |w_chip[j, i]| over all synapses into any neuron stays below 2**31."""
-    total = np.zeros(int(prog.n.sum()), np.int64)
+    from snncc.targets.loihi.emulator import SparseBlock
+
+    def abs_in(block) -> np.ndarray:
+        return block.abs_in() if isinstance(block, SparseBlock) else np.abs(block).sum(axis=0).astype(np.float64)
+
+    total = np.zeros(int(prog.n.sum()), np.float64)
     for i in range(1, len(prog.n)):
         lo, hi = int(prog.noff[i]), int(prog.noff[i] + prog.n[i])
-        total[lo:hi] += np.abs(prog.wt[i]).sum(axis=0)
-        if prog.wr[i].size:
-            total[lo:hi] += np.abs(prog.wr[i]).sum(axis=0)
+        total[lo:hi] += abs_in(prog.wt[i])
+        if _present(prog.wr[i]):
+            total[lo:hi] += abs_in(prog.wr[i])
     return bool(total.max(initial=0) < 2**31)
+
+
+def _present(block) -> bool:
+    """A projection is there: a SparseBlock, or a non-empty dense block."""
+    return not isinstance(block, np.ndarray) or block.size > 0
 
 
 def _uniform(d: np.ndarray) -> int:
@@ -185,31 +223,53 @@ class Flat:
 
     def __init__(self, prog):
         self.prog = prog
+        from snncc.targets.loihi.emulator import SparseBlock
+
         layers = len(prog.n)
         blocks_w, blocks_d = [], []
+        sparse_ptr, sparse_post, sparse_w, sparse_d = [np.zeros(0, np.int64)], [], [], []
         woff = np.full(layers, -1, np.int64)
         roff = np.full(layers, -1, np.int64)
+        wsp = np.full(layers, -1, np.int64)      # offset of a sparse block's pointers in sptr (-1: dense)
+        rsp = np.full(layers, -1, np.int64)
         duni = np.zeros(layers, np.int64)
         druni = np.zeros(layers, np.int64)
-        pos = 0
+        pos, ptr_pos, syn_pos = 0, 0, 0
+
+        def add(block, delays):
+            """Append a block; returns (dense offset or -1, sparse pointer offset or -1, uniform delay)."""
+            nonlocal pos, ptr_pos, syn_pos
+            if isinstance(block, SparseBlock):
+                sparse_ptr.append(block.ptr + syn_pos)
+                sparse_post.append(block.post)
+                sparse_w.append(block.w)
+                sparse_d.append(block.delay)
+                start = ptr_pos
+                ptr_pos += block.ptr.size
+                syn_pos += block.post.size
+                return -1, start, _uniform(block.delay)
+            blocks_w.append(block.ravel())
+            blocks_d.append(delays.ravel())
+            start = pos
+            pos += block.size
+            return start, -1, _uniform(delays)
+
         for i in range(1, layers):
-            woff[i] = pos
-            blocks_w.append(prog.wt[i].ravel())
-            blocks_d.append(prog.dt_[i].ravel())
-            duni[i] = _uniform(prog.dt_[i])
-            pos += prog.wt[i].size
-            if prog.wr[i].size:
-                roff[i] = pos
-                blocks_w.append(prog.wr[i].ravel())
-                blocks_d.append(prog.dr[i].ravel())
-                druni[i] = _uniform(prog.dr[i])
-                pos += prog.wr[i].size
+            woff[i], wsp[i], duni[i] = add(prog.wt[i], prog.dt_[i])
+            if _present(prog.wr[i]):
+                roff[i], rsp[i], druni[i] = add(prog.wr[i], prog.dr[i])
         wflat = np.ascontiguousarray(np.concatenate(blocks_w) if blocks_w else np.zeros(0, np.int64), dtype=np.int64)
+        sw = np.ascontiguousarray(np.concatenate(sparse_w) if sparse_w else np.zeros(0, np.int64), dtype=np.int64)
         if _fits_int32(prog):
             # every q a step can deliver fits 32 bits: accumulate in int32 (twice the SIMD width)
-            wflat = wflat.astype(np.int32)
+            wflat, sw = wflat.astype(np.int32), sw.astype(np.int32)
         dflat = np.ascontiguousarray(np.concatenate(blocks_d) if blocks_d else np.zeros(0, np.int64), dtype=np.int64)
         self.wflat, self.dflat, self.woff, self.roff, self.duni, self.druni = wflat, dflat, woff, roff, duni, druni
+        self.wsp, self.rsp, self.sw = wsp, rsp, sw
+        self.sptr = np.ascontiguousarray(np.concatenate(sparse_ptr), dtype=np.int64)
+        self.spost = np.ascontiguousarray(np.concatenate(sparse_post) if sparse_post else np.zeros(0, np.int64),
+                                          dtype=np.int64)
+        self.sd = np.ascontiguousarray(np.concatenate(sparse_d) if sparse_d else np.zeros(0, np.int64), dtype=np.int64)
         self.cells = np.ascontiguousarray(np.stack([prog.keep_u, prog.keep_v, prog.vth]), dtype=np.int64)
 
 
@@ -248,7 +308,8 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False):
         params = prog.params
     runner = _run if batch > 1 else _run_serial
     runner(np.ascontiguousarray(x), prog.n, prog.noff, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni, flat.druni,
-         params, prog.bias, flat.cells, int(prog.ring), record_all, out, all_s, all_u, all_v, ovf, wraps)
+           params, prog.bias, flat.cells, int(prog.ring), record_all, out, all_s, all_u, all_v, ovf, wraps,
+           flat.wsp, flat.rsp, flat.sptr, flat.spost, flat.sw, flat.sd)
     counts = out.sum(axis=1, dtype=np.int64)
     res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts),
                           overflow={"q_wrap": int(ovf[:, 0].sum()), "u_wrap": int(ovf[:, 1].sum()),

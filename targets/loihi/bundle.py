@@ -19,6 +19,7 @@ it reads: one SnnccError line naming the file, the HDF5 path and the rule.
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 from typing import Any
@@ -26,11 +27,13 @@ from typing import Any
 import h5py
 import numpy as np
 
-from snncc.atomic import atomic_path
+from snncc.atomic import write_bytes_atomic
 from snncc.errors import SnnccError
+from snncc.limits import check_memory, check_time_steps
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 
 SNNCC_GROUP = "snncc"
+MAX_TEXT_BYTES = 64 * 2**20    # a text field (type, JSON record) of a bundle: one string of at most 64 MiB
 FORMAT_VERSION = 1
 
 
@@ -109,50 +112,53 @@ def _exponent_field(group: h5py.Group, key: str, exp) -> None:
 def write_bundle(network: LoihiNetwork, path: str | Path, extra: dict[str, Any] | None = None) -> None:
     """Write ``network`` to ``path`` atomically; ``extra`` adds JSON records under /snncc."""
     check_network(network, str(path))
-    with atomic_path(path) as tmp:
-        with h5py.File(tmp, "w", libver="earliest", track_order=False) as f:
-            sim = f.create_group("simulation")
-            _scalar(sim, "Ts", 1, np.int64)
-            _scalar(sim, "tSample", network.t_sample, np.int64)
-            layers = f.create_group("layer")
-            for i, lay in enumerate(network.layers):
-                g = layers.create_group(str(i))
-                _string(g, "type", lay.kind)
-                if lay.always_on:
-                    _scalar(g, "alwaysOn", lay.always_on, np.int64)
-                if i == 0:
-                    _array(g, "shape", [1, 1, lay.n], np.int64)
-                    continue
-                _array(g, "shape", [lay.n, 1, 1], np.int64)
-                _array(g, "weight", lay.weight, np.int16)
-                if np.any(np.asarray(lay.delay) != 0):
-                    _array(g, "delay", _delay_array(lay.delay, lay.weight.shape), np.uint8)
-                if lay.weight_rec is not None:
-                    _array(g, "weight_rec", lay.weight_rec, np.int16)
-                    if np.any(np.asarray(lay.delay_rec) != 0):
-                        _array(g, "delay_rec", _delay_array(lay.delay_rec, lay.weight_rec.shape), np.uint8)
-                if lay.bias is not None:
-                    _array(g, "bias", lay.bias, np.int32)
-                nrn = g.create_group("neuron")
-                _string(nrn, "type", "LOIHI")
-                for key, value in (("vThMant", lay.v_th_mant), ("iDecay", lay.i_decay), ("vDecay", lay.v_decay),
-                                   ("refDelay", lay.ref_delay)):
-                    (_array if np.ndim(value) else _scalar)(nrn, key, value, np.int64)
-                _exponent_field(nrn, "wgtExp", lay.wgt_exp)
-                if lay.weight_rec is not None:
-                    _exponent_field(nrn, "wgtExpRec", lay.wgt_exp_rec)
-                if lay.bias is not None:
-                    _scalar(nrn, "biasExp", lay.bias_exp, np.int64)
-            s = f.create_group(SNNCC_GROUP)
-            _string(s, "version", _version())
-            _scalar(s, "format", FORMAT_VERSION, np.int64)
-            _string(s, "source_sha256", str(network.metadata.get("source_sha256", "")))
-            _string(s, "metadata", _json(network.metadata))
-            _string(s, "netx_compat", _json(netx_compat(network)))
-            if network.core_map is not None:
-                _string(s, "core_map", _json(network.core_map))
-            for key, value in sorted((extra or {}).items()):
-                _string(s, key, _json(value))
+    # Built in memory, then written as plain bytes: HDF5 writing straight to a file crashes the
+    # process (SIGSEGV) when the disk fills, where a plain write fails cleanly with ENOSPC.
+    buf = io.BytesIO()
+    with h5py.File(buf, "w", libver="earliest", track_order=False) as f:
+        sim = f.create_group("simulation")
+        _scalar(sim, "Ts", 1, np.int64)
+        _scalar(sim, "tSample", network.t_sample, np.int64)
+        layers = f.create_group("layer")
+        for i, lay in enumerate(network.layers):
+            g = layers.create_group(str(i))
+            _string(g, "type", lay.kind)
+            if lay.always_on:
+                _scalar(g, "alwaysOn", lay.always_on, np.int64)
+            if i == 0:
+                _array(g, "shape", [1, 1, lay.n], np.int64)
+                continue
+            _array(g, "shape", [lay.n, 1, 1], np.int64)
+            _array(g, "weight", lay.weight, np.int16)
+            if np.any(np.asarray(lay.delay) != 0):
+                _array(g, "delay", _delay_array(lay.delay, lay.weight.shape), np.uint8)
+            if lay.weight_rec is not None:
+                _array(g, "weight_rec", lay.weight_rec, np.int16)
+                if np.any(np.asarray(lay.delay_rec) != 0):
+                    _array(g, "delay_rec", _delay_array(lay.delay_rec, lay.weight_rec.shape), np.uint8)
+            if lay.bias is not None:
+                _array(g, "bias", lay.bias, np.int32)
+            nrn = g.create_group("neuron")
+            _string(nrn, "type", "LOIHI")
+            for key, value in (("vThMant", lay.v_th_mant), ("iDecay", lay.i_decay), ("vDecay", lay.v_decay),
+                               ("refDelay", lay.ref_delay)):
+                (_array if np.ndim(value) else _scalar)(nrn, key, value, np.int64)
+            _exponent_field(nrn, "wgtExp", lay.wgt_exp)
+            if lay.weight_rec is not None:
+                _exponent_field(nrn, "wgtExpRec", lay.wgt_exp_rec)
+            if lay.bias is not None:
+                _scalar(nrn, "biasExp", lay.bias_exp, np.int64)
+        s = f.create_group(SNNCC_GROUP)
+        _string(s, "version", _version())
+        _scalar(s, "format", FORMAT_VERSION, np.int64)
+        _string(s, "source_sha256", str(network.metadata.get("source_sha256", "")))
+        _string(s, "metadata", _json(network.metadata))
+        _string(s, "netx_compat", _json(netx_compat(network)))
+        if network.core_map is not None:
+            _string(s, "core_map", _json(network.core_map))
+        for key, value in sorted((extra or {}).items()):
+            _string(s, key, _json(value))
+    write_bytes_atomic(path, buf.getvalue())
 
 
 # -- reading ---------------------------------------------------------------------------------------
@@ -160,7 +166,23 @@ def _fail(path: str, field: str, rule: str) -> None:
     raise SnnccError(rule, file=path, field=field)
 
 
+def _declared(ds: Any, path: str, field: str, max_elements: int | None = None) -> None:
+    """Refuse a dataset by its DECLARED size, before reading it (a small file can declare a huge
+    dataset that was never written): at most ``max_elements`` values and what fits in memory."""
+    if not isinstance(ds, h5py.Dataset):
+        return
+    if max_elements is not None and ds.size > max_elements:
+        _fail(path, field, f"declares {ds.size:,} values (shape {ds.shape}); at most {max_elements:,} belong here")
+    check_memory(int(ds.size) * max(int(ds.dtype.itemsize), 8), f"the declared dataset (shape {ds.shape})",
+                 file=path, field=field)
+
+
 def _text(ds: Any) -> str:
+    if isinstance(ds, h5py.Dataset):
+        _declared(ds, None, ds.name or "string", max_elements=1)
+        if ds.size * ds.dtype.itemsize > MAX_TEXT_BYTES:
+            _fail(None, ds.name or "string", f"declares a {ds.dtype.itemsize:,}-byte string; text fields hold at most "
+                  f"{MAX_TEXT_BYTES:,} bytes")
     value = ds[()] if isinstance(ds, h5py.Dataset) else ds
     if isinstance(value, np.ndarray):
         value = value.reshape(-1)[0] if value.size else b""
@@ -183,6 +205,8 @@ def _number(group: h5py.Group, key: str, path: str, where: str, default=None, in
     ds = group[key]
     if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "biuf":
         _fail(path, f"{where}/{key}", "must be a numeric dataset")
+    if ds.size != 1:
+        _fail(path, f"{where}/{key}", f"must hold one value, holds {ds.size}")
     arr = np.asarray(ds[()]).reshape(-1)
     if arr.size != 1:
         _fail(path, f"{where}/{key}", f"must hold one value, holds {arr.size}")
@@ -200,9 +224,10 @@ def _weights(group: h5py.Group, key: str, path: str, where: str, shape: tuple[in
     ds = _get(group, key, path, where)
     if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "iuf":
         _fail(path, f"{where}/{key}", f"must be a numeric array, got {getattr(ds, 'dtype', type(ds).__name__)}")
+    if ds.shape != shape:
+        _fail(path, f"{where}/{key}", f"shape {ds.shape} does not chain: expected {shape} (out, in)")
+    _declared(ds, path, f"{where}/{key}")
     w = np.asarray(ds[()], np.float64)
-    if w.shape != shape:
-        _fail(path, f"{where}/{key}", f"shape {w.shape} does not chain: expected {shape} (out, in)")
     if not np.all(np.isfinite(w)):
         _fail(path, f"{where}/{key}", "contains NaN or Inf")
     if np.any(w != np.round(w)) or np.any(np.round(w) % 2 != 0):
@@ -218,6 +243,10 @@ def _delays(group: h5py.Group, key: str, path: str, where: str, shape: tuple[int
     ds = group[key]
     if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "iuf":
         _fail(path, f"{where}/{key}", "must be a numeric array")
+    if ds.size not in (1, shape[0], shape[0] * shape[1]):
+        _fail(path, f"{where}/{key}", f"declares shape {ds.shape}: delays need 1 value, one per neuron ({shape[0]}) "
+              f"or one per synapse {shape}")
+    _declared(ds, path, f"{where}/{key}")
     d = np.asarray(ds[()], np.float64)
     if d.ndim == 1 and d.shape[0] == shape[0]:
         d = np.repeat(d[:, None], shape[1], axis=1)
@@ -235,6 +264,7 @@ def _shape_width(group: h5py.Group, path: str, where: str) -> int:
     ds = _get(group, "shape", path, where)
     if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "iuf":
         _fail(path, f"{where}/shape", "must be a numeric array")
+    _declared(ds, path, f"{where}/shape", max_elements=8)
     shape = np.asarray(ds[()]).reshape(-1)
     if shape.size == 0 or np.any(shape < 1) or np.any(shape != np.round(shape)):
         _fail(path, f"{where}/shape", "must be positive integers")
@@ -278,6 +308,19 @@ def _always_on(group: h5py.Group, path: str, where: str, n: int) -> int:
     return k
 
 
+def _check_layer_size(path: str, where: str, n: int, width: int, rec: bool) -> None:
+    """A layer's declared size must fit this machine's memory (the reader holds its weights as float64);
+    the message also says how many Loihi 1 chips such a layer would take (resources.LOIHI1)."""
+    from snncc.targets.loihi.resources import LOIHI1
+
+    per_chip = LOIHI1.cores_per_chip * LOIHI1.compartments_per_core
+    n_weights = n * width + (n * n if rec else 0)
+    chips = -(-n // per_chip)
+    context = (f"{n:,} neurons x {width:,} inputs (as compartments alone, {chips:,} {LOIHI1.name} chip(s) of "
+               f"{LOIHI1.cores_per_chip} cores x {LOIHI1.compartments_per_core} compartments)")
+    check_memory(8 * n_weights, f"the declared layer of {context}", file=path, field=f"{where}/weight")
+
+
 def read_bundle(path: str | Path) -> LoihiNetwork:
     """Read and validate a bundle written by snncc, lava-dl netx or SLAYER v1."""
     path = str(path)
@@ -290,8 +333,8 @@ def read_bundle(path: str | Path) -> LoihiNetwork:
     with f:
         try:
             return _read(f, path)
-        except SnnccError:
-            raise
+        except SnnccError as err:
+            raise err.with_file(path) from None
         except (KeyError, ValueError, TypeError, OSError, RuntimeError, AttributeError, IndexError) as ex:
             _fail(path, "format", f"unreadable bundle ({type(ex).__name__}: {str(ex).splitlines()[0] if str(ex) else ''})")
     raise AssertionError("unreachable")  # pragma: no cover
@@ -305,6 +348,7 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
     t_sample = _number(f["simulation"], "tSample", path, "/simulation")
     if t_sample < 1:
         _fail(path, "/simulation/tSample", "must be >= 1")
+    check_time_steps(t_sample, f"tSample = {t_sample}", file=path, field="/simulation/tSample")
     group = f["layer"]
     keys = list(group.keys())
     if not all(k.isdigit() for k in keys) or sorted(int(k) for k in keys) != list(range(len(keys))):
@@ -341,6 +385,7 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
         if w.ndim != 2:
             _fail(path, f"{where}/weight", "must be a 2-D (out, in) array")
         n = int(w.shape[0])
+        _check_layer_size(path, where, n, width, rec=kind != "dense")
         if "shape" in g and _shape_width(g, path, where) != n:
             _fail(path, f"{where}/shape", f"says {_shape_width(g, path, where)} neurons, weight has {n} rows")
         lay = LoihiLayer(name=f"layer{i}", kind="dense_rec" if kind != "dense" else "dense", n=n,
@@ -384,6 +429,8 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
             b = g["bias"]
             if not isinstance(b, h5py.Dataset) or b.dtype.kind not in "iuf":
                 _fail(path, f"{where}/bias", "must be a numeric array")
+            if b.size not in (1, n):
+                _fail(path, f"{where}/bias", f"declares {b.size:,} values; a layer of {n} needs 1 or {n}")
             bias = np.asarray(b[()], np.float64).reshape(-1)
             if bias.size == 1:
                 bias = np.full(n, bias[0])

@@ -6,7 +6,8 @@ Four runs on the same inputs (five when the reset changes):
   (b) the IR in the order Loihi runs, float (timing change only, e.g. the paper's export order)
   (c) the IR with the quantized weights, thresholds and decay constants, float
   (d) the bit-exact emulator of the bundle (integer, truncating decays, wrap/clip)
-plus (d') the emulator without overflow (wide registers) when any overflow occurred.
+plus (d') the emulator without overflow (wide registers) when any overflow occurred, and (e) the
+relayed bundle when a layer's fan-in needs relays (``relays.py``; loss "relays" = acc(d) - acc(e)).
 Loss split: reset = acc(a) - acc(r); timing = acc(r) - acc(b); quantization = acc(b) - acc(c) + acc(c) - acc(d'),
 i.e. parameters plus integer truncation; overflow = acc(d') - acc(d).
 """
@@ -52,7 +53,8 @@ class CheckRecord:
         rows = [("(a) float model as trained", "float_trained")] + (
             [("(r) reset to zero instead, float", "ir_reset_changed")] if self.reset_changed else []) + [
                 ("(b) IR in Loihi order, float", "ir_loihi_order"),
-                ("(c) IR with quantized parameters, float", "ir_quantized"), ("(d) Loihi emulator (bit-exact)", "emulator")]
+                ("(c) IR with quantized parameters, float", "ir_quantized"), ("(d) Loihi emulator (bit-exact)", "emulator")] + (
+            [("(e) relayed bundle (fan-in relays), emulator", "relayed")] if "relayed" in a else [])
         for label, key in rows:
             console.print(f"  {label:<42} accuracy {100 * a[key]:6.2f} %")
         console.print("  loss (points) from: " + ", ".join(f"{k} {v:+.2f}" for k, v in l.items()))
@@ -70,6 +72,15 @@ def _ir_run(graph: Graph, x: np.ndarray, names: list[str]) -> tuple[np.ndarray, 
     with one_thread():
         res = simulate(graph, x, record="spikes")
     return res.prediction.numpy(), {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
+
+
+def _relays(network):
+    """(relayed network, plan) when a layer's fan-in needs relays, else (None, None)."""
+    from snncc.targets.loihi.relays import needs_relays, relay_network
+
+    if not needs_relays(network):
+        return None, None
+    return relay_network(network)
 
 
 def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: dict[str, Any],
@@ -91,8 +102,9 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     shift = lowered.timing_record.output_shift
     lead = lead_steps(lowered.timing_record.shifts, shift)
     mode = options.get("mode", "batch")
+    relayed, plan = _relays(net)
     preds = {k: [] for k in ("float_trained", "ir_reset_changed", "ir_loihi_order", "ir_quantized", "emulator",
-                             "emulator_wide")}
+                             "emulator_wide", "relayed")}
     agree_sum = {k: {nm: 0.0 for nm in names} for k in
                  ("emulator_vs_trained", "emulator_vs_quantized_ir", "loihi_order_vs_trained")}
     overflow = {"q_wrap": 0, "u_wrap": 0, "v_clip": 0}
@@ -116,6 +128,13 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
             res = emulate(net, pad(x, lead), record="all", mode="stream", gap=int(options.get("gap", 100)))
         s_d = loihi_spikes(res, lowered.network, lowered.layers, lowered.timing_record.shifts, steps)
         p_d = np.argmax(s_d[names[-1]].sum(axis=1), axis=1)
+        if plan is not None:
+            from snncc.targets.loihi.relays import emulate_relayed
+
+            kw = {"mode": "stream", "gap": int(options.get("gap", 100))} if mode != "batch" else {}
+            s_e = loihi_spikes(emulate_relayed(relayed, plan, pad(x, lead), **kw), lowered.network, lowered.layers,
+                               lowered.timing_record.shifts, steps)
+            preds["relayed"].append(np.argmax(s_e[names[-1]].sum(axis=1), axis=1))
         for k, v in res.overflow.items():
             overflow[k] += v
         emu_outputs.append((x, mode))
@@ -139,6 +158,8 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
             preds["emulator_wide"].append(np.argmax(counts, axis=1))
     else:
         preds["emulator_wide"] = preds["emulator"]
+    if plan is None:
+        preds["relayed"] = preds["emulator"]
     p = {k: np.concatenate(v) for k, v in preds.items()}
     acc = {k: float(np.mean(v == labels)) for k, v in p.items()}
     loss = {
@@ -149,21 +170,28 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
         "overflow": 100 * (acc["emulator_wide"] - acc["emulator"]),
         "total": 100 * (acc["float_trained"] - acc["emulator"]),
     }
+    if plan is not None:
+        loss["relays"] = 100 * (acc["emulator"] - acc["relayed"])
+        loss["total"] = 100 * (acc["float_trained"] - acc["relayed"])
     notes = []
     if lowered.timing_record.changes:
         notes += [f"timing: {c}" for c in lowered.timing_record.changes]
+    if plan is not None:
+        notes += plan.notes()
     if options.get("synthetic"):
         notes.append("the data set is synthetic: these accuracies are not the paper's")
     return CheckRecord(
         target="loihi", samples=n, steps=steps, timing=lowered.timing_record.mode,
         scale_rule=lowered.quant_record.rule, scale_reason=lowered.quant_record.reason,
-        accuracy={k: acc[k] for k in ("float_trained", "ir_reset_changed", "ir_loihi_order", "ir_quantized", "emulator")},
+        accuracy={k: acc[k] for k in ("float_trained", "ir_reset_changed", "ir_loihi_order", "ir_quantized", "emulator")
+                  + (("relayed",) if plan is not None else ())},
         loss_points=loss,
         spike_agreement={k: {nm: v / n for nm, v in d.items()} for k, d in agree_sum.items()},
         prediction_agreement={
             "emulator_vs_trained": float(np.mean(p["emulator"] == p["float_trained"])),
             "emulator_vs_quantized_ir": float(np.mean(p["emulator"] == p["ir_quantized"])),
             "loihi_order_vs_trained": float(np.mean(p["ir_loihi_order"] == p["float_trained"])),
+            **({"relayed_vs_emulator": float(np.mean(p["relayed"] == p["emulator"]))} if plan is not None else {}),
         },
         overflow=overflow, mode=mode, notes=notes, reset_changed=lowered.deployed is not None,
     )

@@ -23,8 +23,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.limits import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, whole_number
 from snncc.targets.loihi.network import LoihiNetwork
 
+DEFAULT_GAP = 100                # blank steps between samples in stream mode (the paper's protocol)
 Q_BITS, U_BITS = 21, 23          # magnitude bits; plus a sign bit each
 RECORD_CHOICES = ("outputs", "all")
 MODES = ("batch", "stream")
@@ -55,22 +57,11 @@ def decay(x: np.ndarray, register) -> np.ndarray:
 
 # -- input checks ---------------------------------------------------------------------------------
 def check_inputs(inputs, width: int, source: str | None = None) -> np.ndarray:
-    """(T, C) or (B, T, C) 0/1 data (bool, ints or floats) -> (B, T, C) uint8, or a one-line error."""
-    x = np.asarray(inputs)
-    if x.ndim == 2:
-        x = x[None]
-    if x.ndim != 3:
-        raise SnnccError(f"input must have shape (T, C) or (B, T, C), got {x.shape}", file=source, field="input")
-    if x.dtype.kind not in "biuf":
-        raise SnnccError(f"input must be numeric 0/1 values, got dtype {x.dtype}", file=source, field="input")
-    if x.shape[2] != width:
-        raise SnnccError(f"input has {x.shape[2]} channels, the bundle's input layer has {width}",
-                         file=source, field="input")
-    if x.dtype.kind == "f" and not np.all(np.isfinite(x)):
-        raise SnnccError("input contains NaN or Inf; spikes must be 0 or 1", file=source, field="input")
-    if x.size and not np.all((x == 0) | (x == 1)):
-        raise SnnccError("input must be binary (0/1 spikes)", file=source, field="input")
-    return x.astype(np.uint8)
+    """(T, C) or (B, T, C) 0/1 data (bool, ints or floats) -> (B, T, C) uint8, or a one-line error
+    (the rules of ``snncc.inputs.check_batch``, shared with ``snncc run``)."""
+    from snncc.inputs import check_batch
+
+    return check_batch(inputs, width, spikes=True, source=source).astype(np.uint8)
 
 
 def _prediction(counts: np.ndarray) -> np.ndarray:
@@ -88,8 +79,23 @@ def _by_delay(weight: np.ndarray, delay) -> list[tuple[int, np.ndarray]]:
     Sums of integer chip weights over 0/1 spikes stay far below 2**53, so a float64 matrix
     product (BLAS) gives the exact integer q; it is converted back to int64 below.
     """
+    if np.ndim(delay) == 0 or np.asarray(delay).size == 1:
+        return [(int(np.asarray(delay).reshape(-1)[0]), _matrix_t(np.asarray(weight)))]
     d = _as_delay(delay, weight.shape)
-    return [(int(v), np.where(d == v, weight, 0).astype(np.float64).T.copy()) for v in np.unique(d)]
+    return [(int(v), _matrix_t(np.where(d == v, weight, 0))) for v in np.unique(d)]
+
+
+SPARSE_MIN_SIZE = 1 << 20      # weight matrices this large and at most SPARSE_MAX_DENSITY full are
+SPARSE_MAX_DENSITY = 0.25      # multiplied as sparse matrices (the same exact integer sums, less work)
+
+
+def _matrix_t(w: np.ndarray):
+    """w.T as float64: dense, or scipy CSR for a large, mostly-zero matrix (a folded convolution)."""
+    if w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size:
+        import scipy.sparse as sp
+
+        return sp.csr_matrix(w.T.astype(np.float64))
+    return w.astype(np.float64).T.copy()
 
 
 def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndarray]], zero: np.ndarray) -> np.ndarray:
@@ -98,7 +104,7 @@ def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndar
     for d, w_t in parts:
         src = t - 1 - d
         if src >= 0:
-            part = history[src].astype(np.float64) @ w_t
+            part = np.asarray(history[src].astype(np.float64) @ w_t)
             total = total + (part if zero.dtype.kind == "f" else np.rint(part).astype(np.int64))
     return total
 
@@ -192,8 +198,9 @@ class _Program:
 
     n: np.ndarray            # (L+1,) neurons per layer, layer 0 = inputs
     noff: np.ndarray         # (L+1,) offset of each layer in the flat neuron arrays
-    wt: list                 # per layer: feed-forward weights transposed (n_pre, n) int64, chip units
-    dt_: list                # per layer: per-synapse delays transposed (n_pre, n) int64
+    wt: list                 # per layer: feed-forward weights transposed (n_pre, n) int64, chip units,
+                             # or a SparseBlock (large mostly-zero projections: only their synapses)
+    dt_: list                # per layer: per-synapse delays transposed (n_pre, n) int64 (None when sparse)
     wr: list                 # recurrent (n, n) transposed, or a (0, 0) array
     dr: list
     params: np.ndarray       # (L+1, 7) int64 per layer: 4096 - iDecay, 4096 - vDecay, vThMant * 2**6 (when
@@ -213,6 +220,60 @@ def _chip_weights(weight, exp, where: str) -> np.ndarray:
     return np.asarray(weight, np.int64) << (6 + exp)
 
 
+@dataclass
+class SparseBlock:
+    """A projection's synapses grouped by source neuron (what the chip stores per input axon):
+    synapses ptr[k]..ptr[k+1]-1 of source k go to ``post`` with chip weight ``w`` and delay ``delay``."""
+
+    n_pre: int
+    n_post: int
+    ptr: np.ndarray          # (n_pre + 1,) int64
+    post: np.ndarray         # (nnz,) int64
+    w: np.ndarray            # (nnz,) int64, chip units
+    delay: np.ndarray        # (nnz,) int64
+
+    def abs_in(self) -> np.ndarray:
+        """sum |w| over the synapses into each post neuron."""
+        return np.bincount(self.post, weights=np.abs(self.w).astype(np.float64), minlength=self.n_post)
+
+
+def _sparse_eligible(weight) -> bool:
+    w = np.asarray(weight)
+    return w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size
+
+
+def _sparse_block(weight, exp, delay, where: str) -> SparseBlock:
+    """The nonzero synapses of ``weight`` (n_post, n_pre) as a SparseBlock, chip units."""
+    w = np.asarray(weight)
+    post, pre = np.nonzero(w)
+    order = np.lexsort((post, pre))
+    post, pre = post[order].astype(np.int64), pre[order].astype(np.int64)
+    e = np.asarray(exp, np.int64)
+    e = e if e.ndim == 0 else e[post, pre]
+    if np.size(e) and np.min(e) < -6:
+        raise SnnccError("wgtExp below -6 gives fractional chip weights", field=where)
+    chip = w[post, pre].astype(np.int64) << (6 + e)
+    d = np.asarray(delay, np.int64)
+    d = np.full(post.size, int(d.reshape(-1)[0]) if d.size else 0, np.int64) if d.size <= 1 else d[post, pre]
+    ptr = np.searchsorted(pre, np.arange(w.shape[1] + 1)).astype(np.int64)
+    return SparseBlock(int(w.shape[1]), int(w.shape[0]), ptr, post, np.ascontiguousarray(chip), d)
+
+
+def _block(weight, exp, delay, where: str):
+    """(weights, delays) of one projection for the kernel: dense transposed, or a SparseBlock and None."""
+    if _sparse_eligible(weight):
+        return _sparse_block(weight, exp, delay, where), None
+    w = _chip_weights(weight, exp, where)
+    d = _as_delay(delay, w.shape)
+    return np.ascontiguousarray(w.T), np.ascontiguousarray(d.T)
+
+
+def _max_delay(w, d) -> int:
+    if isinstance(w, SparseBlock):
+        return int(w.delay.max(initial=0))
+    return int(d.max(initial=0))
+
+
 def _program(network: LoihiNetwork) -> _Program:
     layers = network.layers
     n = np.array([lay.n for lay in layers], np.int64)
@@ -224,17 +285,15 @@ def _program(network: LoihiNetwork) -> _Program:
     bias = np.zeros(int(n.sum()), np.int64)
     max_delay = 0
     for i, lay in enumerate(layers[1:], start=1):
-        w = _chip_weights(lay.weight, lay.wgt_exp, f"/layer/{i}/neuron/wgtExp")
-        d = _as_delay(lay.delay, w.shape)
-        wt.append(np.ascontiguousarray(w.T))
-        dts.append(np.ascontiguousarray(d.T))
-        max_delay = max(max_delay, int(d.max(initial=0)))
+        w, d = _block(lay.weight, lay.wgt_exp, lay.delay, f"/layer/{i}/neuron/wgtExp")
+        wt.append(w)
+        dts.append(d)
+        max_delay = max(max_delay, _max_delay(w, d))
         if lay.weight_rec is not None:
-            r = _chip_weights(lay.weight_rec, lay.wgt_exp_rec, f"/layer/{i}/neuron/wgtExpRec")
-            drr = _as_delay(lay.delay_rec, r.shape)
-            wr.append(np.ascontiguousarray(r.T))
-            dr.append(np.ascontiguousarray(drr.T))
-            max_delay = max(max_delay, int(drr.max(initial=0)))
+            r, drr = _block(lay.weight_rec, lay.wgt_exp_rec, lay.delay_rec, f"/layer/{i}/neuron/wgtExpRec")
+            wr.append(r)
+            dr.append(drr)
+            max_delay = max(max_delay, _max_delay(r, drr))
         else:
             wr.append(empty)
             dr.append(empty)
@@ -261,7 +320,27 @@ class PreparedNetwork:
         self.network = network
         self.flat = Flat(_program(network))
 
-    def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int = 100,
+    def _check_size(self, total_steps: int, record: str) -> None:
+        """What the run records must fit in memory: 1 byte per spike, 8 per recorded u and v."""
+        units = sum(lay.n for lay in self.network.layers)
+        per_step = self.network.layers[-1].n + (units * 17 if record == "all" else 0) + units * 16
+        check_memory(total_steps * per_step, f"emulating {total_steps:,} steps of {units:,} units (record {record!r})",
+                     field="input")
+
+    @staticmethod
+    def _check_stream(batch: int, steps: int, gap) -> None:
+        """--gap: a whole number of blank steps, 0..MAX_TIME_STEPS, the whole stream within MAX_STREAM_STEPS."""
+        gap = whole_number(gap, field="--gap", minimum=0)
+        if gap > MAX_TIME_STEPS:
+            raise SnnccError(f"{gap:,} blank steps exceed snncc's cap of {MAX_TIME_STEPS:,} steps "
+                             "(snncc.limits.MAX_TIME_STEPS)", field="--gap")
+        total = batch * (steps + gap)
+        if total > MAX_STREAM_STEPS:
+            raise SnnccError(f"the stream of {batch} sample(s) x ({steps} steps + {gap} gap steps) = {total:,} steps "
+                             f"exceeds snncc's cap of {MAX_STREAM_STEPS:,} (snncc.limits.MAX_STREAM_STEPS)",
+                             field="--gap")
+
+    def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int | None = None,
             wide: bool = False) -> EmulationResult:
         from snncc.targets.loihi._kernel import run_flat
 
@@ -270,11 +349,16 @@ class PreparedNetwork:
         if mode not in MODES:
             raise SnnccError(f"mode must be one of {MODES}", field="mode")
         x = check_inputs(inputs, self.network.input_width)
-        if mode == "batch":
-            return run_flat(self.flat, self.network.drive(x), record, wide)
-        if gap < 0:
-            raise SnnccError("gap must be >= 0 steps", field="gap")
         batch, steps, width = x.shape
+        if mode == "batch":
+            if gap is not None:
+                raise SnnccError("applies only to stream mode (--stream, the paper's protocol); batch mode starts "
+                                 "every sample from zero state", field="--gap")
+            self._check_size(batch * steps, record)
+            return run_flat(self.flat, self.network.drive(x), record, wide)
+        gap = DEFAULT_GAP if gap is None else gap
+        self._check_stream(batch, steps, gap)
+        self._check_size(batch * (steps + gap), record)
         period = steps + gap
         stream = np.zeros((1, batch * period, width), np.uint8)
         for b in range(batch):
@@ -299,14 +383,14 @@ def emulate(
     *,
     record: str = "outputs",
     mode: str = "batch",
-    gap: int = 100,
+    gap: int | None = None,
     wide: bool = False,
 ) -> EmulationResult:
     """Run ``network`` bit-exactly on 0/1 ``inputs`` (T, C) or (B, T, C).
 
     ``inputs`` carry the model's channels; always-on bias axons (``bias_sources.py``) are added
     here, held at 1 on every step (gaps included). mode "batch": every sample starts from zero state. mode "stream": the paper's protocol, one
-    continuous run with ``gap`` blank steps after each sample; each sample's outputs are the
+    continuous run with ``gap`` blank steps (default 100) after each sample; each sample's outputs are the
     steps of its own window. record "all" keeps every layer's spikes, u and v. ``wide=True``
     (outputs only) removes the q/u wrap and the v clip, to measure what overflow costs.
     """

@@ -6,9 +6,14 @@ scale="auto" keeps the paper's global rule unless a screen finds projections it 
     max|W| > 256                                     (w_scale would be 0)
 When flagged, candidates are measured by emulating calibration inputs and comparing every layer's
 per-neuron spike counts with the float model's (in the order Loihi runs): the global rule, per-layer scales,
-and per-layer scales with split exponents on the projections that have outliers (the outliers keep
-the exponent that fits them, the bulk of the weights gets a finer one: two synapse formats). A
-candidate replaces the paper's rule only if it cuts the error by >= 25 %.
+per-layer scales with split exponents on the projections that have outliers (the outliers keep
+the exponent that fits them, the bulk of the weights gets a finer one: two synapse formats), and
+the fine rule (every synapse its own finest exponent, thresholds near 2**14 chip units, decay
+registers rounded to nearest: ``quantize.py``) at the scales s * k, k in FINE_STEPS (one octave: the
+same precision, each weight rounded differently; which rounding errors cancel is measured, not
+assumed). The candidate with the smallest measured error
+wins (ties go to the one listed first, the simpler), so auto is never worse, on the calibration
+inputs, than any rule it tried.
 """
 
 from __future__ import annotations
@@ -20,11 +25,11 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.passes.quantize import OUTLIER_RATIO, QuantizationRecord, projection_max, projections, quantize_graph
+from snncc.passes.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
+                                   quantize_graph)
 
 OUTLIER_REASON = "max|W| is"
 MIN_RANGE = 1.0 / 8.0
-IMPROVEMENT = 0.75          # a candidate must cut the measured error by at least 25 %
 
 
 @dataclass
@@ -49,6 +54,8 @@ def screen(graph: Graph) -> Screen:
     return Screen(flagged, possible)
 
 
+FINE_REASON = ("requested: fine (each synapse its finest weight exponent, threshold mantissa near 256, "
+               "decay registers rounded to nearest)")
 ErrorFn = Callable[[Graph, QuantizationRecord], float]
 
 
@@ -63,8 +70,10 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
         return quantize_graph(graph, "global", reason="requested: the paper's rule (one w_scale, wgtExp 0)")
     if rule == "per-layer":
         return quantize_graph(graph, "per-layer", reason="requested: one scale per layer, weight exponent per projection")
+    if rule == "fine":
+        return quantize_graph(graph, "fine", reason=FINE_REASON)
     if rule not in ("auto", "split"):
-        raise SnnccError("scale must be one of global, per-layer, split, auto", field="--scale")
+        raise SnnccError("scale must be one of global, per-layer, split, fine, auto", field="--scale")
     sc = screen(graph)
     outliers = {d for d, why in sc.flagged.items() if why.startswith(OUTLIER_REASON)}
     if rule == "split":
@@ -74,11 +83,17 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
                     "requested split, but no projection has outliers that a finer exponent would help "
                     f"(max|W| > {OUTLIER_RATIO:.0f}x its median): per-layer scales")
         return g, r
-    if sc.global_possible and not sc.flagged:
-        return quantize_graph(graph, "global", reason="auto: the paper's global rule; no outlier weights (every "
-                              f"max|W| <= {OUTLIER_RATIO:.0f}x its median, every projection uses >= 1/8 of the 8-bit range)")
-    candidates: list[tuple[str, Graph, QuantizationRecord, float]] = []
     refused: dict[str, str] = {}
+    if sc.global_possible and not sc.flagged:
+        try:
+            return quantize_graph(graph, "global", reason="auto: the paper's global rule; no outlier weights (every "
+                                  f"max|W| <= {OUTLIER_RATIO:.0f}x its median, every projection uses >= 1/8 of the "
+                                  "8-bit range)")
+        except SnnccError as ex:   # e.g. a threshold mantissa beyond 17 bits: measure the other rules
+            refused["global"] = str(ex)
+            sc.flagged["graph"] = "the paper's global rule cannot be lowered"
+            sc.global_possible = False
+    candidates: list[tuple[str, Graph, QuantizationRecord, float]] = []
 
     def consider(name: str, make: Callable[[], tuple[Graph, QuantizationRecord]]) -> None:
         """Quantize and measure a candidate; one that cannot be lowered (a register out of range) is left out."""
@@ -99,22 +114,20 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
         else:
             if split_projections(split[1]):
                 consider(f"per-layer, split exponents on {split_projections(split[1])}", lambda: split)
+    for step in FINE_STEPS:
+        consider("fine" if step == 1.0 else f"fine x{step:g}", lambda step=step: quantize_graph(graph, "fine", fine_step=step))
     if not candidates:
         raise SnnccError(f"no scale rule can be lowered: {'; '.join(f'{k}: {v}' for k, v in refused.items())}",
                          field="--scale")
     errors = {name: err for name, _, _, err in candidates}
     paper = errors.get("global")
-    name, g, r, err = min(candidates, key=lambda c: c[3])
-    if paper is not None and not (err <= IMPROVEMENT * paper and paper > 0):
-        name, g, r, err = next(c for c in candidates if c[0] == "global")
-        why = (f"auto: kept the paper's global rule; no candidate cut its measured spike-count error ({paper:.4f}) "
-               f"by {100 * (1 - IMPROVEMENT):.0f} %")
-    else:
-        versus = (f" vs {paper:.4f} under the paper's global rule" if paper is not None else
-                  " (the global rule is impossible: max|W| > 256)" if not sc.global_possible else
-                  " (the global rule cannot be lowered)")
-        why = (f"auto: {', '.join(f'{k}: {v}' for k, v in sc.flagged.items())}; chose '{name}' by measured "
-               f"spike-count error {err:.4f}{versus}")
+    name, g, r, err = min(candidates, key=lambda c: c[3])   # min keeps the first of equal errors
+    versus = (f" vs {paper:.4f} under the paper's global rule" if paper is not None else
+              " (the global rule cannot be lowered)" if "global" in refused else
+              " (the global rule is impossible: max|W| > 256)" if not sc.global_possible else
+              " (the global rule cannot be lowered)")
+    why = (f"auto: {', '.join(f'{k}: {v}' for k, v in sc.flagged.items())}; chose '{name}' by measured "
+           f"spike-count error {err:.4f}{versus}, the smallest of {len(errors)} candidates")
     if refused:
         why += "; left out (cannot be lowered): " + "; ".join(f"{k}: {v}" for k, v in refused.items())
     r.reason = why

@@ -32,3 +32,25 @@ def test_failed_steps_are_reported_and_dependants_skipped(tmp_path):
     text = rp.markdown(res)
     assert "| train RSNN th1 | failed |" in text and "| check RSNN Loihi | unavailable |" in text
     assert "78.32 %" in text and "96.92 %" in text and "82.31 %" in text
+
+
+def test_baseline_rows_ttc_and_latency_are_reported_beside_the_paper(tmp_path):
+    rp = _module()
+    p = rp.Pipeline(tmp_path, {"baseline_epochs": 1}, 0)
+    p.steps.append(rp.Step("train fcn", [], "ok", 1.0, "", {"parameters": 279451, "history": {"test_accuracy": 0.5}}))
+    p.steps.append(rp.Step("train tcnn", [], "failed", 1.0, "snncc: error: boom"))
+    p.steps.append(rp.Step("TTC", [], "ok", 1.0, "", {"models": [
+        {"model": "fcn.pt", "kind": "fcn", "method": "zero-padded", "final_accuracy": 0.5, "mean_ttc": 0.8,
+         "median_ttc": 0.9, "never_correct_share": 0.5, "samples": 10}]}))
+    p.steps.append(rp.Step("bench Jetson artefacts", [], "ok", 1.0, "", {"models": [
+        {"artefact": str(tmp_path / "fcn_jetson"), "kind": "fcn", "median_ms": 2.0, "spread_ms": 0.1,
+         "ratio_to_reference": 1.0}]}))
+    res = rp.results(p)
+    rows = {r["model"]: r for r in res["rows"]}
+    assert rows["FCN on frames (279,451 params; paper 280k)"]["ours_percent"] == 50.0
+    assert rows["TCNN on frames (? params; paper 2,673)"] == {"model": "TCNN on frames (? params; paper 2,673)",
+                                                              "ours_percent": None, "paper_percent": 83.4}
+    assert not any(r["model"].startswith("ResNet") for r in res["rows"])   # not run: no row
+    text = rp.markdown(res)
+    assert "| fcn.pt | fcn | 50.0 % | 0.800 | 0.900 | 50.0 % |" in text
+    assert "| fcn_jetson | fcn | 2.000 | 0.100 | 1.00 |" in text and "SYNTHETIC" in text

@@ -9,7 +9,7 @@ import torch
 from snncc.errors import SnnccError
 from snncc.training.loss import lstm_loss, snn_loss, spike_count_prediction
 from snncc.training.presets import PRESETS, paper_preset, parse_overrides, with_overrides
-from snncc.training.split import stratified_split
+from snncc.data.split import stratified_split
 
 
 def test_snn_loss_matches_hand_computation():

@@ -1,6 +1,7 @@
 """Parameter counts of the paper's models and the RSNN forward pass in the authors' order."""
 
 
+import numpy as np
 import pytest
 import torch
 
@@ -91,3 +92,33 @@ def test_membrane_near_threshold_gets_gradient_without_spiking():
     assert hid.sum() == 0
     hid.sum().backward()
     assert m.w_in.grad.abs().item() > 0
+
+
+def _late_silent_events(n_per_class=24, n_classes=3, steps=80, seed=0):
+    """Class c fires its own 8 channels early (steps 10..40); the recording ends in 10 silent steps."""
+    rng = np.random.default_rng(seed)
+    y = np.repeat(np.arange(n_classes), n_per_class)
+    x = (rng.random((y.size, steps, 24)) < 0.02).astype(np.uint8)
+    for i, c in enumerate(y):
+        x[i, 10:40, 8 * c:8 * c + 8] |= (rng.random((30, 8)) < 0.3).astype(np.uint8)
+    x[:, steps - 10:] = 0
+    return torch.from_numpy(x), torch.from_numpy(y)
+
+
+def test_elstm_event_initialisation_keeps_the_architecture_and_learns(tmp_path):
+    from snncc.training.data import TrainingData
+    from snncc.training.pipeline import TrainRequest, train
+
+    model = build_model("elstm", n_inputs=24)
+    model.init_for_events(270)
+    assert count_trainable(model) == 236_919 and not model.lstm.bias_hh_l0.any()
+    h = 228
+    assert torch.equal(model.lstm.bias_ih_l0[:h], -model.lstm.bias_ih_l0[h:2 * h])
+    assert model.lstm.bias_ih_l0[h:2 * h].min() >= 0 and model.lstm.bias_ih_l0[h:2 * h].max() <= np.log(269)
+    x, y = _late_silent_events()
+    data = TrainingData(x, y, {"synthetic": True}, "toy")
+    res = train(TrainRequest(kind="elstm", data="toy", output=str(tmp_path / "e.pt"), epochs=4, batch_size=8,
+                             device="cpu"), data=data)
+    losses = [e["loss"] for e in res.epochs]
+    assert res.parameters == 236_919
+    assert losses[-1] < 0.7 * np.log(3) and res.history["test_accuracy"] >= 0.8

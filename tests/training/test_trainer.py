@@ -3,7 +3,7 @@
 import pytest
 import torch
 
-from snncc.training.split import stratified_split
+from snncc.data.split import stratified_split
 from snncc.training.trainer import TrainSettings, accuracy, build_model, train_model
 
 from .conftest import toy_events

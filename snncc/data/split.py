@@ -1,5 +1,7 @@
 """Stratified, seeded train/test (and optional validation) split with scikit-learn.
 
+The one split of the project: ``snncc data encode --split-test`` and ``snncc train`` both use it.
+
 The paper: 80 % train / 20 % test, stratified by letter. With ``val_fraction`` > 0 a stratified
 share of the *training* part is held out for selecting the epoch instead of the test set.
 """
@@ -9,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from sklearn.model_selection import train_test_split
 
 from snncc.errors import SnnccError
 
@@ -31,6 +32,8 @@ class Split:
 def stratified_split(labels: np.ndarray, *, seed: int = 0, test_fraction: float = 0.2,
                      val_fraction: float = 0.0) -> Split:
     """Indices of a stratified split; ``val_fraction`` is a share of the whole set taken from training."""
+    from sklearn.model_selection import train_test_split
+
     labels = np.asarray(labels)
     if not 0.0 < test_fraction < 1.0:
         raise SnnccError(f"test fraction must be in (0, 1), got {test_fraction}", field="test_fraction")

@@ -1,0 +1,102 @@
+"""Older NIR files that today's ``nir.read`` rejects, read where their meaning is unambiguous.
+
+NIR 0.2-era writers (the NIR paper's 2023 Braille sub-graph, for one) stored a sub-graph's
+``Input`` with the shape of the OUTER graph's input instead of the shape of the node it feeds,
+so today's type inference refuses the file even with ``type_check=False`` (sub-graphs are
+type-checked when they are built). Rule applied here, to the raw HDF5 record before any node is
+built: an ``Input`` whose every successor expects one and the same size n (an Affine/Linear's
+weight columns, a neuron population's size, a sub-graph's own Input) but which declares another
+size is read with shape n, and a note says so. If its successors disagree, or a size cannot be
+told from their parameters, the file is refused with one line. Edges naming a sub-graph instead of
+its Input/Output node are left as they are: the NIR frontend resolves them (a sub-graph with one
+Input and one Output).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snncc.errors import SnnccError
+
+NEURONS = ("LIF", "CubaLIF", "LI", "CubaLI", "IF", "I", "Threshold", "Scale", "Delay")
+
+
+def _text(value: Any) -> str:
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+def _input_size(node: dict) -> int | None:
+    """How many values ``node`` (a raw NIR record) takes in, from its own parameters, or None."""
+    kind = _text(node.get("type", ""))
+    if kind in ("Affine", "Linear") and "weight" in node:
+        return int(np.shape(node["weight"])[-1])
+    if kind in NEURONS:
+        for key in ("tau_mem", "tau", "r", "v_threshold", "threshold", "scale", "delay"):
+            if key in node:
+                return int(np.size(node[key]))
+    if kind == "NIRGraph":
+        ins = [n for n in node["nodes"].values() if _text(n.get("type", "")) == "Input"]
+        if len(ins) == 1:
+            fed = _fed_sizes(node, next(k for k, n in node["nodes"].items() if n is ins[0]))
+            return fed.pop() if len(fed) == 1 else int(np.prod(ins[0]["shape"]))
+    return None
+
+
+def _fed_sizes(graph: dict, name: str) -> set[int | None]:
+    edges = [(_text(a), _text(b)) for a, b in graph["edges"]]
+    return {_input_size(graph["nodes"][b]) if b in graph["nodes"] else None for a, b in edges if a == name}
+
+
+def normalise(graph: dict, path: str, notes: list[str], source: str) -> None:
+    """Fix, in place, the Input shapes of ``graph`` and its sub-graphs that disagree with what they feed."""
+    graph["edges"] = [(_text(a), _text(b)) for a, b in graph["edges"]]
+    for name, node in graph["nodes"].items():
+        where = f"{path}{name}"
+        if _text(node.get("type", "")) == "NIRGraph":
+            normalise(node, where + ".", notes, source)
+            node["type_check"] = False
+    if not path:
+        return
+    for name, node in graph["nodes"].items():
+        if _text(node.get("type", "")) != "Input":
+            continue
+        sizes = _fed_sizes(graph, name)
+        declared = int(np.prod(node["shape"]))
+        if None in sizes or len(sizes) != 1:
+            if declared not in sizes:
+                raise SnnccError(f"older NIR file: sub-graph input '{path}{name}' declares {declared} values and feeds "
+                                 f"nodes of sizes {sorted(s for s in sizes if s is not None)} (undecidable)",
+                                 file=source, field=f"node '{path}{name}'")
+            continue
+        (size,) = sizes
+        if size != declared:
+            node["shape"] = np.array([size])
+            notes.append(f"older NIR file: sub-graph input '{path}{name}' declared shape [{declared}] but feeds "
+                         f"{size} values; read as [{size}] (the size of what it feeds)")
+
+
+def read_legacy(path: str | Path) -> tuple[Any, list[str]]:
+    """(nir.NIRGraph, notes) for an older NIR file, or a one-line SnnccError."""
+    import h5py
+    import nir
+    from nir.serialization import hdf2dict
+
+    try:
+        with h5py.File(str(path), "r") as f:
+            raw = hdf2dict(f["node"])
+    except Exception as ex:  # not HDF5 / no 'node' group
+        raise SnnccError(f"not a readable NIR graph ({type(ex).__name__})", file=str(path), field="format") from None
+    if _text(raw.get("type", "")) != "NIRGraph" or "nodes" not in raw:
+        raise SnnccError("not a NIR graph (no top-level NIRGraph)", file=str(path), field="format")
+    notes: list[str] = []
+    normalise(raw, "", notes, str(path))
+    raw["type_check"] = False
+    try:
+        return nir.dict2NIRNode(raw), notes
+    except Exception as ex:  # the nir builders raise assorted types
+        detail = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
+        raise SnnccError(f"not a readable NIR graph, even as an older NIR file ({detail})", file=str(path),
+                         field="format") from None

@@ -1,0 +1,193 @@
+"""Jetson artefacts of the buffered classifiers (FCN, ResNet, Encoder, Time-CNN, Inception).
+
+These networks have no IR graph (the IR has no convolutions), so their reference is the PyTorch
+module of the checkpoint itself: ``model.onnx`` (legacy exporter, the JetPack's opset, dynamic
+batch, T fixed: the whole buffered sample) must pass ``onnx.checker`` and the TensorRT operator
+rules, run at two batch sizes, and agree with PyTorch in ONNX Runtime on seeded N(0, 1) frames:
+max |delta score| <= 1e-3 x max(1, max |score|) and the same predictions, else SnnccError.
+There is no step model: a buffered classifier needs the whole sample before it can answer.
+
+Files: model.onnx, manifest.json (the same format the runner and ``snncc bench`` read),
+build_engine.sh, run.py.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+import snncc
+from snncc.atomic import atomic_dir, file_sha256
+from snncc.errors import SnnccError
+from snncc.frontends.checkpoint import is_checkpoint, model_metadata, module_from_checkpoint
+from snncc.frontends.torchfile import load_torch_file
+from snncc.models.baselines import BASELINE_KINDS, BufferedClassifier
+from snncc.targets.jetson.export import _export, opset_for_jetpack
+from snncc.targets.jetson.manifest import FORMAT, FORMAT_VERSION, manifest_bytes
+from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK, build_engine_script
+from snncc.targets.jetson.validate import VALUE_TOLERANCE, check_structure, session, single_thread
+
+EXECUTABLE = ("build_engine.sh", "run.py")
+MAIN_BATCH, SECOND_BATCH = 8, 3
+
+
+def buffered_checkpoint(path: str | os.PathLike) -> dict | None:
+    """The checkpoint in ``path`` when it holds a buffered classifier, else None (not read as one)."""
+    p = Path(path)
+    if p.suffix.lower() not in (".pt", ".pth", ".ckpt") or not p.is_file():
+        return None
+    obj = load_torch_file(p)
+    if is_checkpoint(obj) and isinstance(obj.get("architecture"), dict) \
+            and obj["architecture"].get("kind") in BASELINE_KINDS:
+        return obj
+    return None
+
+
+def seeded_frames(batch: int, steps: int, channels: int, seed: int) -> np.ndarray:
+    return np.random.default_rng(seed).standard_normal((batch, steps, channels)).astype(np.float32)
+
+
+def validate_buffered(module: BufferedClassifier, data: bytes, seed: int = 0) -> dict:
+    """model.onnx vs the PyTorch module (float32) in ONNX Runtime; raises SnnccError on disagreement."""
+    from snncc.targets.jetson.export import ExportedModel
+
+    cfg = module.config
+    ops = check_structure(ExportedModel(data, ["frames"], ["scores"], {}), "model.onnx")
+    sess = session(data)
+    record: dict[str, Any] = {"reference": "the checkpoint's PyTorch module (float32; the IR has no convolutions)",
+                              "seed": seed, "operators": ops}
+    worst, agree, total = 0.0, 0, 0
+    for batch, s in ((MAIN_BATCH, seed), (SECOND_BATCH, seed + 1)):
+        x = seeded_frames(batch, cfg.n_steps, cfg.n_inputs, s)
+        with torch.no_grad():
+            ref = module.eval()(torch.from_numpy(x)).numpy()
+        got = sess.run(None, {"frames": x})[0]
+        if got.shape != ref.shape:
+            raise SnnccError(f"model.onnx gives scores of shape {got.shape} at batch {batch}, PyTorch {ref.shape}",
+                             field="model.onnx")
+        delta = float(np.max(np.abs(got - ref)))
+        scale = max(1.0, float(np.max(np.abs(ref))))
+        if not delta <= VALUE_TOLERANCE * scale:
+            raise SnnccError(f"model.onnx disagrees with PyTorch: max |delta score| {delta:.3g} at batch {batch} "
+                             f"(tolerance {VALUE_TOLERANCE * scale:.3g})", field="model.onnx")
+        worst = max(worst, delta)
+        agree += int(np.sum(np.argmax(got, 1) == np.argmax(ref, 1)))
+        total += batch
+    record.update({"samples": total, "batch_sizes_checked": [MAIN_BATCH, SECOND_BATCH],
+                   "max_abs_delta_score": worst, "prediction_agreement": agree / total})
+    if agree != total:
+        raise SnnccError(f"model.onnx changes {total - agree} of {total} predictions against PyTorch",
+                         field="model.onnx")
+    return record
+
+
+def build_buffered_manifest(module: BufferedClassifier, meta: dict, opset: int, jetpack: str, validation: dict,
+                            source: str | None, source_sha256: str | None) -> dict:
+    cfg = module.config
+    classes = meta.get("classes") or [str(i) for i in range(cfg.n_outputs)]
+    return {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "snncc_version": snncc.__version__,
+        "model": {"name": cfg.kind, "kind": cfg.kind, "update_order": None},
+        "source": {"file": source, "sha256": source_sha256},
+        "jetpack": str(jetpack),
+        "opset": opset,
+        "tensorrt": TENSORRT_FOR_JETPACK.get(opset),
+        "dt": cfg.dt,
+        "time_steps": cfg.n_steps,
+        "time_axis": "fixed (buffered: the whole sample)",
+        "encoding": meta.get("encoding") or "analog frames",
+        "input": {"name": "frames", "channels": cfg.n_inputs, "input_copies": 1, "graph_width": cfg.n_inputs,
+                  "signal": "analog", "dtype": "float32", "note": "the whole sample of frames, buffered"},
+        "readout": {"mode": "scores", "score_output": "scores",
+                    "prediction": "argmax of the score over classes, ties to the lowest index (computed on the host)"},
+        "classes": list(classes),
+        "variants": [{"name": "sequence", "file": "model.onnx",
+                      "inputs": [{"name": "frames", "shape": ["batch", cfg.n_steps, cfg.n_inputs], "dtype": "float32"}],
+                      "outputs": [{"name": "scores", "shape": ["batch", cfg.n_outputs], "dtype": "float32"}],
+                      "description": "the whole buffered sample, T fixed, dynamic batch (no step model)"}],
+        "default_variant": "sequence",
+        "validation": validation,
+    }
+
+
+@dataclass
+class BufferedArtefact:
+    files: dict[str, bytes]
+    manifest: dict
+    notes: list[str] = field(default_factory=list)
+
+    def write(self, path: str | os.PathLike) -> None:
+        dest = Path(path)
+        if dest.exists() and not dest.is_dir():
+            raise SnnccError("the Jetson artefact is a directory, and a file of that name exists", file=str(dest),
+                             field="--output")
+        with atomic_dir(dest) as tmp:
+            for name, data in self.files.items():
+                (tmp / name).write_bytes(data)
+                if name in EXECUTABLE:
+                    os.chmod(tmp / name, 0o755)
+
+    def summary(self) -> dict[str, Any]:
+        m = self.manifest
+        return {"model": m["model"],
+                "files": {n: {"bytes": len(d), "sha256": hashlib.sha256(d).hexdigest()} for n, d in self.files.items()},
+                "jetpack": m["jetpack"], "opset": m["opset"], "tensorrt": m["tensorrt"], "time_steps": m["time_steps"],
+                "time_axis": m["time_axis"], "dt": m["dt"], "input": m["input"],
+                "variants": [{k: v[k] for k in ("name", "file", "inputs", "outputs")} for v in m["variants"]],
+                "validation": {k: v for k, v in m["validation"].items() if k != "operators"}, "notes": self.notes}
+
+    def render_text(self, console) -> None:
+        m, v = self.manifest, self.manifest["validation"]
+        console.print(f"[bold]Jetson artefact[/bold]  {m['model']['kind']} (buffered classifier)   JetPack {m['jetpack']} "
+                      f"-> ONNX opset {m['opset']} (TensorRT {m['tensorrt']})")
+        for name, data in self.files.items():
+            console.print(f"  {name}: {len(data):,} bytes")
+        console.print(f"input: frames (batch, {m['time_steps']}, {m['input']['channels']}) -> scores "
+                      f"(batch, {len(m['classes'])})")
+        console.print(f"validated against PyTorch in ONNX Runtime ({v['samples']} seeded samples, batches "
+                      f"{v['batch_sizes_checked']}): max |delta score| {v['max_abs_delta_score']:.2g}; predictions "
+                      f"{v['prediction_agreement']:.0%} equal")
+        for note in self.notes:
+            console.print(f"note: {note}")
+
+
+def lower_buffered(module: BufferedClassifier, metadata: dict | None = None, options: dict | None = None) -> BufferedArtefact:
+    """A validated Jetson artefact of a buffered classifier (options: jetpack, seed, source, source_sha256)."""
+    from snncc.targets.jetson import runner_source
+
+    options, meta = dict(options or {}), dict(metadata or {})
+    given = options.get("time_steps")
+    if given is not None and int(given) != module.config.n_steps:
+        raise SnnccError(f"a buffered {module.config.kind} takes exactly {module.config.n_steps} frames "
+                         f"(its architecture), not {given}", field="--time-steps")
+    jetpack = str(options.get("jetpack") or "4.6")
+    opset = opset_for_jetpack(jetpack)
+    module = module.eval()
+    with single_thread():
+        example = torch.from_numpy(seeded_frames(2, module.config.n_steps, module.config.n_inputs, 7))
+        exported = _export(module, (example,), ["frames"], ["scores"], {"frames": {0: "batch"}, "scores": {0: "batch"}},
+                           opset)
+        validation = validate_buffered(module, exported.data, seed=int(options.get("seed", 0)))
+    manifest = build_buffered_manifest(module, meta, opset, jetpack, validation, options.get("source"),
+                                       options.get("source_sha256"))
+    files = {"model.onnx": exported.data, "manifest.json": manifest_bytes(manifest),
+             "build_engine.sh": build_engine_script(manifest).encode("utf-8"), "run.py": runner_source()}
+    notes = ["validated in ONNX Runtime against the PyTorch module on this machine; TensorRT engines are built "
+             "and run on the board",
+             "buffered classifier: one variant (model.onnx), no streaming step model; fp16 not emulated"]
+    return BufferedArtefact(files, manifest, notes)
+
+
+def lower_checkpoint(path: str | os.PathLike, obj: dict, options: dict | None = None) -> BufferedArtefact:
+    """``snncc compile --target jetson`` for a buffered-classifier checkpoint already read from ``path``."""
+    module = module_from_checkpoint(obj, source=str(path))
+    opts = {**dict(options or {}), "source": Path(path).name, "source_sha256": file_sha256(path)}
+    return lower_buffered(module, model_metadata(obj), opts)

@@ -1,0 +1,44 @@
+"""Start-up cost: help and bundle-only verbs import no heavy library (checked in a fresh interpreter)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+HEAVY = ("torch", "sklearn", "scipy", "pandas", "onnx", "onnxruntime", "matplotlib", "numba", "optuna")
+VERBS = ("compile", "inspect", "emulate", "check", "map", "report", "export", "run", "data", "train", "bench")
+
+PROBE = """
+import contextlib, io, json, sys
+from snncc.cli.main import run
+seen = []
+for args in {calls!r}:
+    with contextlib.redirect_stdout(io.StringIO()):
+        code = run(args)
+    heavy = sorted({{m.split('.')[0] for m in sys.modules if m.split('.')[0] in {heavy!r}}})
+    seen.append({{"args": args, "code": code, "heavy": heavy}})
+print(json.dumps(seen))
+"""
+
+
+def run_in_fresh_interpreter(calls: list[list[str]]) -> list[dict]:
+    out = subprocess.run([sys.executable, "-c", PROBE.format(calls=calls, heavy=HEAVY)], capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_help_of_snncc_and_every_verb_imports_no_heavy_library():
+    calls = [["--help"]] + [[verb, "--help"] for verb in VERBS]
+    for record in run_in_fresh_interpreter(calls):
+        assert record["code"] == 0, record
+        assert record["heavy"] == [], f"snncc {' '.join(record['args'])} imported {record['heavy']}"
+
+
+def test_every_verb_is_registered():
+    import typer
+
+    from snncc.cli.main import build_app
+
+    assert set(VERBS) <= set(typer.main.get_command(build_app()).commands)

@@ -1,0 +1,108 @@
+"""Real NIR graphs written by other frameworks (tests/data/nir, NIR paper artefacts): each compiles
+for Loihi and Jetson or is refused with one line naming the reason; the trained Braille graphs keep
+the float graph's decisions on Loihi (bit-exact emulation) at a reduced size.
+
+Inputs are seeded random spike trains (SYNTHETIC): the figures are agreement with the float graph,
+not accuracy on Braille recordings.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nir_graphs import run_cli
+from snncc.errors import SnnccError
+from snncc.frontends import LoadOptions, load_model
+from snncc.frontends.nir_legacy import normalise
+from snncc.targets.loihi.agreement import measure_agreement
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "nir"
+GRAPHS = ["braille_zero_2023.nir", "braille_noDelay_noBias_subtract.nir", "braille_subgraph_2023.nir",
+          "lif_norse.nir", "lif_rockpool.nir", "two_lif_neurons.nir"]
+
+
+def _extra(name):
+    return ["--reset", "subtract", "--allow-reset-change"] if "subtract" in name else []
+
+
+@pytest.mark.parametrize("name", GRAPHS)
+def test_real_graph_compiles_for_loihi_and_jetson(name, tmp_path, capsys):
+    for target, out, extra in (("loihi", tmp_path / "g.net", _extra(name)),
+                               ("jetson", tmp_path / "j", ["--time-steps", "20"] + _extra(name)[:2])):
+        code, stdout, err = run_cli(["compile", DATA / name, "--dt", "1e-4", "--target", target, "-o", out, *extra],
+                                    capsys)
+        if code == 0:
+            assert out.exists(), (target, stdout)
+            if target == "loihi" and name.startswith("braille_zero"):   # auto measured every candidate
+                assert "scale candidates, measured spike-count error" in stdout and "fine x1.5" in stdout, stdout
+        else:   # refused: one line naming the reason, nothing written
+            assert code == 2 and not out.exists(), (target, err)
+            lines = [ln for ln in err.splitlines() if ln.startswith("snncc: error:")]
+            assert len(lines) == 1 and "Traceback" not in err, err
+    # every one of these graphs is expected to compile for both targets today
+    assert code == 0, err
+
+
+def test_older_nir_file_loads_with_a_note():
+    g = load_model(DATA / "braille_subgraph_2023.nir", LoadOptions(dt=1e-4))
+    notes = g.metadata["import_notes"]
+    assert any("older NIR file" in n and "read as [38]" in n for n in notes), notes
+    assert g.node("fc1").weight.shape == (38, 12) and g.node("hidden.lin").weight.shape == (38, 38)
+
+
+def test_older_nir_input_feeding_disagreeing_sizes_is_one_line():
+    sub = {"type": "NIRGraph", "edges": [(b"input", b"a"), (b"input", b"b")],
+           "nodes": {"input": {"type": b"Input", "shape": np.array([12])},
+                     "a": {"type": b"Affine", "weight": np.zeros((3, 5)), "bias": np.zeros(3)},
+                     "b": {"type": b"CubaLIF", "tau_mem": np.ones(7), "tau_syn": np.ones(7), "r": np.ones(7),
+                           "v_leak": np.zeros(7), "v_threshold": np.ones(7)}}}
+    top = {"type": "NIRGraph", "edges": [], "nodes": {"sub": sub}}
+    with pytest.raises(SnnccError, match="undecidable"):
+        normalise(top, "", [], "x.nir")
+
+
+def test_damaged_nir_file_is_still_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.nir"
+    bad.write_bytes(b"not hdf5")
+    code, _, err = run_cli(["inspect", bad, "--dt", "1e-4"], capsys)
+    assert code == 2 and err.strip().splitlines()[-1].startswith("snncc: error:") and "Traceback" not in err
+
+
+@pytest.mark.parametrize("name,argmax_bound,corr_bound", [
+    # bounds well below what was measured at 20 samples x 256 steps, density 0.08, seed 0 (auto picks a
+    # fine candidate: see the printed figures on failure); the paper's global rule: 0.85 / 0.885 and 0.85 / 0.961
+    ("braille_zero_2023.nir", 0.95, 0.94),
+    ("braille_noDelay_noBias_subtract.nir", 0.85, 0.98),
+])
+def test_trained_braille_graph_agrees_with_its_float_graph(name, argmax_bound, corr_bound):
+    g = load_model(DATA / name, LoadOptions(dt=1e-4, reset="subtract" if "subtract" in name else None))
+    kw = dict(samples=20, steps=256, density=0.08)
+    rec = measure_agreement(g, {"scale": "auto", "allow_reset_change": True}, **kw)
+    errors = rec.candidates
+    assert {"global", "per-layer", "fine", "fine x1.5"} <= set(errors), errors
+    best = min(errors, key=errors.get)            # auto: never worse than a rule it tried
+    assert rec.scale_rule == "fine" and best.startswith("fine") and f"chose '{best}'" in rec.scale_reason, errors
+    assert rec.argmax_agreement >= argmax_bound and rec.count_correlation >= corr_bound, rec.lines()
+    assert not any(rec.overflow.values()), rec.overflow
+    paper = measure_agreement(g, {"scale": "global", "allow_reset_change": True}, **kw)
+    assert rec.count_correlation >= paper.count_correlation + 0.02, (rec.lines(), paper.lines())
+    if "subtract" in name:
+        assert "reset to zero" in rec.reference
+
+
+def test_check_without_labels_prints_agreement_and_the_noise_ceiling(tmp_path, capsys):
+    code, out, err = run_cli(["check", DATA / "braille_zero_2023.nir", "--dt", "1e-4", "--limit", "6",
+                              "--density", "0.1", "--noise", "0.01", "--json"], capsys)
+    assert code == 0, err
+    rec = json.loads(out)
+    assert rec["samples"] == 6 and rec["steps"] == 256 and rec["noise"] == 0.01
+    assert 0 <= rec["argmax_agreement"] <= 1 and set(rec["layer_spike_agreement"]) == {"lif1.lif", "lif2"}
+    assert "ceiling_argmax_agreement" in rec and "SYNTHETIC" in rec["inputs"]
+    x = (np.random.default_rng(3).random((3, 40, 12)) < 0.1).astype(np.uint8)
+    np.savez(tmp_path / "x.npz", inputs=x)
+    code, out, err = run_cli(["check", DATA / "braille_zero_2023.nir", "--dt", "1e-4", "--data", tmp_path / "x.npz",
+                              "--agreement"],
+                             capsys)
+    assert code == 0 and "argmax agreement" in out and "3 given spike trains of 40 steps" in out, err
