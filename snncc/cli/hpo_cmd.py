@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import List, Optional
 
@@ -78,7 +77,6 @@ def hpo_run(
     from snncc.hpo.objectives import parse_objectives
     from snncc.hpo.progress import RichStudyView
     from snncc.hpo.run import HpoRequest, run_hpo
-    from snncc.hpo.study import Interrupted
 
     if threads < 1:
         raise SnnccError("must be >= 1", field="--threads")
@@ -92,14 +90,9 @@ def hpo_run(
                      pruner=pruner, n_startup=startup, enqueue_preset=preset, storage=storage, workdir=str(workdir),
                      device=device, heartbeat=heartbeat)
     view = None if (quiet or json_out) else (lambda study: RichStudyView(study, err_console))
-    try:
-        summaries = run_hpo(req, view)
-    except Interrupted as ex:
-        what = (f"trial {ex.trial} was marked FAIL and its parameters re-queued" if ex.trial is not None
-                else "no trial was running")
-        print(f"snncc: interrupted: study {ex.study} is consistent ({what}); rerun the same command to continue",
-              file=sys.stderr)
-        raise typer.Exit(130)
+    # Ctrl-C: the running trial is marked FAIL and re-queued (study.Interrupted, a KeyboardInterrupt);
+    # the entry point prints its one line and exits with 130; rerunning the command continues
+    summaries = run_hpo(req, view)
     if json_out:
         print_json(summaries)
         return

@@ -223,7 +223,8 @@ def study_report(storage, name: str, storage_label: str = "") -> HpoReport:
     if retried:
         notes.append("re-queued after a kill or Ctrl-C: " + ", ".join(f"trial {r.retry_of} -> {r.number}" for r in retried))
     counts = {"complete": b.complete, "pruned": b.pruned, "failed": b.failed, "killed and re-queued": b.retried,
-              "running": b.running, "waiting": b.waiting, "budget": b.n_trials}
+              "running": b.running, "waiting": b.waiting, "budget": b.n_trials,
+              "cancelled over budget": b.cancelled}
     return HpoReport(study=name, storage=storage_label, plan=plan_d, counts=counts, rows=rows, best=best_of(rows),
                      front=front_of(rows), paper_presets={th: p.as_dict() for th, p in PRESETS.items()},
                      synthetic_data=synthetic, notes=notes)

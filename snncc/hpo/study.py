@@ -6,8 +6,10 @@ it when it is created; rerunning the same command loads it and continues: finish
 worker is marked FAIL once its heartbeat is stale and its parameters are queued again, and a
 trial interrupted by Ctrl-C is marked FAIL and queued again at once. Each worker starts trials
 while ``spent + running + waiting < n_trials`` and then waits for the running ones, so several
-workers (processes or machines on one storage) share one budget; a race between two workers'
-checks can start at most one extra trial per extra worker (never a repeated one).
+workers (processes or machines on one storage) share one budget. Two workers whose checks race can
+create one trial too many; trial numbers are unique, so the trial that finds ``n_trials`` counted
+trials below its number is cancelled before training (FAIL, user attribute ``over_budget``, not
+counted) and the study ends with exactly ``n_trials``.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ STEPS = ("anneal", "grid")
 SELECT = ("val", "test")
 PLAN_ATTR = "snncc_plan"
 INTERRUPTED_ATTR = "snncc_interrupted"
+OVER_BUDGET_ATTR = "over_budget"     # a trial two workers' racing checks started beyond the budget: cancelled
 
 
 @dataclass
@@ -122,6 +125,7 @@ class Budget:
     running: int
     waiting: int
     n_trials: int
+    cancelled: int = 0                # over-budget trials cancelled before training (not counted)
 
     @property
     def spent(self) -> int:
@@ -146,19 +150,33 @@ def retried_numbers(trials) -> set[int]:
     return out
 
 
+def counted(trials) -> list:
+    """The trials that use the budget: all but re-queued failures and cancelled over-budget trials."""
+    from optuna.trial import TrialState
+
+    retried = retried_numbers(trials)
+    return [t for t in trials if not t.user_attrs.get(OVER_BUDGET_ATTR)
+            and not (t.state == TrialState.FAIL and t.number in retried)]
+
+
+def over_budget(study, number: int, n_trials: int) -> bool:
+    """Trial ``number`` started although ``n_trials`` counted trials with smaller numbers exist."""
+    return sum(t.number < number for t in counted(study.get_trials(deepcopy=False))) >= n_trials
+
+
 def budget(study, n_trials: int) -> Budget:
     from optuna.trial import TrialState
 
     trials = study.get_trials(deepcopy=False)
-    retried = retried_numbers(trials)
+    used = counted(trials)
     count = {s: 0 for s in TrialState}
-    failed = 0
-    for t in trials:
+    for t in used:
         count[t.state] += 1
-        if t.state == TrialState.FAIL and t.number not in retried:
-            failed += 1
-    return Budget(count[TrialState.COMPLETE], count[TrialState.PRUNED], failed,
-                  count[TrialState.FAIL] - failed, count[TrialState.RUNNING], count[TrialState.WAITING], n_trials)
+    cancelled = sum(bool(t.user_attrs.get(OVER_BUDGET_ATTR)) for t in trials)
+    fails = sum(t.state == TrialState.FAIL for t in trials)
+    return Budget(count[TrialState.COMPLETE], count[TrialState.PRUNED], count[TrialState.FAIL],
+                  fails - count[TrialState.FAIL] - cancelled, count[TrialState.RUNNING],
+                  count[TrialState.WAITING], n_trials, cancelled)
 
 
 # --------------------------------------------------------------------------- opening a study
@@ -358,6 +376,10 @@ def run_study(plan: StudyPlan, storage, objective_factory: Callable, view=None, 
 
     def tracked(trial):
         current["trial"] = trial.number
+        if over_budget(study, trial.number, plan.n_trials):
+            trial.set_user_attr(OVER_BUDGET_ATTR, True)
+            raise SnnccError("cancelled before training: other workers had started the whole budget",
+                             field=f"trial {trial.number}")
         return objective(trial)
 
     catch = (SnnccError,)

@@ -86,8 +86,9 @@ def test_two_workers_share_one_study(braille_dir, tmp_path):
     for name, n in (("two", 3), ("two-grid", 2)):          # grid: time_bin_size pinned x copies 1..2
         ts = trials(work, name)
         done = _state(ts, COMPLETE)
-        assert len(done) == n and len(ts) == n, [(t.number, t.state) for t in ts]
-        assert sorted(t.number for t in done) == list(range(n))
+        cancelled = [t for t in ts if t.user_attrs.get("over_budget")]   # the two workers' checks raced
+        assert len(done) == n and len(ts) == n + len(cancelled), [(t.number, t.state) for t in ts]
+        assert all(t.state == FAIL and "outcome" not in t.user_attrs for t in cancelled)
         assert len({json.dumps(t.params, sort_keys=True) for t in done}) == n   # no trial run twice
     ran_by = {t.user_attrs["worker"] for name in ("two", "two-grid") for t in trials(work, name)}
     assert len(ran_by) == 2                                # both processes took trials
