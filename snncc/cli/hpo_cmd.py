@@ -102,8 +102,10 @@ def hpo_run(
                       f" of {b['n_trials']}; {len(s.trials_run_here)} run by this worker")
         for note in s.notes:
             console.print(f"note: {note}")
+    from snncc.hpo.storage import redact
+
     console.print(f"report: snncc hpo report {summaries[-1].study}"
-                  + (f" --storage '{storage}'" if storage else f" --dir {workdir}"))
+                  + (f" --storage '{redact(storage)}'" if storage else f" --dir {workdir}"))
 
 
 @hpo_app.command("report")
