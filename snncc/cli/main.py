@@ -19,7 +19,7 @@ import sys
 # rich and the standard library at module level, so ``snncc --help`` starts at once.
 VERB_MODULES = (
     "compile_cmd", "inspect_cmd", "emulate_cmd", "check_cmd", "map_cmd", "report_cmd", "export_cmd",
-    "run_cmd", "data_cmd", "train_cmd", "bench_cmd", "analyse_cmd",
+    "run_cmd", "data_cmd", "train_cmd", "bench_cmd", "analyse_cmd", "hpo_cmd",
 )
 OUTPUT_OPTIONS = ("-o", "--output")
 INTERRUPTED = "snncc: interrupted; no partial output was left behind"

@@ -46,6 +46,7 @@ class TrainRequest:
     qat_from: str | None = None
     qat_epochs: int = 3
     device: str = "auto"
+    n_hidden: int | None = None      # spiking models: hidden neurons (None: the paper's 450)
 
 
 @dataclass
@@ -113,8 +114,9 @@ def _new_model(req: TrainRequest, hp: PaperParams, data: TrainingData) -> torch.
     if req.kind in ("rsnn", "ffsnn"):
         if n_classes > N_SNN_OUTPUTS:
             raise SnnccError(f"labels reach {n_classes - 1}; the SNN has {N_SNN_OUTPUTS} outputs", field="labels")
+        size = {} if req.n_hidden is None else {"n_hidden": int(req.n_hidden)}
         model = build_model(req.kind, n_inputs=channels, n_outputs=N_SNN_OUTPUTS, input_copies=hp.nb_input_copies,
-                            tau_mem=hp.tau_mem, tau_syn=hp.tau_syn, dt=hp.dt, scale=hp.scale, order=req.order)
+                            tau_mem=hp.tau_mem, tau_syn=hp.tau_syn, dt=hp.dt, scale=hp.scale, order=req.order, **size)
         model.reset_parameters(hp.fwd_weight_scale, hp.weight_scale_factor)
         return model
     if req.kind in BASELINE_KINDS:
@@ -184,8 +186,11 @@ def _metadata(req, hp, data, split, history: History, extra=None) -> dict:
     return meta
 
 
-def train(req: TrainRequest, progress=None, data: TrainingData | None = None) -> TrainResult:
-    """Train a model from scratch and write its checkpoint (``data``: already loaded, else from req.data)."""
+def train(req: TrainRequest, progress=None, data: TrainingData | None = None, on_epoch=None) -> TrainResult:
+    """Train a model from scratch and write its checkpoint (``data``: already loaded, else from req.data).
+
+    ``on_epoch(record)``: called after each epoch with its ``EpochRecord`` (see ``train_model``).
+    """
     if req.kind not in KINDS:
         raise SnnccError(f"unknown model {req.kind!r} (known: {', '.join(KINDS)})", field="model")
     if req.epochs < 1:
@@ -201,7 +206,8 @@ def train(req: TrainRequest, progress=None, data: TrainingData | None = None) ->
     split, train_set, test_set, val_set = _prepare(req, data)
     model = _new_model(req, hp, data)
     settings = _settings(req, hp, req.epochs)
-    history = train_model(model, train_set, test_set, settings, val=val_set, progress=progress, device=device)
+    history = train_model(model, train_set, test_set, settings, val=val_set, progress=progress, device=device,
+                          on_epoch=on_epoch)
     meta = _metadata(req, hp, data, split, history, {"trained_on": str(device)})
     save_checkpoint(model, req.output, meta)
     return TrainResult(req.kind, req.output, count_trainable(model), hp.as_dict(), asdict(settings), data.facts(),

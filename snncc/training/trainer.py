@@ -152,6 +152,7 @@ def train_model(
     select: str | None = None,
     keep_start: bool = False,
     device=None,
+    on_epoch: Callable[[EpochRecord], None] | None = None,
 ) -> History:
     """Train ``model`` in place; at the end it holds the selected epoch's weights (back on the CPU).
 
@@ -159,7 +160,8 @@ def train_model(
     ``keep_start``: the starting weights compete as epoch 0 (fine-tuning never returns worse
     weights, on the selection metric, than it was given). ``progress``: a ``rich.progress.Progress``.
     ``device``: a ``torch.device`` to train on (default: where the model is); the data stay on the
-    CPU and each batch is moved to it.
+    CPU and each batch is moved to it. ``on_epoch(record)``: called after each epoch (e.g. a
+    hyper-parameter search reporting intermediate values); an exception it raises stops training.
     """
     if device is not None:
         model.to(device)
@@ -176,7 +178,7 @@ def train_model(
         task = progress.add_task("training", total=settings.epochs * max(1, -(-n // settings.batch_size)))
     try:
         _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select,
-                keep_start, scheduler)
+                keep_start, scheduler, on_epoch)
     finally:
         if progress is not None:
             progress.stop()
@@ -185,7 +187,7 @@ def train_model(
 
 
 def _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select,
-            keep_start=False, scheduler=None):
+            keep_start=False, scheduler=None, on_epoch=None):
     n = x_train.shape[0]
     best_metric, best_state = -1.0, None
     if keep_start and select != "last":
@@ -235,6 +237,8 @@ def _epochs(model, x_train, y_train, test, val, settings, forward, progress, tas
                 f"epoch {epoch}: loss {record.loss:.4f}  train {100 * record.train_accuracy:.2f} %  "
                 f"test {100 * test_acc:.2f} %" + (f"  val {100 * val_acc:.2f} %" if val_acc is not None else "")
                 + f"  ({record.seconds:.1f} s)")
+        if on_epoch is not None:
+            on_epoch(record)
     if best_state is not None:
         model.load_state_dict(best_state)
 

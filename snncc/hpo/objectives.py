@@ -1,0 +1,76 @@
+"""What a trial returns to the study: accuracy and the hardware figures, each with its direction.
+
+``accuracy`` is the selection accuracy: the best VALIDATION epoch's by default; with
+``select="test"`` the best TEST epoch's, as the paper did (optimistic: the test set picks the
+epoch *and* the hyper-parameters). ``energy``, ``delay`` and ``synops`` are per sample, from
+the compiled Loihi model (ESTIMATES); ``cores`` from its core map; ``emulated_accuracy`` from the
+bit-exact emulator on a subset (needs ``emulate_samples > 0``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+from snncc.errors import SnnccError
+
+DIRECTIONS = {
+    "accuracy": "maximize",
+    "emulated_accuracy": "maximize",
+    "energy": "minimize",
+    "cores": "minimize",
+    "synops": "minimize",
+    "delay": "minimize",
+}
+UNITS = {"accuracy": "%", "emulated_accuracy": "%", "energy": "uJ/sample (ESTIMATE)", "cores": "cores",
+         "synops": "synaptic ops/sample", "delay": "ms/sample (ESTIMATE)"}
+ALIASES = {"pareto": ("accuracy", "energy", "cores")}
+
+
+def parse_objectives(text: str) -> tuple[str, ...]:
+    """``"accuracy,energy,cores"`` (or ``"pareto"``) -> the objective names, first one primary."""
+    names: list[str] = []
+    for part in (p.strip() for p in text.split(",")):
+        for name in ALIASES.get(part, (part,)):
+            if name not in DIRECTIONS:
+                raise SnnccError(f"unknown objective {name!r} (known: {', '.join(DIRECTIONS)}, or pareto)",
+                                 field="--objectives")
+            if name in names:
+                raise SnnccError(f"objective {name!r} given twice", field="--objectives")
+            names.append(name)
+    if not names:
+        raise SnnccError("give at least one objective", field="--objectives")
+    return tuple(names)
+
+
+@dataclass
+class TrialOutcome:
+    """Everything one finished trial measured (stored on the trial as the user attribute 'outcome')."""
+
+    params: dict
+    accuracy: float                      # on the selection split (see ``selected_on``)
+    selected_on: str                     # "val" | "test" (optimistic)
+    val_accuracy: float | None
+    test_accuracy: float
+    best_epoch: int
+    epochs_run: int
+    hardware: dict | None                # HardwareFigures.as_dict()
+    checkpoint: str
+    synthetic_data: bool
+    worker: str
+    train_seconds: float
+    notes: list = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+    def value(self, name: str) -> float:
+        hw = self.hardware or {}
+        if name == "accuracy":
+            return float(self.accuracy)
+        key = {"emulated_accuracy": "emulated_accuracy", "energy": "energy_uj_per_sample", "cores": "cores",
+               "synops": "synaptic_ops_per_sample", "delay": "delay_ms_per_sample"}[name]
+        v = hw.get(key)
+        if v is None:
+            raise SnnccError(f"objective {name!r} needs the hardware figures"
+                             + (" with --emulate > 0" if name == "emulated_accuracy" else ""), field="--objectives")
+        return float(v)

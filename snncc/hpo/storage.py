@@ -1,0 +1,77 @@
+"""Where a study lives: an SQLite file by default, any Optuna RDB URL (PostgreSQL for many machines).
+
+Heartbeats: every worker refreshes its running trial's heartbeat every ``heartbeat`` seconds; a
+RUNNING trial whose heartbeat is older than ``grace`` seconds (its worker was killed) is marked
+FAIL and its parameters are queued again (``optuna.storages.RetryHeartbeatStaleTrialCallback``),
+so a finished trial is never run twice and a killed one is not lost.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+import warnings
+from pathlib import Path
+
+from snncc.errors import SnnccError
+
+SQLITE_TIMEOUT_S = 60          # writers wait this long for SQLite's lock (several local workers)
+CREATE_RETRIES = 6
+
+
+def default_url(workdir: str | Path) -> str:
+    return f"sqlite:///{Path(workdir).resolve() / 'hpo.sqlite3'}"
+
+
+def redact(url: str) -> str:
+    """``url`` without its password (for reports and logs)."""
+    return re.sub(r"(://[^:/@]+:)[^@]*@", r"\1***@", url)
+
+
+def open_storage(url: str, heartbeat: int = 30, grace: int | None = None):
+    """An Optuna RDBStorage for ``url`` with heartbeats and the retry of stale trials."""
+    import optuna
+    from optuna.exceptions import ExperimentalWarning
+
+    if heartbeat < 1:
+        raise SnnccError("must be >= 1 (seconds)", field="--heartbeat")
+    grace = grace if grace is not None else 2 * heartbeat + 1
+    scheme = url.split("://", 1)[0] if "://" in url else ""
+    if not scheme or not re.fullmatch(r"[a-z0-9+]+", scheme):
+        raise SnnccError("expected an Optuna storage URL such as sqlite:///path.db or "
+                         "postgresql://user:pass@host/db", file=redact(url), field="--storage")
+    kwargs = {}
+    if scheme == "sqlite":
+        path = url[len("sqlite:///"):]
+        if path and path != ":memory:":
+            parent = Path(path).parent
+            if not parent.is_dir():
+                raise SnnccError("the SQLite file's directory does not exist", file=redact(url), field="--storage")
+        kwargs = {"connect_args": {"timeout": SQLITE_TIMEOUT_S}}
+    else:
+        kwargs = {"pool_pre_ping": True}
+    for attempt in range(CREATE_RETRIES):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ExperimentalWarning)
+                return optuna.storages.RDBStorage(
+                    url, engine_kwargs=kwargs, heartbeat_interval=int(heartbeat), grace_period=int(grace),
+                    heartbeat_stale_trial_callback=optuna.storages.RetryHeartbeatStaleTrialCallback())
+        except ImportError as ex:
+            missing = getattr(ex.__cause__, "name", None) or type(ex).__name__
+            raise SnnccError(f"no database driver for {scheme!r} URLs (missing {missing}; PostgreSQL: "
+                             "pip install 'snncc[postgres]')", file=redact(url), field="--storage") from None
+        except Exception as ex:  # sqlalchemy: bad URL, unreachable server, bad credentials, a creation race
+            if _creation_race(ex) and attempt + 1 < CREATE_RETRIES:
+                time.sleep(0.5 * (attempt + 1))   # another worker is creating the tables this instant
+                continue
+            first = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
+            raise SnnccError(f"cannot open the storage ({type(ex).__name__}: {first[:160]})", file=redact(url),
+                             field="--storage") from None
+    raise AssertionError("unreachable")
+
+
+def _creation_race(ex: Exception) -> bool:
+    """Two workers creating a fresh storage's tables at once: one of them sees a duplicate."""
+    text = str(ex).lower()
+    return type(ex).__name__ == "IntegrityError" or "already exists" in text or "database is locked" in text
