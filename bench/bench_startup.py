@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 VERBS = ("compile", "inspect", "emulate", "check", "map", "report", "export", "run", "data", "train", "bench",
-         "analyse")
+         "analyse", "hpo")
 GOAL_HELP_S = 0.5
 
 

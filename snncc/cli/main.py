@@ -77,6 +77,17 @@ def _os_error_line(ex: OSError) -> str:
     return f"{target}: {code}: {reason.lower()}"
 
 
+def _caused_by_interrupt(ex: BaseException) -> bool:
+    """True if a KeyboardInterrupt is anywhere in ``ex``'s chain of causes and contexts."""
+    seen: set[int] = set()
+    while ex is not None and id(ex) not in seen:
+        if isinstance(ex, KeyboardInterrupt):
+            return True
+        seen.add(id(ex))
+        ex = ex.__cause__ or ex.__context__
+    return False
+
+
 def _dispatch(args: list[str], debug: bool) -> int:
     import typer
 
@@ -125,6 +136,9 @@ def _dispatch(args: list[str], debug: bool) -> int:
         _say("snncc: error: memory: this input needs more memory than the machine has; use a smaller batch or input")
         return 2
     except Exception as ex:  # the last line of defence: never a traceback without --debug
+        if _caused_by_interrupt(ex):   # a library turned Ctrl-C into its own error (e.g. an ImportError)
+            _say(INTERRUPTED)
+            return 130
         if debug:
             raise
         first = str(ex).strip().splitlines()[0] if str(ex).strip() else ""

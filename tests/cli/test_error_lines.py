@@ -178,3 +178,19 @@ def test_published_layouts_still_load_through_the_restricted_unpickler(tmp_path)
         formats.write_raw(path, raw, np.array([0, 1, 2]), release=release)
         loaded = formats.load_raw(path)
         assert loaded.release == release and np.array_equal(loaded.raw, raw)
+
+
+def test_ctrl_c_turned_into_another_error_by_a_library_still_reads_as_interrupted(tmp_path, capsys, monkeypatch):
+    import snncc.frontends
+
+    def interrupted_import(*args, **kwargs):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as ex:
+            raise ImportError("partially initialised module") from ex
+
+    monkeypatch.setattr(snncc.frontends, "load_model", interrupted_import)
+    model = tmp_path / "m.pt"
+    model.write_bytes(b"x")
+    code, _, err = run_cli(["compile", model, "-t", "ir", "-o", tmp_path / "o.snnir"], capsys)
+    assert "interrupted" in one_error_line(code, err, status=130)

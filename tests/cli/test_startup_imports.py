@@ -8,7 +8,7 @@ import sys
 
 HEAVY = ("torch", "sklearn", "scipy", "pandas", "onnx", "onnxruntime", "matplotlib", "numba", "optuna")
 VERBS = ("compile", "inspect", "emulate", "check", "map", "report", "export", "run", "data", "train", "bench",
-         "analyse")
+         "analyse", "hpo")
 
 PROBE = """
 import contextlib, io, json, sys
