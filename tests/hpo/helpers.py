@@ -69,6 +69,6 @@ def wait_until(condition, proc: subprocess.Popen, timeout: float = 180) -> None:
         if proc.poll() is not None:
             out, err = proc.communicate()
             raise AssertionError(f"the worker ended early ({proc.returncode}): {err[-2000:]}")
-        time.sleep(0.25)
+        time.sleep(0.05)
     proc.kill()
     raise AssertionError("timed out")

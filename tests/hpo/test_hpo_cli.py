@@ -23,14 +23,15 @@ def test_interrupted_killed_and_resumed_study_loses_and_repeats_nothing(braille_
     from snncc.cli.main import run as cli
 
     work = tmp_path / "w"
-    args = ["hpo", "run", "s", "--step", "anneal", "--trials", "3", "--epochs", "2", "--pruner", "none",
+    epochs = 12   # long enough that a poll finds a trial in the middle even on an idle machine
+    args = ["hpo", "run", "s", "--step", "anneal", "--trials", "3", "--epochs", str(epochs), "--pruner", "none",
             *tiny_args(braille_dir, work)]
 
     def midway(min_complete):
-        """``min_complete`` trials done and one RUNNING with an epoch reported (so it has >= 1 epoch to go)."""
+        """``min_complete`` trials done and one RUNNING with some epochs reported and several still to go."""
         rows = states(work)
         return sum(state == "COMPLETE" for _, state, _ in rows) >= min_complete and any(
-            state == "RUNNING" and epoch == 1 for _, state, epoch in rows)
+            state == "RUNNING" and epoch is not None and 1 <= epoch <= epochs - 4 for _, state, epoch in rows)
 
     # 1) Ctrl-C in the middle of a trial, after one finished: one line, exit 130, the trial re-queued
     p = start(args)
