@@ -21,20 +21,18 @@ from typing import Any
 
 import numpy as np
 
-from snncc.atomic import atomic_dir
 from snncc.errors import SnnccError
 from snncc.frontends.params import RECORDING_LENGTH_S
 from snncc.ir.graph import Graph
 from snncc.ir.timebase import recording_steps
 from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
 from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
-from snncc.targets.jetson.manifest import build_manifest, manifest_bytes, replace_refusal
+from snncc.targets.jetson.manifest import build_manifest, manifest_bytes, write_artefact
 from snncc.targets.jetson.plan import GraphPlan, plan_graph
 from snncc.targets.jetson.recipe import build_engine_script
 from snncc.targets.jetson.validate import validate_export
 from snncc.threads import one_thread
 
-EXECUTABLE = ("build_engine.sh", "run.py")
 MAX_UNROLLED_STEPS = 5000
 
 
@@ -75,11 +73,7 @@ class JetsonArtefact:
     notes: list[str] = field(default_factory=list)
 
     def write(self, path: str | os.PathLike) -> None:
-        with atomic_dir(Path(path), replaceable=replace_refusal) as tmp:
-            for name, data in self.files.items():
-                (tmp / name).write_bytes(data)
-                if name in EXECUTABLE:
-                    os.chmod(tmp / name, 0o755)
+        write_artefact(path, self.files)
 
     def summary(self) -> dict[str, Any]:
         m = self.manifest

@@ -23,18 +23,17 @@ import numpy as np
 import torch
 
 import snncc
-from snncc.atomic import atomic_dir, file_sha256
+from snncc.atomic import file_sha256
 from snncc.errors import SnnccError
 from snncc.frontends.checkpoint import is_checkpoint, model_metadata, module_from_checkpoint
 from snncc.frontends.torchfile import load_torch_file
 from snncc.models.baselines import BASELINE_KINDS, BufferedClassifier
 from snncc.targets.jetson.export import _export, opset_for_jetpack
-from snncc.targets.jetson.manifest import FORMAT, FORMAT_VERSION, manifest_bytes
+from snncc.targets.jetson.manifest import FORMAT, FORMAT_VERSION, manifest_bytes, write_artefact
 from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK, build_engine_script
 from snncc.targets.jetson.validate import VALUE_TOLERANCE, check_structure, session
 from snncc.threads import one_thread
 
-EXECUTABLE = ("build_engine.sh", "run.py")
 MAIN_BATCH, SECOND_BATCH = 8, 3
 
 
@@ -126,15 +125,7 @@ class BufferedArtefact:
     notes: list[str] = field(default_factory=list)
 
     def write(self, path: str | os.PathLike) -> None:
-        dest = Path(path)
-        if dest.exists() and not dest.is_dir():
-            raise SnnccError("the Jetson artefact is a directory, and a file of that name exists", file=str(dest),
-                             field="--output")
-        with atomic_dir(dest) as tmp:
-            for name, data in self.files.items():
-                (tmp / name).write_bytes(data)
-                if name in EXECUTABLE:
-                    os.chmod(tmp / name, 0o755)
+        write_artefact(path, self.files)
 
     def summary(self) -> dict[str, Any]:
         m = self.manifest

@@ -104,7 +104,22 @@ def manifest_bytes(manifest: dict) -> bytes:
 
 
 MANIFEST = "manifest.json"
-WRITTEN_FILES = (MANIFEST, "build_engine.sh", "run.py")
+EXECUTABLE = ("build_engine.sh", "run.py")
+WRITTEN_FILES = (MANIFEST, *EXECUTABLE)
+
+
+def write_artefact(path, files: dict[str, bytes]) -> None:
+    """Write an artefact directory atomically, replacing only an earlier snncc artefact (``replace_refusal``)."""
+    import os
+    from pathlib import Path
+
+    from snncc.atomic import atomic_dir
+
+    with atomic_dir(Path(path), replaceable=replace_refusal) as tmp:
+        for name, data in files.items():
+            (tmp / name).write_bytes(data)
+            if name in EXECUTABLE:
+                os.chmod(tmp / name, 0o755)
 
 
 def replace_refusal(directory) -> str | None:
