@@ -105,6 +105,12 @@ def test_real_full_and_read_only_disks_give_one_line_and_no_crash(small_mounts, 
     del torch
 
 
+def default_sigint() -> None:
+    """In the child: Ctrl-C's default action, even where the test runner was started with SIGINT
+    ignored (a background job of a non-interactive shell), so Python installs its handler."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 READY_THEN_RUN = (   # the console script's own call, run() reading sys.argv, after a 'ready' line
     "from snncc.cli.main import run\n"
     "print('ready', flush=True)\n"
@@ -123,7 +129,7 @@ def test_ctrl_c_at_any_moment_prints_one_line_and_exits_130(small_rsnn_checkpoin
         out = tmp_path / f"b{delay}.net"
         proc = subprocess.Popen([sys.executable, "-c", READY_THEN_RUN, "compile", str(small_rsnn_checkpoint),
                                  "-t", "loihi", "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                text=True, env=env)
+                                text=True, env=env, preexec_fn=default_sigint)
         assert proc.stdout.readline().strip() == "ready"
         time.sleep(delay)
         if proc.poll() is not None:   # finished before the signal: nothing to interrupt

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -23,8 +24,15 @@ def env() -> dict:
     return e
 
 
+def default_sigint() -> None:
+    """In the child: Ctrl-C's default action, even where the test runner was started with SIGINT
+    ignored (a background job of a non-interactive shell), so Python installs its handler."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start(args: list[str]) -> subprocess.Popen:
-    return subprocess.Popen(SNNCC + args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env())
+    return subprocess.Popen(SNNCC + args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env(),
+                            preexec_fn=default_sigint)
 
 
 def run(args: list[str], timeout: float = 240) -> subprocess.CompletedProcess:
