@@ -111,10 +111,14 @@ def default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
-READY_THEN_RUN = (   # the console script's own call, run() reading sys.argv, after a 'ready' line
-    "from snncc.cli.main import run\n"
-    "print('ready', flush=True)\n"
-    "run()\n"
+READY_THEN_RUN = (   # the console script's own call, run() reading sys.argv; 'ready' once inside it
+    "from snncc.cli import main\n"
+    "dispatch = main._dispatch\n"
+    "def announced(*args):\n"
+    "    print('ready', flush=True)\n"
+    "    return dispatch(*args)\n"
+    "main._dispatch = announced\n"
+    "main.run()\n"
 )
 
 
