@@ -234,12 +234,10 @@ def analyse_cmd(
     from snncc.data.binning import bin_events, binned_reconstruction, n_bins_for, record_ms
     from snncc.data.sigma_delta import reconstruct
 
+    from snncc.data.encoding import load_raw_frames
+
     ths = _parse_thresholds(thresholds)
-    sources.require_exists(src)
-    raw_path = sources.raw_file(src)
-    if raw_path is None:
-        raise SnnccError(f"the analysis needs the raw frames ({formats.RAW_NAME})", file=str(src))
-    rs = formats.load_raw(raw_path)
+    raw_path, rs = load_raw_frames(src, f"the analysis needs the raw frames ({formats.RAW_NAME})")
     x = rs.inverted()
     labels = rs.labels
     n, t, c = x.shape

@@ -135,16 +135,22 @@ def encode_events(src: str | Path, threshold: float | None = None, bin_ms: float
     return EncodedSet(inputs, labels, meta)
 
 
-def frame_set(src: str | Path) -> EncodedSet:
-    """Inverted frames (N, T, 12) float32 (0 = rest, 255 = full load) for the LSTM."""
+def load_raw_frames(src: str | Path, missing: str | None = None):
+    """(raw-frame file, its ``RawSet``) for a directory of published files or the raw ``.pkl`` itself;
+    ``missing`` is the rule stated when there is none (default: no raw-frame file here)."""
     from snncc.data import formats, sources
 
     src = Path(src)
     sources.require_exists(src)
     raw_path = sources.raw_file(src)
     if raw_path is None:
-        raise SnnccError(f"no {formats.RAW_NAME} here", file=str(src))
-    rs = formats.load_raw(raw_path)
+        raise SnnccError(missing or f"no {formats.RAW_NAME} here", file=str(src))
+    return raw_path, formats.load_raw(raw_path)
+
+
+def frame_set(src: str | Path) -> EncodedSet:
+    """Inverted frames (N, T, 12) float32 (0 = rest, 255 = full load) for the LSTM."""
+    raw_path, rs = load_raw_frames(src)
     inputs = rs.inverted().astype(np.float32)
     return EncodedSet(inputs, rs.labels, _meta("frames", str(raw_path), None, FRAME_MS, FRAME_MS / 1000.0,
                                                inputs.shape[1], {}))
