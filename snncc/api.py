@@ -1,0 +1,36 @@
+"""snncc's Python API: every CLI verb as a function with the same name and typed arguments.
+
+Each function returns a record with ``as_dict()`` (what ``--json`` prints) and
+``render_text(console)`` (what the CLI prints); the CLI only parses options, calls the function
+and prints the record. Names are resolved on first use, so ``import snncc.api`` is instant and a
+verb imports only what it needs. ``docs/api.md`` shows the Python equivalent of each command.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+# public name -> module that defines it
+
+# --- target verbs: compile, check, emulate, map, report, run, bench ---
+_TARGET_HOMES: dict[str, str] = {
+}
+
+# --- model and data verbs: inspect, export, data, train, analyse, hpo ---
+_MODEL_DATA_HOMES: dict[str, str] = {
+}
+
+_HOMES = {**_TARGET_HOMES, **_MODEL_DATA_HOMES}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str):
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'snncc.api' has no attribute {name!r}")
+    return getattr(importlib.import_module(home), name)
+
+
+def __dir__() -> list[str]:
+    return __all__
