@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import importlib
 
-# public name -> module that defines it
+# public name -> "module:attribute" that defines it (verb names follow the CLI: ``compile``,
+# ``check``, ``data_encode`` for ``snncc data encode``, ...)
 
 # --- target verbs: compile, check, emulate, map, report, run, bench ---
 _TARGET_HOMES: dict[str, str] = {
@@ -29,7 +30,8 @@ def __getattr__(name: str):
     home = _HOMES.get(name)
     if home is None:
         raise AttributeError(f"module 'snncc.api' has no attribute {name!r}")
-    return getattr(importlib.import_module(home), name)
+    module, _, attribute = home.partition(":")
+    return getattr(importlib.import_module(module), attribute or name)
 
 
 def __dir__() -> list[str]:
