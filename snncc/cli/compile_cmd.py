@@ -33,7 +33,7 @@ def compile_command(
     json_out: bool = typer.Option(False, "--json", help="Print the compile report as JSON."),
 ) -> None:
     """Compile a trained model for a target. Every artefact is checked against the IR reference."""
-    from snncc.cli.render import print_graph_summary, print_import_notes
+    from snncc.cli.render import print_import_notes
     from snncc.frontends import LoadOptions, load_model
     from snncc.frontends.buffered import compile_buffered  # buffered classifiers have no IR graph
     from snncc.targets import get_target
@@ -51,12 +51,9 @@ def compile_command(
     if json_out:
         print_json({"target": target, "output": str(output), **summary})
         return
-    if target == "ir":
-        print_graph_summary(summary)
+    render = getattr(artefact, "render_text", None)
+    if render is not None:
+        render(console)
     else:
-        render = getattr(artefact, "render_text", None)
-        if render is not None:
-            render(console)
-        else:
-            console.print(summary)
+        console.print(summary)
     console.print(f"wrote {output}")

@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
-from snncc.cli.output import print_json
+from snncc.cli.output import console, print_json
 
 
 @app.command("inspect")
@@ -20,9 +20,10 @@ def inspect_command(
     json_out: bool = typer.Option(False, "--json", help="Print as JSON."),
 ) -> None:
     """Load a model, validate its IR and print it: nodes, sizes, time constants, delays, reset."""
-    from snncc.cli.render import print_graph_summary, print_import_notes
+    from snncc.cli.render import print_import_notes
     from snncc.frontends import LoadOptions, load_model
     from snncc.ir.summary import graph_summary
+    from snncc.ir.summary_text import render_graph_summary
 
     graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
     summary = graph_summary(graph)
@@ -30,4 +31,4 @@ def inspect_command(
     if json_out:
         print_json(summary)
     else:
-        print_graph_summary(summary)
+        render_graph_summary(summary, console)

@@ -25,6 +25,11 @@ class IRArtefact:
     def summary(self) -> dict[str, Any]:
         return graph_summary(self.graph)
 
+    def render_text(self, console) -> None:
+        from snncc.ir.summary_text import render_graph_summary
+
+        render_graph_summary(self.summary(), console)
+
 
 class IRTarget:
     name = "ir"
