@@ -103,9 +103,19 @@ def linear(params: NodeParams, name: str, op, x: torch.Tensor, q=_same) -> torch
     return conv(params, name, op, x, q) if isinstance(op, Conv) else dense(params, name, x, q)
 
 
-def lif_step(params: NodeParams, name: str, op: LIF, i_syn, v, ref, drive, q=_same):
-    """One step of a LIF population; returns (I, V after reset, ref, spikes).
-    ``q`` rounds every arithmetic result (identity, or ``round_fp16`` for fp16 emulation)."""
+_COUNTED = object()   # lif_step's default hold: the refractory counter ``ref``
+
+
+def lif_step(params: NodeParams, name: str, op: LIF, i_syn, v, ref, drive, q=_same, held=_COUNTED):
+    """One step of a LIF population; returns (I, V after reset, ref, spikes, fired).
+
+    I <- alpha I + drive (+ bias) ; V <- beta V + I (+ bias) ; V <- 0 while held ; spike if V > theta,
+    then V <- 0 (zero reset) or V - theta (subtract). ``q`` rounds every arithmetic result (identity,
+    or ``round_fp16`` for fp16 emulation). ``held`` is counted in ``ref`` (held while ref > 0) unless
+    the caller passes the hold mask itself: with a refractory period of 2 (the SpyTorch order) a
+    neuron is held exactly in the step after a spike, so the previous step's ``fired`` (None before
+    the first step) replaces the counter in unrolled graphs.
+    """
     i_syn = q(q(params.get(name, "alpha") * i_syn) + drive)
     bias = params.get(name, "bias")
     if bias is not None and op.bias_placement == "current":
@@ -113,10 +123,12 @@ def lif_step(params: NodeParams, name: str, op: LIF, i_syn, v, ref, drive, q=_sa
     v = q(q(params.get(name, "beta") * v) + i_syn)
     if bias is not None and op.bias_placement == "voltage":
         v = q(v + bias)
-    if op.refractory > 1:
+    counted = op.refractory > 1 and held is _COUNTED
+    if counted:
         held = ref > 0
-        v = torch.where(held, torch.zeros((), dtype=v.dtype), v)
         ref = torch.where(held, ref - 1, ref)
+    if op.refractory > 1 and held is not None:
+        v = torch.where(held, torch.zeros((), dtype=v.dtype), v)
     theta = params.get(name, "theta")
     fired = v > theta
     spikes = fired.to(v.dtype)
@@ -124,9 +136,9 @@ def lif_step(params: NodeParams, name: str, op: LIF, i_syn, v, ref, drive, q=_sa
         v_after = torch.where(fired, torch.zeros((), dtype=v.dtype), v)
     else:
         v_after = torch.where(fired, q(v - theta), v)
-    if op.refractory > 1:
+    if counted:
         ref = torch.where(fired, torch.full((), float(op.refractory - 1), dtype=ref.dtype), ref)
-    return i_syn, v_after, ref, spikes
+    return i_syn, v_after, ref, spikes, fired
 
 
 def lstm_cell(params: NodeParams, name: str, hidden: int, h, c, x, q=_same):
@@ -252,7 +264,8 @@ class UnrolledModel(nn.Module):
                     hist[(n, "spikes")].append(linear(p, n, op, total))
                 elif isinstance(op, LIF):
                     i_syn, v, ref, fired_before = state[n]
-                    i_syn, v, ref, s, fired = lif_step_unrolled(p, n, op, i_syn, v, ref, fired_before, total)
+                    hold = {"held": fired_before} if op.refractory == 2 else {}   # the mask is cheaper to unroll
+                    i_syn, v, ref, s, fired = lif_step(p, n, op, i_syn, v, ref, total, **hold)
                     state[n] = [i_syn, v, ref, fired]
                     hist[(n, "spikes")].append(s)
                     if "voltage" in self.ports[n]:
@@ -273,30 +286,6 @@ def _in_width(op) -> int:
     if isinstance(op, LSTM):
         return op.input_size
     return op.size
-
-
-def lif_step_unrolled(params: NodeParams, name: str, op: LIF, i_syn, v, ref, fired_before, drive):
-    """``lif_step`` with a cheaper refractory period of 2 (the SpyTorch order): the neuron is held
-    exactly in the step after a spike, so the previous step's spike mask replaces the counter."""
-    if op.refractory != 2:
-        i_syn, v, ref, spikes = lif_step(params, name, op, i_syn, v, ref, drive)
-        return i_syn, v, ref, spikes, None
-    i_syn = params.get(name, "alpha") * i_syn + drive
-    bias = params.get(name, "bias")
-    if bias is not None and op.bias_placement == "current":
-        i_syn = i_syn + bias
-    v = params.get(name, "beta") * v + i_syn
-    if bias is not None and op.bias_placement == "voltage":
-        v = v + bias
-    if fired_before is not None:
-        v = torch.where(fired_before, torch.zeros((), dtype=v.dtype), v)
-    theta = params.get(name, "theta")
-    fired = v > theta
-    if op.reset == "zero":
-        v_after = torch.where(fired, torch.zeros((), dtype=v.dtype), v)
-    else:
-        v_after = torch.where(fired, v - theta, v)
-    return i_syn, v_after, ref, fired.to(v.dtype), fired
 
 
 class WholeSequenceModel(nn.Module):
@@ -406,7 +395,7 @@ class StepModel(nn.Module):
                 ref = st.get((name, "ref"))
                 if ref is None:
                     ref = st[(name, "V")]  # unused when refractory == 1
-                i_syn, v, ref, s = lif_step(p, name, op, st[(name, "I")], st[(name, "V")], ref, total, q)
+                i_syn, v, ref, s, _ = lif_step(p, name, op, st[(name, "I")], st[(name, "V")], ref, total, q)
                 nxt[(name, "I")], nxt[(name, "V")] = i_syn, v
                 if op.refractory > 1:
                     nxt[(name, "ref")] = ref
