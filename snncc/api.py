@@ -15,6 +15,13 @@ import importlib
 
 # --- target verbs: compile, check, emulate, map, report, run, bench ---
 _TARGET_HOMES: dict[str, str] = {
+    "compile": "snncc.verbs.compile:compile_model",
+    "check": "snncc.verbs.check:check_model",
+    "emulate": "snncc.verbs.emulate:emulate_bundle",
+    "map": "snncc.verbs.map:map_cores",
+    "report": "snncc.verbs.report:report_energy",
+    "run": "snncc.verbs.run:run_artefact",
+    "bench": "snncc.verbs.bench:bench_artefacts",
 }
 
 # --- model and data verbs: inspect, export, data, train, analyse, hpo ---

@@ -67,3 +67,63 @@ def check_dataset(inputs, labels, graph, *, source: str | None = None) -> None:
     """A labelled data set for ``graph``: N >= 1 samples of T >= 1 steps, labels within its classes."""
     x = check_batch(inputs, spikes=False, source=source, field="inputs")
     check_labels(labels, x.shape[0], model_classes(graph), source=source)
+
+
+# -- input files and seeded random inputs ----------------------------------------------------------
+def load_spike_input(path, field: str = "--input") -> np.ndarray:
+    """One .npy array (no pickles; an .npz archive is refused), as ``snncc emulate --input`` reads it."""
+    from pathlib import Path
+
+    path = Path(path)
+    if not path.is_file():
+        raise SnnccError("file does not exist", file=str(path), field=field)
+    try:
+        x = np.load(path, allow_pickle=False)
+    except Exception as ex:
+        raise SnnccError(f"not a .npy array ({type(ex).__name__})", file=str(path), field=field) from None
+    if not isinstance(x, np.ndarray):
+        raise SnnccError("expected one .npy array, got an .npz archive", file=str(path), field=field)
+    return x
+
+
+def load_array(path, field: str = "--input") -> np.ndarray:
+    """A .npy array (no pickles), or the ``inputs`` of a .npz data set (``snncc run --input``)."""
+    from pathlib import Path
+
+    path = Path(path)
+    if not path.is_file():
+        raise SnnccError("file not found", file=str(path), field=field)
+    try:
+        obj = np.load(path, allow_pickle=False)
+    except (ValueError, OSError, EOFError) as ex:
+        raise SnnccError(f"not a readable .npy/.npz array ({type(ex).__name__})", file=str(path), field=field) from None
+    if isinstance(obj, np.lib.npyio.NpzFile):
+        with obj:
+            if "inputs" not in obj.files:
+                raise SnnccError(f"a .npz input needs an 'inputs' array (has {sorted(obj.files)})", file=str(path),
+                                 field="inputs")
+            return obj["inputs"]
+    return obj
+
+
+class RandomSpikes:
+    """Seeded random 0/1 inputs, drawn once the shape is known: each entry is 1 with probability
+    ``rate`` (numpy's default_rng(seed).random(shape) < rate)."""
+
+    def __init__(self, samples: int, rate: float, seed: int):
+        self.samples, self.rate, self.seed = samples, rate, seed
+
+    def draw(self, steps: int, width: int) -> np.ndarray:
+        """(samples, steps, width) uint8, refusing a bad rate or count and more memory than allowed."""
+        from snncc.limits import check_memory
+
+        if not 0.0 <= self.rate <= 1.0 or self.samples < 1:
+            raise SnnccError("need 0 <= --rate <= 1 and --samples >= 1", field="--rate/--samples")
+        check_memory(8 * self.samples * steps * width,
+                     f"{self.samples:,} random samples of {steps} steps x {width} channels", field="--samples")
+        rng = np.random.default_rng(self.seed)
+        return (rng.random((self.samples, steps, width)) < self.rate).astype(np.uint8)
+
+    def note(self) -> str:
+        return (f"SYNTHETIC: {self.samples} seeded random sparse input samples (rate {self.rate}, seed {self.seed}); "
+                "no data given")

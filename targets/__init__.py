@@ -1,7 +1,14 @@
 """Targets, found through the ``snncc.targets`` entry-point group (third parties plug in there).
 
-A target offers ``lower(graph, options) -> Artefact``; an artefact offers ``write(path)``
-(atomic), ``validate(graph, inputs) -> dict`` against the IR reference, and ``summary()``.
+The interface is ``snncc.targets.base``: a target names its typed option record
+(``options_type``) and offers any of the capabilities there (``lower``, ``check``, ``agree``,
+``emulate``, ``run``, ``map``, ``estimate``, ``bench``). The verbs (``snncc.api``) ask
+``capability(get_target(name), verb)`` and refuse in one line when the target lacks it.
+
+A third-party package registers its target object in its own metadata::
+
+    [project.entry-points."snncc.targets"]
+    xylo = "snncc_xylo:target"
 """
 
 from __future__ import annotations
@@ -9,30 +16,12 @@ from __future__ import annotations
 from importlib.metadata import entry_points
 
 from snncc.errors import SnnccError
-from snncc.targets.base import Artefact, Target
+from snncc.targets.base import (
+    OPTION_FLAGS, Artefact, IROptions, JetsonOptions, LoihiOptions, Record, Target, TargetOptions, capability,
+    target_options,
+)
 
 GROUP = "snncc.targets"
-
-
-# user-facing target options (key in the options dict -> command-line flag); each target lists the
-# keys it uses in ``accepts``, and a key given for a target that does not use it is refused
-OPTION_FLAGS = {
-    "timing": "--timing",
-    "scale": "--scale",
-    "allow_reset_change": "--allow-reset-change",
-    "stream": "--stream",
-    "jetpack": "--jetpack",
-    "time_steps": "--time-steps",
-}
-
-
-def check_target_options(target, options: dict | None) -> None:
-    """Refuse a user-given option (not None, not False) that ``target`` does not use."""
-    accepts = tuple(getattr(target, "accepts", ()))
-    for key, value in (options or {}).items():
-        if key in OPTION_FLAGS and key not in accepts and value is not None and value is not False:
-            takes = ", ".join(OPTION_FLAGS[k] for k in accepts if k in OPTION_FLAGS) or "no target options"
-            raise SnnccError(f"does not apply to --target {target.name} (it takes {takes})", field=OPTION_FLAGS[key])
 
 
 def available_targets() -> list[str]:
@@ -46,4 +35,5 @@ def get_target(name: str) -> Target:
     raise SnnccError(f"unknown target {name!r} (installed: {', '.join(available_targets()) or 'none'})", field="--target")
 
 
-__all__ = ["Target", "Artefact", "get_target", "available_targets", "check_target_options", "OPTION_FLAGS"]
+__all__ = ["Target", "Artefact", "Record", "TargetOptions", "IROptions", "LoihiOptions", "JetsonOptions",
+           "get_target", "available_targets", "capability", "target_options", "OPTION_FLAGS"]

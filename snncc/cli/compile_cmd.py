@@ -1,4 +1,4 @@
-"""``snncc compile``: any supported model file -> validated IR -> a target's artefact."""
+"""``snncc compile``: any supported model file -> validated IR -> a target's artefact (``snncc.api.compile``)."""
 
 from __future__ import annotations
 
@@ -8,13 +8,8 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
-from snncc.cli.output import console, print_json
+from snncc.cli.output import print_record
 from snncc.targets import available_targets
-
-
-def compile_options(**kwargs) -> dict:
-    """Target options from the CLI, dropping the ones not given."""
-    return {k: v for k, v in kwargs.items() if v is not None}
 
 
 @app.command("compile")
@@ -33,27 +28,11 @@ def compile_command(
     json_out: bool = typer.Option(False, "--json", help="Print the compile report as JSON."),
 ) -> None:
     """Compile a trained model for a target. Every artefact is checked against the IR reference."""
+    from snncc.api import compile as compile_model
     from snncc.cli.render import print_import_notes
-    from snncc.frontends import LoadOptions, load_model
-    from snncc.frontends.buffered import compile_buffered  # buffered classifiers have no IR graph
-    from snncc.targets import get_target
 
-    options = compile_options(timing=timing, scale=scale, allow_reset_change=allow_reset_change or None,
-                              jetpack=jetpack, source=str(model), time_steps=time_steps)
-    artefact, graph = compile_buffered(model, target, options), None
-    if artefact is None:
-        graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
-        artefact = get_target(target).lower(graph, options)
-    artefact.write(output)
-    if graph is not None:
-        print_import_notes(graph)
-    summary = artefact.summary()
-    if json_out:
-        print_json({"target": target, "output": str(output), **summary})
-        return
-    render = getattr(artefact, "render_text", None)
-    if render is not None:
-        render(console)
-    else:
-        console.print(summary)
-    console.print(f"wrote {output}")
+    record = compile_model(model, target=target, output=output, params=params, dt=dt, reset=reset, timing=timing,
+                           scale=scale, allow_reset_change=allow_reset_change, jetpack=jetpack, time_steps=time_steps)
+    if record.graph is not None:
+        print_import_notes(record.graph)
+    print_record(record, json_out)

@@ -1,4 +1,4 @@
-"""``snncc emulate``: run a Loihi bundle in the bit-exact emulator.
+"""``snncc emulate``: run a Loihi bundle in the bit-exact emulator (``snncc.api.emulate``).
 
 X.npy: 0/1 spikes (bool, uint8 or float) shaped (T, C) or (B, T, C), C = the bundle's input width.
 OUT.npz: output_spikes (B, T, n_out) uint8, counts (B, n_out), prediction (B,), overflow counts;
@@ -13,28 +13,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Optional
 
-import numpy as np
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
-from snncc.atomic import write_npz_atomic
 from snncc.cli.app import app
-from snncc.cli.output import console, err_console, print_json
-from snncc.errors import SnnccError
-
-CHUNK = 256
-
-
-def load_spike_input(path: Path) -> np.ndarray:
-    if not path.is_file():
-        raise SnnccError("file does not exist", file=str(path), field="--input")
-    try:
-        x = np.load(path, allow_pickle=False)
-    except Exception as ex:
-        raise SnnccError(f"not a .npy array ({type(ex).__name__})", file=str(path), field="--input") from None
-    if not isinstance(x, np.ndarray):
-        raise SnnccError("expected one .npy array, got an .npz archive", file=str(path), field="--input")
-    return x
+from snncc.cli.output import err_console, print_record, progress_bar
 
 
 @app.command("emulate")
@@ -45,70 +28,17 @@ def emulate_command(
     record: str = typer.Option("outputs", "--record", help="'outputs' or 'all' (every layer's spikes, voltage, current)."),
     stream: bool = typer.Option(False, "--stream", help="The paper's protocol: one continuous run, --gap blank steps between samples."),
     gap: Optional[int] = typer.Option(None, "--gap", help="Blank steps between samples in --stream mode (default 100)."),
+    target: str = typer.Option("loihi", "--target", "-t", help="Target whose emulator runs the bundle."),
     json_out: bool = typer.Option(False, "--json", help="Print a summary as JSON."),
 ) -> None:
     """Run a Loihi bundle bit-exactly (integer u, v; truncating decays; wrap and clip counted)."""
-    from snncc.targets.loihi.bundle import read_bundle
-    from snncc.targets.loihi.emulator import EmulationResult, PreparedNetwork, check_inputs, emulate, pad
+    from snncc.api import emulate
 
-    if record not in ("outputs", "all"):
-        raise SnnccError("must be 'outputs' or 'all'", field="--record")
-
-    network = read_bundle(bundle)
-    x = check_inputs(load_spike_input(input), network.input_width, source=str(input))
-    shift = int(network.metadata.get("output_shift", 0) or 0)
-    padded = shift if shift and x.shape[1] + shift == network.t_sample else 0
-    x = pad(x, padded)
-    parts: list[EmulationResult] = []
-    if stream:
-        result = emulate(network, x, record=record, mode="stream", gap=gap)
-    else:
-        with Progress(TextColumn("emulating"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                      console=err_console, disable=json_out or x.shape[0] <= CHUNK, transient=True) as bar:
-            task = bar.add_task("emulate", total=x.shape[0])
-            prepared = PreparedNetwork(network)      # flattened once for every chunk
-            for start in range(0, x.shape[0], CHUNK):
-                parts.append(prepared.run(x[start:start + CHUNK], record=record, gap=gap))
-                bar.advance(task, min(CHUNK, x.shape[0] - start))
-        result = _merge(parts)
-    arrays = {"output_spikes": result.output_spikes, "counts": result.counts, "prediction": result.prediction,
-              "overflow_q_wrap": np.int64(result.overflow["q_wrap"]), "overflow_u_wrap": np.int64(result.overflow["u_wrap"]),
-              "overflow_v_clip": np.int64(result.overflow["v_clip"])}
-    index = network.metadata.get("hdf5_layer_index") or list(range(len(network.layers)))
-    for field_name, records in (("spikes", result.spikes), ("voltage", result.voltage), ("current", result.current)):
-        for i, a in records.items():   # named by HDF5 layer index (a SLAYER flatten layer has no state)
-            arrays[f"layer{index[i]}_{field_name}"] = a[..., :network.layers[i].model_n]
-    write_npz_atomic(output, arrays)      # zlib level 1: numpy's level 6 took longer than the emulation
-    summary = {"bundle": str(bundle), "output": str(output), "samples": int(x.shape[0]), "steps": int(x.shape[1]),
-               "mode": "stream" if stream else "batch", "prediction": result.prediction,
-               "overflow": result.overflow, "padded_steps": padded}
-    if json_out:
-        print_json(summary)
-        return
-    if padded:
-        console.print(f"appended {padded} blank step(s) to each sample: on Loihi the outputs appear {padded} step(s) "
-                      "later than in the model (see the bundle's timing record)")
-    elif shift and x.shape[1] < network.t_sample:
-        err_console.print(f"[yellow]warning: the bundle's outputs appear {shift} step(s) late and the input is shorter "
-                          f"than tSample ({network.t_sample}); the last output steps fall outside the run[/yellow]")
-    console.print(f"emulated {x.shape[0]} sample(s) x {x.shape[1]} steps ({summary['mode']} mode); overflow "
-                  f"{result.overflow}; predictions {result.prediction[:20].tolist()}{' ...' if x.shape[0] > 20 else ''}")
-    console.print(f"wrote {output}")
-
-
-def _merge(parts):
-    from snncc.targets.loihi.emulator import EmulationResult
-
-    if len(parts) == 1:
-        return parts[0]
-    first = parts[0]
-    res = EmulationResult(
-        output_spikes=np.concatenate([p.output_spikes for p in parts]),
-        counts=np.concatenate([p.counts for p in parts]),
-        prediction=np.concatenate([p.prediction for p in parts]),
-        overflow={k: sum(p.overflow[k] for p in parts) for k in first.overflow},
-    )
-    for name in ("spikes", "voltage", "current"):
-        for i in getattr(first, name):
-            getattr(res, name)[i] = np.concatenate([getattr(p, name)[i] for p in parts])
-    return res
+    with progress_bar(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                      disable=json_out) as progress:
+        result = emulate(bundle, input=input, output=output, target=target, record=record, stream=stream, gap=gap,
+                         progress=progress)
+    if not json_out:
+        for line in result.warnings():
+            err_console.print(f"[yellow]warning: {line}[/yellow]")
+    print_record(result, json_out)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 from typing import Any
 
@@ -15,3 +16,37 @@ def print_json(record: Any) -> None:
     from snncc.records import to_jsonable   # numpy-aware; imported only when JSON is printed
 
     print(json.dumps(to_jsonable(record), indent=2, sort_keys=False))
+
+
+def print_record(record: Any, json_out: bool) -> None:
+    """A verb's record: ``as_dict()`` as JSON, or ``render_text`` for people."""
+    if json_out:
+        print_json(record.as_dict())
+    else:
+        record.render_text(console)
+
+
+@contextlib.contextmanager
+def progress_bar(*columns, disable: bool = False):
+    """Yields ``progress(done, total, phase)`` for a verb: a transient bar on stderr, started at the
+    first report that leaves work to do (a run finished in one report shows none)."""
+    state: dict[str, Any] = {}
+
+    def report(done: int, total: int, phase: str = "") -> None:
+        if disable:
+            return
+        if "bar" not in state:
+            if done >= total:
+                return
+            from rich.progress import Progress
+
+            state["bar"] = Progress(*columns, console=err_console, transient=True)
+            state["bar"].start()
+            state["task"] = state["bar"].add_task(phase, total=total)
+        state["bar"].update(state["task"], completed=done, total=total, description=phase)
+
+    try:
+        yield report
+    finally:
+        if "bar" in state:
+            state["bar"].stop()

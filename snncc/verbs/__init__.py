@@ -1,1 +1,28 @@
-"""The library functions behind the CLI's verbs, one small module per verb (faced by ``snncc.api``)."""
+"""The library functions behind the CLI's target verbs, one small module per verb (faced by ``snncc.api``).
+
+Each takes the CLI's file argument first and its options as keyword arguments, asks the
+registered target for the capability it needs (``snncc.targets.capability``) and returns a record
+with ``as_dict()`` (what ``--json`` prints) and ``render_text(console)`` (what the command prints).
+
+``progress``, where a verb takes it, is runtime state, never an option: a callable
+``progress(done, total, phase)`` called with the samples (or protocol steps) done so far.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+VerbProgress = Callable[[int, int, str], None]
+
+
+def counting(progress: VerbProgress | None, total: int, phase: str) -> Callable[[int], None] | None:
+    """A target-side ``progress(n)`` (n more done) that reports ``progress(done, total, phase)``."""
+    if progress is None:
+        return None
+    done = [0]
+
+    def advanced(n: int) -> None:
+        done[0] += n
+        progress(done[0], total, phase)
+
+    return advanced

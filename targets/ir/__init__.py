@@ -13,6 +13,7 @@ from typing import Any
 from snncc.ir.graph import Graph
 from snncc.ir.serialize import save_graph
 from snncc.ir.summary import graph_summary
+from snncc.targets.base import IROptions, TargetOptions, target_options
 
 
 @dataclass
@@ -35,12 +36,10 @@ class IRTarget:
     name = "ir"
     description = "snncc's IR as a .snnir file (validated graph, explicit dt, delays, reset)"
     output_kind = "file"
-    accepts: tuple[str, ...] = ()
+    options_type = IROptions
 
-    def lower(self, graph: Graph, options: dict[str, Any]) -> IRArtefact:
-        from snncc.targets import check_target_options
-
-        check_target_options(self, options)
+    def lower(self, graph: Graph, options: TargetOptions | dict[str, Any] | None = None, *, progress=None) -> IRArtefact:
+        target_options(self, options)
         return IRArtefact(graph.copy())
 
 

@@ -7,15 +7,17 @@ creates the directory atomically:
 
     model.onnx  step.onnx  manifest.json  build_engine.sh  run.py
 
-Options: ``jetpack`` ("4.6" -> opset 13, default), ``time_steps`` (T of the unrolled sequence
-model; default recording_length_s / dt from the graph's metadata), ``source`` (model path).
+Options (``JetsonOptions``): ``jetpack`` ("4.6" -> opset 13, default), ``time_steps`` (T of the
+unrolled sequence model; default recording_length_s / dt from the graph's metadata), ``source``
+(model path), ``seed`` (of the validation inputs).
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +27,7 @@ from snncc.errors import SnnccError
 from snncc.frontends.params import RECORDING_LENGTH_S
 from snncc.ir.graph import Graph
 from snncc.ir.timebase import recording_steps
+from snncc.targets.base import JetsonOptions, Progress, TargetOptions, target_options
 from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
 from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
 from snncc.targets.jetson.manifest import build_manifest, manifest_bytes, write_artefact
@@ -133,25 +136,26 @@ class JetsonArtefact:
 
 
 class JetsonTarget:
+    """Capabilities: lower, check (IR vs ONNX Runtime on data), run (an artefact on inputs), bench
+    (the paper's latency and power protocol)."""
+
     name = "jetson"
     description = "NVIDIA Jetson: ONNX (sequence + streaming step) + TensorRT recipe, validated in ONNX Runtime"
     output_kind = "directory"
-    accepts = ("jetpack", "time_steps")
+    options_type = JetsonOptions
 
-    def lower(self, graph: Graph, options: dict[str, Any]) -> JetsonArtefact:
-        from snncc.targets import check_target_options
-
-        check_target_options(self, options)
-        options = dict(options or {})
+    def lower(self, graph: Graph, options: TargetOptions | Mapping[str, Any] | None = None, *,
+              progress: Progress | None = None) -> JetsonArtefact:
+        opts = target_options(self, options)
         plan = plan_graph(graph.copy())
-        steps = resolve_steps(plan, options)
-        jetpack = str(options.get("jetpack") or "4.6")
+        steps = resolve_steps(plan, opts.as_dict())
+        jetpack = str(opts.jetpack or "4.6")
         opset = opset_for_jetpack(jetpack)
         with one_thread():
             sequence = export_sequence(plan, steps, opset)
             step = export_step(plan, opset)
-        record = validate_export(plan, steps, sequence, step, seed=int(options.get("seed", 0)))
-        manifest = build_manifest(plan, steps, opset, jetpack, record.as_dict(), options.get("source"))
+        record = validate_export(plan, steps, sequence, step, seed=int(opts.seed))
+        manifest = build_manifest(plan, steps, opset, jetpack, record.as_dict(), opts.source)
         files = {
             "model.onnx": sequence.data,
             "step.onnx": step.data,
@@ -164,20 +168,40 @@ class JetsonTarget:
             notes.append(f"model.onnx is unrolled for T = {steps}; step.onnx runs any length")
         return JetsonArtefact(files, manifest, notes)
 
-    def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, options: dict[str, Any]) -> JetsonCheckRecord:
+    def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray | None,
+              options: TargetOptions | Mapping[str, Any] | None = None, *, data: str | None = None,
+              synthetic: bool = False, progress: Progress | None = None) -> JetsonCheckRecord:
         """IR reference vs the ONNX Runtime artefact on a data set (see ``check.check_artefact``)."""
-        from snncc.targets import check_target_options
-
-        check_target_options(self, options)
-        options = dict(options or {})
-        progress = options.pop("progress", None)
+        opts = target_options(self, options)
         x = np.asarray(inputs)
         if x.ndim == 2:
             x = x[None]
-        options.setdefault("time_steps", int(x.shape[1]))
-        artefact = self.lower(graph, options)
+        if opts.time_steps is None:
+            opts = replace(opts, time_steps=int(x.shape[1]))
+        artefact = self.lower(graph, opts)
         with one_thread():
             return check_artefact(plan_graph(graph.copy()), artefact, x, labels, progress)
+
+    def run(self, artefact: Path, inputs, *, source: str | None = None, stream: bool = False,
+            backend: str = "auto"):
+        from snncc.targets.jetson.run_artefact import run_artefact
+
+        return run_artefact(artefact, inputs, source=source, stream=stream, backend=backend)
+
+    def bench(self, artefacts: list[Path], *, data: Path | None = None, samples: int = 64, power: bool = False,
+              power_root: Path = Path("/"), rail: str = "VDD_IN", repeats: int = 3, warmup_passes: int = 6,
+              timed_passes: int = 6, stream: bool = False, backend: str = "auto", progress=None):
+        """One artefact: a ``BenchRecord`` (with power); several: a ``LatencyComparison`` (ratios to the first)."""
+        from snncc.targets.jetson.bench_run import bench_many, bench_one
+
+        if len(artefacts) > 1:
+            if power:
+                raise SnnccError("power is sampled for one artefact at a time", field="--power")
+            return bench_many(artefacts, data=data, samples=samples, repeats=repeats, warmup_passes=warmup_passes,
+                              timed_passes=timed_passes, stream=stream, backend=backend)
+        return bench_one(artefacts[0], data=data, samples=samples, power=power, power_root=power_root, rail=rail,
+                         repeats=repeats, warmup_passes=warmup_passes, timed_passes=timed_passes, stream=stream,
+                         backend=backend, progress=progress)
 
 
 target = JetsonTarget()

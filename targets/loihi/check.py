@@ -90,7 +90,6 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     from snncc.targets.loihi.emulator import check_inputs, emulate
     from snncc.targets.loihi.validation import lead_steps, loihi_spikes, pad
 
-    progress = progress or options.get("progress")
     lowered = lower_model(graph, dict(options, t_sample=options.get("t_sample") or np.asarray(inputs).shape[1]))
     net = lowered.network
     x_all = check_inputs(inputs, net.input_width, source=options.get("data"))

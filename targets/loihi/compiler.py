@@ -1,8 +1,8 @@
 """Lowering a graph to Loihi 1: timing, quantization, a netx-layout HDF5 bundle checked by a bit-exact emulator.
 
-``target.lower(graph, options)`` returns a ``LoihiArtefact`` that has already been checked
-against the IR reference (``validation.py``); ``target.check(...)`` measures the accuracy lost
-on a data set (``check.py``). Options: timing ("exact" | "paper"), scale ("auto" | "global" |
+``lower_artefact(graph, settings)`` (behind ``target.lower``, ``capabilities.py``) returns a
+``LoihiArtefact`` that has already been checked against the IR reference (``validation.py``).
+Settings (``LoihiOptions.as_dict()``, plus ``t_sample`` for checks): timing ("exact" | "paper"), scale ("auto" | "global" |
 "per-layer" | "split" | "fine"), allow_reset_change (bool), source (model path), time_steps (tSample
 when the model states no recording length; --time-steps).
 """
@@ -21,6 +21,7 @@ from snncc.passes.fold_linear import fold_linear
 from snncc.passes.quantize import samples_steps
 from snncc.passes.timing import lower_timing
 from snncc.targets.loihi.bundle import netx_compat, write_bundle
+from snncc.targets.loihi.capabilities import LoihiTarget, target  # noqa: F401  (the registered target, re-exported)
 from snncc.targets.loihi.chip_units import in_chip_units
 from snncc.targets.loihi.lowering import build_network, chain, lif_params_check
 from snncc.targets.loihi.network import LoihiNetwork
@@ -254,57 +255,42 @@ def attach_core_map(network: LoihiNetwork) -> None:
     network.core_map = core_map.to_dict()
 
 
-class LoihiTarget:
-    name = "loihi"
-    description = "Intel Loihi 1: HDF5 bundle (netx layout) checked by a bit-exact emulator"
-    output_kind = "file"
-    accepts = ("timing", "scale", "allow_reset_change", "stream", "time_steps")
+def lower_artefact(graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
+    """``target.lower``: lower (``lower_model``), place on cores (relays where fan-in needs them) and
+    check the bundle against the IR reference (``validation.py``)."""
+    from snncc.targets.loihi.relays import needs_relays, relay_agreement, relay_network
+    from snncc.targets.loihi.validation import lead_steps, pad, random_spikes, validate_lowering
 
-    def lower(self, graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
-        from snncc.targets import check_target_options
-        from snncc.targets.loihi.relays import needs_relays, relay_agreement, relay_network
-        from snncc.targets.loihi.validation import lead_steps, pad, random_spikes, validate_lowering
-
-        check_target_options(self, options)
-        lowered = lower_model(graph, options)
-        notes: list[str] = list(lowered.notes)
-        network, plan = lowered.network, None
-        if needs_relays(lowered.network):
-            network, plan = relay_network(lowered.network)   # the mapper's relays: the bundle holds them
-        else:
-            attach_core_map(lowered.network)
-        record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
-                                   lowered.timing_record.shifts, lowered.timing_record.output_shift,
-                                   batch=VALIDATION_BATCH)
-        validation = record.as_dict()
-        if plan is not None:
-            trec = lowered.timing_record
-            x = random_spikes(VALIDATION_BATCH, lowered.network.t_sample - trec.output_shift,
-                              lowered.network.input_width, 0.05, seed=0)
-            validation["relays"] = relay_agreement(lowered.network, network, plan,
-                                                   pad(x, lead_steps(trec.shifts, trec.output_shift)))
-            notes += plan.notes()
-            notes.append("relayed vs the same bundle without relays (itself checked against the IR above): spike "
-                         "agreement " + ", ".join(f"{k} {100 * v:.2f}%" for k, v in
-                                                  validation["relays"]["spike_agreement"].items())
-                         + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
-                         + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
-        notes.append(f"tSample {network.t_sample}: {lowered.network.metadata['t_sample_rule']}"
-                     + (f" + {plan.total_shift} relay step(s)" if plan is not None and plan.total_shift else ""))
-        if network.metadata.get("output_shift"):
-            notes.append(f"outputs appear {network.metadata['output_shift']} step(s) later than in the IR; tSample "
-                         "includes them")
-        return LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
-                             timing=lowered.timing_record.as_dict(), validation=validation, notes=notes)
-
-    def check(self, graph: Graph, inputs, labels, options: dict[str, Any]):
-        from snncc.targets import check_target_options
-        from snncc.targets.loihi.check import check_model
-
-        check_target_options(self, options)
-        return check_model(graph, inputs, labels, options)
+    lowered = lower_model(graph, options)
+    notes: list[str] = list(lowered.notes)
+    network, plan = lowered.network, None
+    if needs_relays(lowered.network):
+        network, plan = relay_network(lowered.network)   # the mapper's relays: the bundle holds them
+    else:
+        attach_core_map(lowered.network)
+    record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
+                               lowered.timing_record.shifts, lowered.timing_record.output_shift,
+                               batch=VALIDATION_BATCH)
+    validation = record.as_dict()
+    if plan is not None:
+        trec = lowered.timing_record
+        x = random_spikes(VALIDATION_BATCH, lowered.network.t_sample - trec.output_shift,
+                          lowered.network.input_width, 0.05, seed=0)
+        validation["relays"] = relay_agreement(lowered.network, network, plan,
+                                               pad(x, lead_steps(trec.shifts, trec.output_shift)))
+        notes += plan.notes()
+        notes.append("relayed vs the same bundle without relays (itself checked against the IR above): spike "
+                     "agreement " + ", ".join(f"{k} {100 * v:.2f}%" for k, v in
+                                              validation["relays"]["spike_agreement"].items())
+                     + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
+                     + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
+    notes.append(f"tSample {network.t_sample}: {lowered.network.metadata['t_sample_rule']}"
+                 + (f" + {plan.total_shift} relay step(s)" if plan is not None and plan.total_shift else ""))
+    if network.metadata.get("output_shift"):
+        notes.append(f"outputs appear {network.metadata['output_shift']} step(s) later than in the IR; tSample "
+                     "includes them")
+    return LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
+                         timing=lowered.timing_record.as_dict(), validation=validation, notes=notes)
 
 
-target = LoihiTarget()
-
-__all__ = ["target", "LoihiTarget", "LoihiArtefact", "LoihiNetwork", "lower_model"]
+__all__ = ["target", "LoihiTarget", "LoihiArtefact", "LoihiNetwork", "lower_model", "lower_artefact"]

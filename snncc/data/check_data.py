@@ -1,0 +1,72 @@
+"""The data ``snncc check`` measures on: a Braille data set file or a plain .npz with inputs and labels.
+
+Inputs with the model's ``base_inputs`` channels are tiled ``input_copies`` times (the authors'
+x.tile((k,))), as the model was trained on them.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from snncc.errors import SnnccError
+
+
+def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = True
+                    ) -> tuple[np.ndarray, np.ndarray | None, dict]:
+    """(inputs, labels, meta) from a Braille data set file or a plain .npz with inputs and labels
+    (``labels=False``: inputs only, labels returned as None); the first ``limit`` samples."""
+    path = Path(path)
+    meta: dict = {}
+    try:
+        from snncc.data.dataset import load_dataset
+    except ImportError:
+        load_dataset = None
+    if not path.is_file():
+        raise SnnccError("file does not exist", file=str(path), field="--data")
+    inputs = None
+    if not labels:
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                inputs = np.asarray(z["inputs"])
+        except Exception as ex:  # not an npz / no 'inputs'
+            raise SnnccError(f"agreement needs an .npz with an array 'inputs' (N, T, C) ({type(ex).__name__})",
+                             file=str(path), field="--data") from None
+        if inputs.ndim != 3:
+            raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
+        return tiled(inputs[:limit] if limit is not None else inputs, graph), None, meta
+    if load_dataset is not None:
+        try:
+            inputs, labels, meta = load_dataset(path)
+        except SnnccError:
+            inputs = None
+    if inputs is None:
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                if "inputs" not in z or "labels" not in z:
+                    raise SnnccError("a check data set needs arrays 'inputs' (N, T, C) and 'labels' (N,)",
+                                     file=str(path), field="inputs" if "inputs" not in z else "labels")
+                inputs, labels = z["inputs"], z["labels"]
+        except SnnccError:
+            raise
+        except Exception as ex:  # not an npz / corrupt
+            raise SnnccError(f"not a readable .npz data set ({type(ex).__name__})", file=str(path), field="--data") from None
+    inputs, labels = np.asarray(inputs), np.asarray(labels)
+    if inputs.ndim != 3:
+        raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
+    from snncc.inputs import check_dataset
+
+    check_dataset(inputs, labels, graph, source=str(path))
+    if limit is not None:
+        inputs, labels = inputs[:limit], labels[:limit]
+    return tiled(inputs, graph), labels, meta
+
+
+def tiled(inputs: np.ndarray, graph) -> np.ndarray:
+    """Inputs with ``base_inputs`` channels tiled ``input_copies`` times (the authors' x.tile((k,)))."""
+    k = int(graph.metadata.get("input_copies", 1) or 1)
+    base = graph.metadata.get("base_inputs")
+    if k > 1 and base is not None and inputs.shape[2] == int(base):
+        inputs = np.tile(inputs, (1, 1, k))
+    return inputs

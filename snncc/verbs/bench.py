@@ -1,0 +1,79 @@
+"""``snncc bench``: measured per-sample latency (and power) of written artefacts, the paper's protocol.
+
+Warm-up: the whole data set ``warmup_passes`` times in batches of 64; timing: ``timed_passes`` passes
+at batch 1, repeated ``repeats`` times (median and spread). ``power`` samples the board's main rail
+during each timed repeat. Several artefacts are timed side by side (ratios to the first).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from snncc.errors import SnnccError
+from snncc.verbs import VerbProgress
+
+
+@dataclass
+class BenchResult:
+    """One artefact's benchmark record, as the command prints it."""
+
+    artefact: str
+    repeats: int
+    record: Any              # BenchRecord
+
+    def as_dict(self) -> dict[str, Any]:
+        return self.record.as_dict()
+
+    def render_text(self, console) -> None:
+        record = self.record
+        console.print(f"[bold]snncc bench[/bold] {self.artefact} ({record.variant}, {record.backend})  data: {record.data}")
+        console.print(f"per-sample latency: median {record.median_ms:.3f} ms, spread {record.spread_ms:.3f} ms over "
+                      f"{self.repeats} repeats ({', '.join(f'{v:.3f}' for v in record.per_sample_ms)} ms)")
+        if record.accuracy is not None:
+            console.print(f"accuracy: {record.accuracy:.2%}")
+        if record.power_summary:
+            p = record.power_summary
+            console.print(f"power ({p['rail']}): min {p['min_mw']:.0f} mW, max {p['max_mw']:.0f} mW, avg "
+                          f"{p['avg_mw']:.0f} mW; energy per sample {p['energy_per_sample_uj']:.0f} uJ "
+                          f"(spread {p['energy_spread_uj']:.0f})")
+        for note in record.notes:
+            console.print(f"note: {note}")
+
+
+@dataclass
+class ComparisonResult:
+    """Several artefacts timed side by side."""
+
+    comparison: Any          # LatencyComparison
+
+    def as_dict(self) -> dict[str, Any]:
+        return self.comparison.as_dict()
+
+    def render_text(self, console) -> None:
+        console.print(self.comparison.table(), markup=False, soft_wrap=True)
+        console.print("note: batch-1 latency, the paper's protocol; ratios are to the first artefact; power not sampled",
+                      soft_wrap=True)
+
+
+def bench_artefacts(artefacts: str | Path | list[str | Path], *, target: str = "jetson", data: str | Path | None = None,
+                    samples: int = 64, power: bool = False, power_root: str | Path = Path("/"), rail: str = "VDD_IN",
+                    repeats: int = 3, warmup_passes: int = 6, timed_passes: int = 6, stream: bool = False,
+                    backend: str = "auto", progress: VerbProgress | None = None) -> BenchResult | ComparisonResult:
+    """Benchmark one artefact (``BenchResult``) or several side by side (``ComparisonResult``)."""
+    from snncc.targets import capability, get_target
+
+    paths = [Path(a) for a in ([artefacts] if isinstance(artefacts, (str, Path)) else artefacts)]
+    for name, value in (("--repeats", repeats), ("--warmup-passes", warmup_passes + 1),
+                        ("--timed-passes", timed_passes), ("--samples", samples)):
+        if value < 1:
+            raise SnnccError("must be >= 1 (warm-up passes >= 0)", field=name)
+    bench = capability(get_target(target), "bench")
+    report = None if progress is None else (lambda phase, done, total: progress(done, total, phase))
+    record = bench(paths, data=None if data is None else Path(data), samples=samples, power=power,
+                   power_root=Path(power_root), rail=rail, repeats=repeats, warmup_passes=warmup_passes,
+                   timed_passes=timed_passes, stream=stream, backend=backend, progress=report)
+    if len(paths) > 1:
+        return ComparisonResult(record)
+    return BenchResult(str(paths[0]), repeats, record)

@@ -1,0 +1,58 @@
+"""``snncc report --energy``: ESTIMATE (not a measurement) of energy and delay per sample of a bundle,
+beside the paper's measurement, on a data set, a spike file or seeded random inputs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.verbs import VerbProgress, counting
+
+
+def _load_npy(path: Path) -> np.ndarray:
+    if not path.is_file():
+        raise SnnccError("file does not exist", file=str(path))
+    try:
+        return np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as ex:
+        raise SnnccError(f"not a readable .npy array ({type(ex).__name__})", file=str(path))
+
+
+def report_energy(bundle: str | Path, *, target: str = "loihi", energy: bool = False, data: str | Path | None = None,
+                  input: str | Path | None = None, limit: int | None = None, samples: int | None = None,
+                  rate: float | None = None, seed: int | None = None, progress: VerbProgress | None = None):
+    """The target's energy report (``as_dict``, ``render_text``) for ``bundle``. Inputs: ``data`` (a data
+    set .npz), ``input`` (a spike .npy), or ``samples`` seeded random samples (default 8) with spike
+    probability ``rate`` (default 0.05) per channel and step, ``seed`` (default 0)."""
+    from snncc.inputs import RandomSpikes
+    from snncc.targets import capability, get_target
+
+    if not energy:
+        raise SnnccError("nothing to report: pass --energy", field="snncc report")
+    if data is not None and input is not None:
+        raise SnnccError("give --data or --input, not both", field="--input")
+    if limit is not None and limit < 1:
+        raise SnnccError("must be >= 1", field="--limit")
+    if data is not None or input is not None:
+        for flag, value in (("--samples", samples), ("--rate", rate), ("--seed", seed)):
+            if value is not None:
+                raise SnnccError("applies only to random inputs, not with --data or --input", field=flag)
+    estimate = capability(get_target(target), "estimate")
+    if data is not None:
+        from snncc.data.dataset import load_dataset
+
+        data = Path(data)
+        x, source, note = load_dataset(data)[0], str(data), f"data set {data.name}"
+    elif input is not None:
+        input = Path(input)
+        x, source, note = _load_npy(input), str(input), f"input file {input.name}"
+    else:
+        x, source, note = RandomSpikes(8 if samples is None else samples, 0.05 if rate is None else rate,
+                                       0 if seed is None else seed), None, ""
+    total = x.samples if isinstance(x, RandomSpikes) else (len(x) if np.ndim(x) == 3 else 1)
+    if limit is not None:
+        total = min(total, limit)
+    return estimate(Path(bundle), x, data=source, note=note, limit=limit,
+                    progress=counting(progress, total, "emulating"))

@@ -1,0 +1,47 @@
+"""``snncc run``: run a written artefact on inputs (Jetson: TensorRT where importable, else ONNX Runtime).
+
+The saved .npz holds ``output_spikes`` (B, T, n) uint8, ``counts`` (B, n) and ``prediction`` (B,) for
+SNNs (the ``snncc emulate`` contract), ``scores`` (B, n) and ``prediction`` for LSTMs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+
+@dataclass
+class RunRecord:
+    artefact: str
+    result: Any              # the target's run (as_dict: backend, variant, samples, time_steps, prediction, classes)
+    output: str | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"artefact": self.artefact, **self.result.as_dict(), "output": self.output}
+
+    def render_text(self, console) -> None:
+        r = self.as_dict()
+        console.print(f"{r['variant']} on {r['backend']}: {r['samples']} sample(s) x {r['time_steps']} steps")
+        console.print("predictions: " + " ".join(r["classes"][:20]) + (" ..." if len(r["classes"]) > 20 else ""))
+        if self.output is not None:
+            console.print(f"wrote {self.output}")
+
+
+def run_artefact(artefact: str | Path, *, input: str | Path, target: str = "jetson", stream: bool = False,
+                 output: str | Path | None = None, backend: str = "auto") -> RunRecord:
+    """Run ``artefact`` on ``input`` (.npy (T, C) or (B, T, C), or a data-set .npz's inputs): the whole
+    sequence model, or with ``stream`` the step model one step at a time; ``output`` saves the arrays."""
+    import numpy as np
+
+    from snncc.atomic import atomic_path
+    from snncc.inputs import load_array
+    from snncc.targets import capability, get_target
+
+    run = capability(get_target(target), "run")
+    result = run(Path(artefact), load_array(input), source=str(input), stream=stream, backend=backend)
+    if output is not None:
+        with atomic_path(output) as tmp:
+            with open(tmp, "wb") as fh:  # a file object: savez must not append '.npz' to the temp name
+                np.savez(fh, **result.arrays())
+    return RunRecord(str(artefact), result, None if output is None else str(output))

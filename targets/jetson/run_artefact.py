@@ -1,0 +1,64 @@
+"""``snncc run``'s work: a Jetson artefact run on inputs (TensorRT where importable, else ONNX Runtime).
+
+The results hold ``output_spikes`` (B, T, n) uint8, ``counts`` (B, n) and ``prediction`` (B,) for
+SNNs (the ``snncc emulate`` contract), ``scores`` (B, n) and ``prediction`` for LSTMs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snncc.errors import SnnccError
+
+
+def open_runner(artefact: Path, backend: str):
+    """An ``ArtefactRunner`` on the artefact directory, or a one-line error."""
+    from snncc.targets.jetson.runner import ArtefactRunner, RunnerError
+
+    try:
+        return ArtefactRunner(str(artefact), backend)
+    except RunnerError as ex:
+        raise SnnccError(ex.rule, file=str(artefact), field=ex.field) from None
+
+
+@dataclass
+class ArtefactRun:
+    """What one run produced: the output arrays and how they were computed."""
+
+    outputs: dict[str, np.ndarray]
+    backend: str
+    stream: bool
+    time_steps: int
+    class_names: list[str]
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return self.outputs
+
+    def as_dict(self) -> dict[str, Any]:
+        prediction = self.outputs["prediction"].tolist()
+        names = self.class_names
+        return {"backend": self.backend, "variant": "step (streaming)" if self.stream else "sequence",
+                "samples": int(self.outputs["prediction"].shape[0]), "time_steps": self.time_steps,
+                "prediction": prediction,
+                "classes": [names[i] if 0 <= i < len(names) else str(i) for i in prediction]}
+
+
+def run_artefact(artefact: Path, inputs, *, source: str | None = None, stream: bool = False,
+                 backend: str = "auto") -> ArtefactRun:
+    """Check ``inputs`` (T, C) or (B, T, C) against the artefact's input signal and run the sequence model,
+    or with ``stream`` the step model one time step at a time."""
+    from snncc.inputs import check_batch
+    from snncc.targets.jetson.runner import RunnerError
+
+    runner = open_runner(artefact, backend)
+    x = check_batch(inputs, spikes=runner.manifest["input"]["signal"] == "spikes", source=source)
+    try:
+        res = runner.stream(x) if stream else runner.run(x)
+        used = runner.session("step" if stream else "sequence").backend
+    except RunnerError as ex:
+        raise SnnccError(ex.rule, file=source, field=ex.field) from None
+    return ArtefactRun(res, used, stream, int(np.asarray(x).shape[-2]), list(runner.manifest["classes"]))

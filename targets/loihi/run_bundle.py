@@ -1,0 +1,84 @@
+"""``snncc emulate``'s work: a bundle run on 0/1 inputs in chunks, with the outputs' timing shift applied.
+
+When compile shifted the outputs (timing, current biases), an input of the model's length
+tSample - output_shift gets output_shift blank steps appended, so every output step is seen.
+Batch mode runs ``CHUNK`` samples at a time on one flattened network (the same results as one
+run: samples are independent); stream mode is one continuous run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+CHUNK = 256
+
+
+@dataclass
+class BundleEmulation:
+    """The emulator's result on ``inputs`` (B, T, C), and how the inputs were padded."""
+
+    network: object          # LoihiNetwork
+    result: object           # EmulationResult
+    samples: int
+    steps: int
+    padded_steps: int        # blank steps appended for the outputs' shift
+    output_shift: int
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """What OUT.npz holds: outputs, counts, prediction, overflow; layer{i}_* named by HDF5 layer index
+        (the model's units only: always-on bias sources are left out)."""
+        res, net = self.result, self.network
+        arrays = {"output_spikes": res.output_spikes, "counts": res.counts, "prediction": res.prediction,
+                  "overflow_q_wrap": np.int64(res.overflow["q_wrap"]),
+                  "overflow_u_wrap": np.int64(res.overflow["u_wrap"]),
+                  "overflow_v_clip": np.int64(res.overflow["v_clip"])}
+        index = net.metadata.get("hdf5_layer_index") or list(range(len(net.layers)))
+        for field_name, records in (("spikes", res.spikes), ("voltage", res.voltage), ("current", res.current)):
+            for i, a in records.items():   # a SLAYER flatten layer has no state
+                arrays[f"layer{index[i]}_{field_name}"] = a[..., :net.layers[i].model_n]
+        return arrays
+
+
+def emulate_bundle(network, inputs, *, record: str = "outputs", stream: bool = False, gap: int | None = None,
+                   source: str | None = None, progress: Callable[[int], None] | None = None) -> BundleEmulation:
+    """Check ``inputs`` against the bundle's width, pad for the output shift, emulate; ``progress(n)``
+    after each chunk of n samples (batch mode)."""
+    from snncc.targets.loihi.emulator import PreparedNetwork, check_inputs, emulate, pad
+
+    x = check_inputs(inputs, network.input_width, source=source)
+    shift = int(network.metadata.get("output_shift", 0) or 0)
+    padded = shift if shift and x.shape[1] + shift == network.t_sample else 0
+    x = pad(x, padded)
+    if stream:
+        result = emulate(network, x, record=record, mode="stream", gap=gap)
+    else:
+        prepared = PreparedNetwork(network)      # flattened once for every chunk
+        parts = []
+        for start in range(0, x.shape[0], CHUNK):
+            parts.append(prepared.run(x[start:start + CHUNK], record=record, gap=gap))
+            if progress is not None:
+                progress(min(CHUNK, x.shape[0] - start))
+        result = merge(parts)
+    return BundleEmulation(network, result, int(x.shape[0]), int(x.shape[1]), padded, shift)
+
+
+def merge(parts):
+    """One EmulationResult from the results of consecutive chunks of samples."""
+    from snncc.targets.loihi.emulator import EmulationResult
+
+    if len(parts) == 1:
+        return parts[0]
+    first = parts[0]
+    res = EmulationResult(
+        output_spikes=np.concatenate([p.output_spikes for p in parts]),
+        counts=np.concatenate([p.counts for p in parts]),
+        prediction=np.concatenate([p.prediction for p in parts]),
+        overflow={k: sum(p.overflow[k] for p in parts) for k in first.overflow},
+    )
+    for name in ("spikes", "voltage", "current"):
+        for i in getattr(first, name):
+            getattr(res, name)[i] = np.concatenate([getattr(p, name)[i] for p in parts])
+    return res

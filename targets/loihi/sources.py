@@ -1,0 +1,36 @@
+"""What ``snncc map`` and ``snncc report`` read: a Loihi bundle, or a model file lowered for Loihi first."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from snncc.errors import SnnccError
+
+MODEL_SUFFIXES = (".pt", ".pth", ".ckpt", ".snnir", ".nir")
+
+
+def load_network(source: Path, timing: str | None = None, scale: str | None = None):
+    """A LoihiNetwork from a bundle, or from a model file lowered with the Loihi target
+    (``timing``/``scale`` apply only to lowering a model file: given with a bundle, they are refused)."""
+    import h5py
+
+    source = Path(source)
+    if not source.is_file():
+        raise SnnccError("file does not exist", file=str(source))
+    if h5py.is_hdf5(str(source)):
+        from snncc.targets.loihi.bundle import read_bundle
+
+        for flag, value in (("--timing", timing), ("--scale", scale)):
+            if value is not None:
+                raise SnnccError("does not apply to a Loihi bundle (its timing and weight scale are fixed); "
+                                 "it applies only when map lowers a model file", file=str(source), field=flag)
+        return read_bundle(source)
+    if source.suffix.lower() not in MODEL_SUFFIXES:
+        raise SnnccError(f"expected a Loihi bundle (HDF5) or a model file ({', '.join(MODEL_SUFFIXES)})",
+                         file=str(source))
+    from snncc.frontends import load_model
+    from snncc.targets.base import LoihiOptions
+    from snncc.targets.loihi.capabilities import target
+
+    graph = load_model(source)
+    return target.lower(graph, LoihiOptions(timing=timing, scale=scale, source=str(source))).network
