@@ -45,16 +45,30 @@ def main(argv=None) -> int:
     ap.add_argument("--bundle", help="also keep the bundle here")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
-    from snncc.cli.main import run
+    import snncc.api
+    from snncc.errors import SnnccError
 
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(args.bundle) if args.bundle else Path(tmp) / "rsnn_random.h5"
         from snncc.targets.loihi.bundle import write_bundle
 
         write_bundle(paper_sized_rsnn(args.seed), path)
-        argv_report = ["report", str(path), "--energy", "--samples", str(args.samples), "--rate", str(args.rate),
-                       "--seed", str(args.seed)] + (["--json"] if args.json else [])
-        return run(argv_report)
+        try:
+            record = snncc.api.report(path, energy=True, samples=args.samples, rate=args.rate, seed=args.seed)
+        except SnnccError as err:
+            print(f"snncc: error: {err.line()}", file=sys.stderr)
+            return 2
+        if args.json:
+            import json
+
+            from snncc.records import to_jsonable
+
+            print(json.dumps(to_jsonable(record.as_dict()), indent=2, sort_keys=False))
+        else:
+            from rich.console import Console
+
+            record.render_text(Console(highlight=False))
+        return 0
 
 
 if __name__ == "__main__":

@@ -1,0 +1,151 @@
+"""A third-party target plugs in through the ``snncc.targets`` entry point, with only the capabilities
+it has; the option records refuse what a target does not take, in today's words."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from snncc.errors import SnnccError
+from snncc.targets import (
+    IROptions, JetsonOptions, LoihiOptions, available_targets, capability, get_target, target_options,
+)
+
+from snncc_test_helpers import run_cli
+
+HERE = Path(__file__).resolve().parent
+
+
+def install_toy(root: Path) -> Path:
+    """A package ``snncc_toy`` and its ``*.dist-info`` (METADATA, entry_points.txt) under ``root``."""
+    shutil.copy(HERE / "toy_target_source.py", root / "snncc_toy.py")
+    info = root / "snncc_toy-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: snncc-toy\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text("[snncc.targets]\ntoy = snncc_toy:target\n")
+    return root
+
+
+@pytest.fixture
+def toy(tmp_path, monkeypatch):
+    root = tmp_path / "site"
+    root.mkdir()
+    monkeypatch.syspath_prepend(str(install_toy(root)))
+    yield root
+    sys.modules.pop("snncc_toy", None)
+
+
+@pytest.fixture
+def toy_data(tmp_path):
+    rng = np.random.default_rng(0)
+    path = tmp_path / "d.npz"
+    np.savez(path, inputs=(rng.random((6, 30, 48)) < 0.2).astype(np.uint8), labels=rng.integers(0, 28, 6))
+    return path
+
+
+def test_the_toy_target_is_found_through_its_entry_point(toy):
+    assert "toy" in available_targets()
+    assert type(get_target("toy")).__name__ == "ToyTarget"
+
+
+def test_compile_and_check_with_a_third_party_target(toy, toy_data, small_rsnn_checkpoint, tmp_path, capsys):
+    out = tmp_path / "m.toy"
+    code, stdout, err = run_cli(["compile", small_rsnn_checkpoint, "--target", "toy", "-o", out,
+                                 "--time-steps", "30", "--json"], capsys)
+    assert code == 0, err
+    written = json.loads(out.read_text())
+    assert written["time_steps"] == 30 and written["nodes"] >= 3
+    assert json.loads(stdout) == {"target": "toy", "output": str(out), **written}
+
+    code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data, "--json"],
+                                capsys)
+    assert code == 0, err
+    record = json.loads(stdout)
+    # the same accuracy as the IR reference computed here, independently of the toy target
+    from snncc.frontends import load_model
+    from snncc.ir.simulate import simulate
+
+    with np.load(toy_data) as z:
+        x, y = z["inputs"], z["labels"]
+    expected = float(np.mean(simulate(load_model(small_rsnn_checkpoint), x.astype(np.float32)).prediction.numpy() == y))
+    assert record == {"target": "toy", "samples": 6, "accuracy": expected}
+    code, stdout, _ = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data], capsys)
+    assert code == 0 and stdout.startswith("toy check: 6 samples, accuracy")
+
+
+def test_a_capability_the_target_lacks_is_refused_in_one_line(toy, toy_data, small_rsnn_checkpoint, tmp_path, capsys):
+    out = tmp_path / "m.toy"
+    assert run_cli(["compile", small_rsnn_checkpoint, "-t", "toy", "-o", out], capsys)[0] == 0
+    x = tmp_path / "x.npy"
+    np.save(x, np.zeros((30, 48), np.uint8))
+    for args, verb in ((["map", out], "map"), (["emulate", out, "-i", x, "-o", tmp_path / "o.npz"], "emulate"),
+                       (["report", out, "--energy"], "estimate"), (["run", out, "-i", x], "run"),
+                       (["bench", out], "bench")):
+        code, stdout, err = run_cli([*args, "--target", "toy"], capsys)
+        assert code == 2 and stdout == ""
+        assert err == f"snncc: error: --target: target 'toy' has no {verb} in this snncc\n"
+    assert not (tmp_path / "o.npz").exists()
+    code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "toy", "-o", out, "--scale", "global"], capsys)
+    assert code == 2 and err == ("snncc: error: --scale: does not apply to --target toy (it takes --time-steps)\n")
+    code, _, err = run_cli(["check", small_rsnn_checkpoint, "-t", "toy"], capsys)   # no labels: agreement
+    assert code == 2 and "agreement without labels is measured for --target loihi" in err
+
+
+def test_the_toy_target_through_the_installed_command(tmp_path, small_rsnn_checkpoint):
+    """A fresh interpreter that finds the target only through PYTHONPATH's dist-info."""
+    root = tmp_path / "site"
+    root.mkdir()
+    install_toy(root)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]))
+    out = tmp_path / "m.toy"
+    proc = subprocess.run([sys.executable, "-m", "snncc.cli.main", "compile", str(small_rsnn_checkpoint), "-t", "toy",
+                           "-o", str(out)], capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.splitlines()[-1] == f"wrote {out}" and json.loads(out.read_text())["nodes"] >= 3
+
+
+# -- option records --------------------------------------------------------------------------------
+@pytest.mark.parametrize("name, given, line", [
+    ("ir", {"time_steps": 5}, "--time-steps: does not apply to --target ir (it takes no target options)"),
+    ("ir", {"scale": "global"}, "--scale: does not apply to --target ir (it takes no target options)"),
+    ("loihi", {"jetpack": "5.1"}, "--jetpack: does not apply to --target loihi (it takes --timing, --scale, "
+                                  "--allow-reset-change, --stream, --time-steps)"),
+    ("jetson", {"timing": "paper"}, "--timing: does not apply to --target jetson (it takes --jetpack, --time-steps)"),
+    ("jetson", {"stream": True}, "--stream: does not apply to --target jetson (it takes --jetpack, --time-steps)"),
+])
+def test_an_option_the_target_does_not_take_is_refused(name, given, line):
+    with pytest.raises(SnnccError) as err:
+        target_options(get_target(name), given)
+    assert err.value.line() == line
+
+
+def test_option_records_are_built_from_the_given_values():
+    loihi, jetson = get_target("loihi"), get_target("jetson")
+    assert target_options(loihi, {"scale": "global", "timing": None, "source": "m.pt"}) == LoihiOptions(
+        scale="global", source="m.pt")
+    assert target_options(jetson, {"jetpack": "6.1", "allow_reset_change": False, "stream": None}) == JetsonOptions(
+        jetpack="6.1")
+    assert target_options(get_target("ir"), None) == IROptions()
+    given = LoihiOptions(stream=True)
+    assert target_options(loihi, given) is given
+    with pytest.raises(TypeError):          # a key that is no option at all is a bug, not a user error
+        target_options(loihi, {"progress": print})
+    with pytest.raises(Exception):          # records are frozen
+        given.stream = False
+
+
+def test_capability_returns_the_bound_method_or_refuses():
+    loihi = get_target("loihi")
+    assert capability(loihi, "check") == loihi.check
+    with pytest.raises(SnnccError) as err:
+        capability(get_target("ir"), "check")
+    assert err.value.line() == "--target: target 'ir' has no check in this snncc"
+    with pytest.raises(ValueError):
+        capability(loihi, "fly")
