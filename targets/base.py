@@ -13,6 +13,9 @@ dataclass derived from ``TargetOptions``), and offers any of these capabilities,
     estimate(source, inputs, *, note, progress)                -> Record     (snncc report --energy)
     bench(artefacts, *, data, samples, ..., progress)          -> Record     (snncc bench)
 
+``progress`` is ``progress(n)`` (n more samples done), except for ``bench``: ``progress(phase,
+done, total)`` (the protocol has phases: warm-up, timing).
+
 A third party implements only the capabilities it has; ``capability(target, "check")`` returns
 the bound method or refuses in one line. Options are settings only (what the user chose); runtime
 state such as a ``progress(n)`` callback is a separate keyword argument, never an option.
