@@ -20,8 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.passes.quantize import BIAS_MANT_MAX
-from snncc.passes.timing import MAX_EXTRA_DELAY
+from snncc.targets.loihi.quantize import BIAS_MANT_MAX
+from snncc.targets.loihi.timing import MAX_EXTRA_DELAY
 from snncc.targets.loihi.network import LoihiLayer
 
 

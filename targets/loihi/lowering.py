@@ -19,8 +19,8 @@ from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
 from snncc.passes.current_bias import current_biases
-from snncc.passes.quantize import QuantizationRecord, quantize_weights
-from snncc.passes.timing import TimingRecord
+from snncc.targets.loihi.quantize import QuantizationRecord, quantize_weights
+from snncc.targets.loihi.timing import TimingRecord
 from snncc.targets.loihi import bias_sources
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.passes.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
+from snncc.targets.loihi.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
                                    quantize_graph)
 
 OUTLIER_REASON = "max|W| is"
