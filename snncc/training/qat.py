@@ -28,7 +28,8 @@ from torch.func import functional_call
 
 from snncc.errors import SnnccError
 from snncc.models import SpikingClassifier
-from snncc.targets.loihi.quantize import WEIGHT_MAX, WEIGHT_MIN, decay_register, threshold_mantissa, weight_scale
+from snncc.targets.loihi.chip import DECAY_ONE, WEIGHT_MAX, WEIGHT_MIN
+from snncc.targets.loihi.quantize import decay_register, threshold_mantissa, weight_scale
 
 WEIGHT_RANGE = (WEIGHT_MIN, WEIGHT_MAX)
 
@@ -49,11 +50,11 @@ class LoihiQuantization:
 
     @property
     def alpha(self) -> float:
-        return (4096 - self.i_decay) / 4096
+        return (DECAY_ONE - self.i_decay) / DECAY_ONE
 
     @property
     def beta(self) -> float:
-        return (4096 - self.v_decay) / 4096
+        return (DECAY_ONE - self.v_decay) / DECAY_ONE
 
 
 def quantize_weights(w: torch.Tensor, w_scale: int) -> torch.Tensor:
