@@ -5,10 +5,11 @@ relays, lowering) reads these names from here, as ``chip.NAME`` at call time whe
 reach the rule, so changing a limit is a change of one line below. Sources: Davies et al., IEEE
 Micro 2018; nengo-loihi 1.1 (``block.py``, hardware builder); lava-dl ``netx``.
 
-The numba kernel (``_kernel.py``) and the resource defaults (``resources.ChipSpec``, and so
-``resources.LOIHI1``) copy their values when they are built: the kernel when numba compiles it,
-``ChipSpec()`` when it is constructed. Numba's on-disk cache is keyed on ``_kernel.py`` alone, so
-after changing a value the kernel uses (DECAY_SHIFT, Q_BITS, U_BITS) remove its cache files.
+Some users copy values when they are built: ``resources.ChipSpec()`` when it is constructed (so
+``resources.LOIHI1`` at import), ``LoihiLayer`` its vmin / vmax when a layer is made, module
+constants derived at import (``fanin.COPY_WEIGHT``, the kernel's wrap masks), and the numba kernel
+(``_kernel.py``) when numba compiles it. Numba's on-disk cache is keyed on ``_kernel.py`` alone,
+so after changing a value the kernel uses (DECAY_SHIFT, DECAY_ONE) remove its cache files.
 """
 
 from __future__ import annotations
