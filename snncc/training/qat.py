@@ -8,7 +8,7 @@ The rules (spec loihi.md, section 1), for the whole network at once::
     iDecay  = int(4096 * (1 - exp(-dt / tau_syn)));  vDecay likewise with tau_mem
 
 The integer rules (w_scale, vThMant, decay registers) are the Loihi pass's own
-(``snncc.passes.quantize``); only the rounding of the weights is restated here, in torch, so that
+(``snncc.targets.loihi.quantize``); only the rounding of the weights is restated here, in torch, so that
 it can sit in the autograd graph. The fake-quantized forward pass runs the float model with ``W' = w_q / w_scale``, threshold
 ``vThMant / w_scale`` and decays ``(4096 - iDecay) / 4096``, ``(4096 - vDecay) / 4096``: exactly
 the chip's arithmetic in float units, except that the chip truncates the decayed current and
@@ -28,7 +28,8 @@ from torch.func import functional_call
 
 from snncc.errors import SnnccError
 from snncc.models import SpikingClassifier
-from snncc.passes.quantize import WEIGHT_MAX, WEIGHT_MIN, decay_register, threshold_mantissa, weight_scale
+from snncc.targets.loihi.chip import DECAY_ONE, WEIGHT_MAX, WEIGHT_MIN
+from snncc.targets.loihi.quantize import decay_register, threshold_mantissa, weight_scale
 
 WEIGHT_RANGE = (WEIGHT_MIN, WEIGHT_MAX)
 
@@ -49,11 +50,11 @@ class LoihiQuantization:
 
     @property
     def alpha(self) -> float:
-        return (4096 - self.i_decay) / 4096
+        return (DECAY_ONE - self.i_decay) / DECAY_ONE
 
     @property
     def beta(self) -> float:
-        return (4096 - self.v_decay) / 4096
+        return (DECAY_ONE - self.v_decay) / DECAY_ONE
 
 
 def quantize_weights(w: torch.Tensor, w_scale: int) -> torch.Tensor:

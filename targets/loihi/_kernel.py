@@ -40,9 +40,10 @@ from numba import config, njit, types
 from numba.extending import overload
 
 from snncc.errors import SnnccError
+from snncc.targets.loihi.chip import DECAY_ONE, DECAY_SHIFT, Q_BITS, U_BITS   # globals: numba freezes them
 
-Q_HALF, Q_MASK = 1 << 21, (1 << 22) - 1
-U_HALF, U_MASK = 1 << 23, (1 << 24) - 1
+Q_HALF, Q_MASK = 1 << Q_BITS, (1 << (Q_BITS + 1)) - 1
+U_HALF, U_MASK = 1 << U_BITS, (1 << (U_BITS + 1)) - 1
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 
 
@@ -105,7 +106,7 @@ def _deliver_sparse(buf, t, ring, total, spk, nspk, post_off, uniform, w, post, 
 def _decay(x, keep, keep_f):
     """sign(x) * ((|x| * keep) >> 12), the chip's truncating decay; ``keep_f`` = keep / 4096."""
     p = int(x) * int(keep)
-    return -((-p) >> 12) if p < 0 else p >> 12
+    return -((-p) >> DECAY_SHIFT) if p < 0 else p >> DECAY_SHIFT
 
 
 @overload(_decay)
@@ -120,7 +121,7 @@ def _decay_kernel(x, keep, keep_f):
 
     def decay_int(x, keep, keep_f):
         p = np.int64(x) * keep
-        return (p + ((p >> 63) & 4095)) >> 12
+        return (p + ((p >> 63) & (DECAY_ONE - 1))) >> DECAY_SHIFT
     return decay_int
 
 
@@ -367,12 +368,12 @@ def q_u_in_range(q_max: np.ndarray, keep_u: np.ndarray) -> bool:
     4096 - keep > 0); then u < 2**23 too, and neither wrap can change a value.
     """
     q_max = np.asarray(q_max, np.int64)
-    i_decay = 4096 - np.asarray(keep_u, np.int64)
+    i_decay = DECAY_ONE - np.asarray(keep_u, np.int64)
     if q_max.size == 0:
         return True
-    if np.any(q_max >= 1 << 21) or np.any(i_decay <= 0):
+    if np.any(q_max >= 1 << Q_BITS) or np.any(i_decay <= 0):
         return False
-    return bool(np.all(q_max * 4096 < (1 << 23) * i_decay))
+    return bool(np.all(q_max * DECAY_ONE < (1 << U_BITS) * i_decay))
 
 
 def narrowest_int(lo: int, hi: int):
@@ -479,8 +480,8 @@ class Flat:
         self.in_range = in_range
         self.keep_u = np.ascontiguousarray(prog.keep_u, np.int64)
         self.keep_v = np.ascontiguousarray(prog.keep_v, np.int64)
-        self.keep_uf = self.keep_u * 2.0**-12   # exact: keep <= 4096, a power-of-two scale
-        self.keep_vf = self.keep_v * 2.0**-12
+        self.keep_uf = self.keep_u * 2.0**-DECAY_SHIFT   # exact: keep <= 4096, a power-of-two scale
+        self.keep_vf = self.keep_v * 2.0**-DECAY_SHIFT
         self.vth = np.ascontiguousarray(prog.vth, np.int64)
         self.bias = np.ascontiguousarray(prog.bias, np.int64)
 

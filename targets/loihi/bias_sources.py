@@ -20,8 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.passes.quantize import BIAS_MANT_MAX
-from snncc.passes.timing import MAX_EXTRA_DELAY
+from snncc.targets.loihi import chip
 from snncc.targets.loihi.network import LoihiLayer
 
 
@@ -33,11 +32,11 @@ def source_bias(pre: LoihiLayer) -> tuple[int, int, int | None]:
     The sources share the layer's highest threshold when the 13-bit mantissa reaches above it (no
     extra compartment profile); otherwise they get their own threshold, vThMant 1 (one more profile).
     """
-    exp = int(pre.bias_exp) if pre.bias is not None else 6
-    mant = ((int(np.max(pre.v_th_mant)) * 64) >> exp) + 1
-    if mant <= BIAS_MANT_MAX:
+    exp = int(pre.bias_exp) if pre.bias is not None else chip.NETX_BIAS_EXP
+    mant = ((int(np.max(pre.v_th_mant)) << chip.V_TH_SHIFT) >> exp) + 1
+    if mant <= chip.BIAS_MANT_MAX:
         return mant, exp, None
-    return (64 >> exp) + 1, exp, 1
+    return ((chip.V_TH_MANT_MIN << chip.V_TH_SHIFT) >> exp) + 1, exp, chip.V_TH_MANT_MIN
 
 
 def _extend(value, k: int, fill):
@@ -99,9 +98,9 @@ def attach(pre: LoihiLayer, post: LoihiLayer, shift: int, terms: list[tuple[int,
         if first < 0:
             raise SnnccError("a current bias from IR step 0 needs the population shifted by one step (timing pass)",
                              field=f"layer '{post.name}'")
-        if first + repeats - 1 > MAX_EXTRA_DELAY:
+        if first + repeats - 1 > chip.MAX_EXTRA_DELAY:
             raise SnnccError(f"a current bias starting at IR step {start} needs a synaptic delay of "
-                             f"{first + repeats - 1} steps; Loihi allows at most {MAX_EXTRA_DELAY}",
+                             f"{first + repeats - 1} steps; Loihi allows at most {chip.MAX_EXTRA_DELAY}",
                              field=f"layer '{post.name}'")
         if exponents is None and np.ndim(post.wgt_exp):
             raise SnnccError("a projection with per-synapse exponents needs the bias columns' exponents",

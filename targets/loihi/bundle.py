@@ -14,7 +14,8 @@ The writer is atomic and byte-identical for identical input (no timestamps, fixe
 reader also accepts SLAYER v1 files as the paper's authors wrote them (a ``flatten`` layer after
 the input, type ``recurrent`` with ``recWeight``, float-typed even weights, ``neuron/theta`` =
 vThMant * 2**6 when vThMant is absent, ``tauRho``/``scaleRho`` ignored) and validates everything
-it reads: one SnnccError line naming the file, the HDF5 path and the rule.
+it reads: one SnnccError line naming the file, the HDF5 path and the rule. The ranges it checks
+are ``chip.py``'s, read at call time (the reader and ``check_network``, which the writer runs, agree).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import numpy as np
 from snncc.atomic import write_bytes_atomic
 from snncc.errors import SnnccError
 from snncc.limits import check_memory, check_time_steps
+from snncc.targets.loihi import chip
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 
 SNNCC_GROUP = "snncc"
@@ -73,8 +75,8 @@ def netx_compat(network: LoihiNetwork) -> list[str]:
                              + ("netx ignores weight exponents)" if key == "wgtExp" else "snncc extension)"))
         if lay.weight_rec is not None and np.any(np.asarray(lay.delay_rec) != 0):
             notes.append(f"/layer/{i}/delay_rec (snncc extension: recurrent synaptic delay)")
-        if lay.bias is not None and lay.bias_exp != 6:
-            notes.append(f"/layer/{i}/neuron/biasExp = {lay.bias_exp} (netx reads bias with exponent 6)")
+        if lay.bias is not None and lay.bias_exp != chip.NETX_BIAS_EXP:
+            notes.append(f"/layer/{i}/neuron/biasExp = {lay.bias_exp} (netx reads bias with exponent {chip.NETX_BIAS_EXP})")
     return notes
 
 
@@ -232,8 +234,9 @@ def _weights(group: h5py.Group, key: str, path: str, where: str, shape: tuple[in
         _fail(path, f"{where}/{key}", "contains NaN or Inf")
     if np.any(w != np.round(w)) or np.any(np.round(w) % 2 != 0):
         _fail(path, f"{where}/{key}", "weights must be even integers (8-bit mantissas, step 2)")
-    if w.size and (w.min() < -256 or w.max() > 254):
-        _fail(path, f"{where}/{key}", f"weights must lie in [-256, 254], found [{w.min():g}, {w.max():g}]")
+    if w.size and (w.min() < chip.WEIGHT_MIN or w.max() > chip.WEIGHT_MAX):
+        _fail(path, f"{where}/{key}", f"weights must lie in [{chip.WEIGHT_MIN}, {chip.WEIGHT_MAX}], "
+              f"found [{w.min():g}, {w.max():g}]")
     return w.astype(np.int16)
 
 
@@ -254,8 +257,9 @@ def _delays(group: h5py.Group, key: str, path: str, where: str, shape: tuple[int
         d = np.full(shape, float(d.reshape(-1)[0]))
     if d.shape != shape:
         _fail(path, f"{where}/{key}", f"shape {d.shape} matches neither the weights {shape} nor the neurons")
-    if not np.all(np.isfinite(d)) or np.any(d != np.round(d)) or d.min(initial=0) < 0 or d.max(initial=0) > 62:
-        _fail(path, f"{where}/{key}", "delays must be integers in 0..62")
+    if (not np.all(np.isfinite(d)) or np.any(d != np.round(d)) or d.min(initial=0) < 0
+            or d.max(initial=0) > chip.MAX_EXTRA_DELAY):
+        _fail(path, f"{where}/{key}", f"delays must be integers in 0..{chip.MAX_EXTRA_DELAY}")
     d = d.astype(np.int64)
     return int(d.flat[0]) if d.size and np.all(d == d.flat[0]) else d
 
@@ -285,7 +289,7 @@ def _register(group: h5py.Group, key: str, path: str, where: str, n: int):
 
 
 def _exponents(group: h5py.Group, key: str, path: str, where: str, shape: tuple, default):
-    """A weight exponent in -6..7: one value, or one per synapse (an array shaped like the weights)."""
+    """A weight exponent in -6..7 (chip.WGT_EXP_*): one value, or one per synapse (an array shaped like the weights)."""
     if key in group and isinstance(group[key], h5py.Dataset) and group[key].size > 1:
         ds = group[key]
         if ds.dtype.kind not in "iu" or ds.shape != tuple(shape):
@@ -296,8 +300,9 @@ def _exponents(group: h5py.Group, key: str, path: str, where: str, shape: tuple,
         if default is None and key not in group:
             _fail(path, f"{where}/{key}", "missing (required with per-synapse feed-forward exponents)")
         value = low = high = _number(group, key, path, where, default=default)
-    if not (-6 <= low and high <= 7):
-        _fail(path, f"{where}/{key}", f"must lie in -6..7 (integer chip weights), got {low}..{high}")
+    if not (chip.WGT_EXP_MIN <= low and high <= chip.WGT_EXP_MAX):
+        _fail(path, f"{where}/{key}", f"must lie in {chip.WGT_EXP_MIN}..{chip.WGT_EXP_MAX} (integer chip weights), "
+              f"got {low}..{high}")
     return value
 
 
@@ -310,14 +315,12 @@ def _always_on(group: h5py.Group, path: str, where: str, n: int) -> int:
 
 def _check_layer_size(path: str, where: str, n: int, width: int, rec: bool) -> None:
     """A layer's declared size must fit this machine's memory (the reader holds its weights as float64);
-    the message also says how many Loihi 1 chips such a layer would take (resources.LOIHI1)."""
-    from snncc.targets.loihi.resources import LOIHI1
-
-    per_chip = LOIHI1.cores_per_chip * LOIHI1.compartments_per_core
+    the message also says how many Loihi 1 chips such a layer would take (chip.py's core limits)."""
+    per_chip = chip.CORES_PER_CHIP * chip.COMPARTMENTS_PER_CORE
     n_weights = n * width + (n * n if rec else 0)
     chips = -(-n // per_chip)
-    context = (f"{n:,} neurons x {width:,} inputs (as compartments alone, {chips:,} {LOIHI1.name} chip(s) of "
-               f"{LOIHI1.cores_per_chip} cores x {LOIHI1.compartments_per_core} compartments)")
+    context = (f"{n:,} neurons x {width:,} inputs (as compartments alone, {chips:,} Loihi 1 chip(s) of "
+               f"{chip.CORES_PER_CHIP} cores x {chip.COMPARTMENTS_PER_CORE} compartments)")
     check_memory(8 * n_weights, f"the declared layer of {context}", file=path, field=f"{where}/weight")
 
 
@@ -406,21 +409,24 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
             lay.v_th_mant = _register(nrn, "vThMant", path, nw, n)
         elif "theta" in nrn:
             theta = _number(nrn, "theta", path, nw, integer=False)
-            if theta <= 0 or theta % 64:
-                _fail(path, f"{nw}/theta", "SLAYER's theta is the on-chip threshold vThMant * 2**6: a positive multiple of 64")
-            lay.v_th_mant = int(theta) // 64
+            unit = 1 << chip.V_TH_SHIFT
+            if theta <= 0 or theta % unit:
+                _fail(path, f"{nw}/theta", f"SLAYER's theta is the on-chip threshold vThMant * 2**{chip.V_TH_SHIFT}: "
+                      f"a positive multiple of {unit}")
+            lay.v_th_mant = int(theta) >> chip.V_TH_SHIFT
         else:
             _fail(path, f"{nw}/vThMant", "missing (required field)")
-        if not (1 <= np.min(lay.v_th_mant) and np.max(lay.v_th_mant) <= 2**17 - 1):
-            _fail(path, f"{nw}/vThMant", f"must lie in 1..{2**17 - 1}, got {np.min(lay.v_th_mant)}..{np.max(lay.v_th_mant)}")
+        if not (chip.V_TH_MANT_MIN <= np.min(lay.v_th_mant) and np.max(lay.v_th_mant) <= chip.V_TH_MANT_MAX):
+            _fail(path, f"{nw}/vThMant", f"must lie in {chip.V_TH_MANT_MIN}..{chip.V_TH_MANT_MAX}, "
+                  f"got {np.min(lay.v_th_mant)}..{np.max(lay.v_th_mant)}")
         for key, attr in (("iDecay", "i_decay"), ("vDecay", "v_decay")):
             value = _register(nrn, key, path, nw, n)
-            if not (0 <= np.min(value) and np.max(value) <= 4096):
-                _fail(path, f"{nw}/{key}", f"decays must lie in 0..4096, got {np.min(value)}..{np.max(value)}")
+            if not (0 <= np.min(value) and np.max(value) <= chip.DECAY_ONE):
+                _fail(path, f"{nw}/{key}", f"decays must lie in 0..{chip.DECAY_ONE}, got {np.min(value)}..{np.max(value)}")
             setattr(lay, attr, value)
-        lay.ref_delay = _number(nrn, "refDelay", path, nw, default=1)
-        if not 1 <= lay.ref_delay <= 63:
-            _fail(path, f"{nw}/refDelay", f"must lie in 1..63, got {lay.ref_delay}")
+        lay.ref_delay = _number(nrn, "refDelay", path, nw, default=chip.REF_DELAY_MIN)
+        if not chip.REF_DELAY_MIN <= lay.ref_delay <= chip.REF_DELAY_MAX:
+            _fail(path, f"{nw}/refDelay", f"must lie in {chip.REF_DELAY_MIN}..{chip.REF_DELAY_MAX}, got {lay.ref_delay}")
         lay.wgt_exp = _exponents(nrn, "wgtExp", path, nw, lay.weight.shape, default=0)
         if lay.weight_rec is not None:  # SLAYER's recurrent layers share one exponent
             lay.wgt_exp_rec = _exponents(nrn, "wgtExpRec", path, nw, lay.weight_rec.shape,
@@ -436,12 +442,12 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
                 bias = np.full(n, bias[0])
             if bias.shape != (n,) or not np.all(np.isfinite(bias)) or np.any(bias != np.round(bias)):
                 _fail(path, f"{where}/bias", f"must be {n} integer mantissas")
-            if np.any(np.abs(bias) > 2**12 - 1):
-                _fail(path, f"{where}/bias", "bias mantissas must fit 13 bits signed (|b| <= 4095)")
+            if np.any(np.abs(bias) > chip.BIAS_MANT_MAX):
+                _fail(path, f"{where}/bias", f"bias mantissas must fit 13 bits signed (|b| <= {chip.BIAS_MANT_MAX})")
             lay.bias = bias.astype(np.int64)
-            lay.bias_exp = _number(nrn, "biasExp", path, nw, default=6)
-            if not 0 <= lay.bias_exp <= 7 + 6:
-                _fail(path, f"{nw}/biasExp", "must lie in 0..13")
+            lay.bias_exp = _number(nrn, "biasExp", path, nw, default=chip.NETX_BIAS_EXP)
+            if not 0 <= lay.bias_exp <= chip.BIAS_EXP_STORED_MAX:
+                _fail(path, f"{nw}/biasExp", f"must lie in 0..{chip.BIAS_EXP_STORED_MAX}")
         layers.append(lay)
         hdf5_index.append(i)
         width = n
@@ -488,21 +494,36 @@ def check_network(network: LoihiNetwork, where: str = "<network>") -> None:
             w = np.asarray(w)
             if w.shape != shape:
                 raise SnnccError(f"shape {w.shape} does not chain, expected {shape}", file=where, field=f"/layer/{i}/{key}")
-            if w.size and (w.min() < -256 or w.max() > 254 or np.any(w % 2)):
-                raise SnnccError("weights must be even integers in [-256, 254]", file=where, field=f"/layer/{i}/{key}")
+            if w.size and (w.min() < chip.WEIGHT_MIN or w.max() > chip.WEIGHT_MAX or np.any(w % 2)):
+                raise SnnccError(f"weights must be even integers in [{chip.WEIGHT_MIN}, {chip.WEIGHT_MAX}]", file=where,
+                                 field=f"/layer/{i}/{key}")
         for key, exp, w in (("wgtExp", lay.wgt_exp, lay.weight), ("wgtExpRec", lay.wgt_exp_rec, lay.weight_rec)):
             e = np.asarray(exp)
-            if (e.ndim and (w is None or e.shape != np.shape(w))) or (e.size and not (-6 <= e.min() and e.max() <= 7)):
-                raise SnnccError("weight exponents must lie in -6..7, one per layer or one per synapse",
-                                 file=where, field=f"/layer/{i}/neuron/{key}")
+            if (e.ndim and (w is None or e.shape != np.shape(w))) or (
+                    e.size and not (chip.WGT_EXP_MIN <= e.min() and e.max() <= chip.WGT_EXP_MAX)):
+                raise SnnccError(f"weight exponents must lie in {chip.WGT_EXP_MIN}..{chip.WGT_EXP_MAX}, one per layer or "
+                                 "one per synapse", file=where, field=f"/layer/{i}/neuron/{key}")
+        for key, delay in (("delay", lay.delay), ("delay_rec", lay.delay_rec if lay.weight_rec is not None else 0)):
+            d = np.asarray(delay)
+            if d.size and (d.min() < 0 or d.max() > chip.MAX_EXTRA_DELAY):
+                raise SnnccError(f"delays must be integers in 0..{chip.MAX_EXTRA_DELAY}", file=where,
+                                 field=f"/layer/{i}/{key}")
         for key, attr in (("iDecay", "i_decay"), ("vDecay", "v_decay"), ("vThMant", "v_th_mant")):
             value = np.asarray(getattr(lay, attr))
             if value.ndim and value.shape != (lay.n,):
                 raise SnnccError(f"per-neuron registers need one value per neuron ({lay.n})", file=where,
                                  field=f"/layer/{i}/neuron/{key}")
         for key in ("i_decay", "v_decay"):
-            if not (0 <= np.min(getattr(lay, key)) and np.max(getattr(lay, key)) <= 4096):
-                raise SnnccError("decays must lie in 0..4096", file=where, field=f"/layer/{i}/neuron/{key}")
-        if not (1 <= np.min(lay.v_th_mant) and np.max(lay.v_th_mant) <= 2**17 - 1):
-            raise SnnccError("vThMant must lie in 1..131071", file=where, field=f"/layer/{i}/neuron/vThMant")
+            if not (0 <= np.min(getattr(lay, key)) and np.max(getattr(lay, key)) <= chip.DECAY_ONE):
+                raise SnnccError(f"decays must lie in 0..{chip.DECAY_ONE}", file=where, field=f"/layer/{i}/neuron/{key}")
+        if not (chip.V_TH_MANT_MIN <= np.min(lay.v_th_mant) and np.max(lay.v_th_mant) <= chip.V_TH_MANT_MAX):
+            raise SnnccError(f"vThMant must lie in {chip.V_TH_MANT_MIN}..{chip.V_TH_MANT_MAX}", file=where,
+                             field=f"/layer/{i}/neuron/vThMant")
+        if not chip.REF_DELAY_MIN <= lay.ref_delay <= chip.REF_DELAY_MAX:
+            raise SnnccError(f"refDelay must lie in {chip.REF_DELAY_MIN}..{chip.REF_DELAY_MAX}", file=where,
+                             field=f"/layer/{i}/neuron/refDelay")
+        if lay.bias is not None and (np.any(np.abs(np.asarray(lay.bias)) > chip.BIAS_MANT_MAX)
+                                     or not 0 <= lay.bias_exp <= chip.BIAS_EXP_STORED_MAX):
+            raise SnnccError(f"bias mantissas must fit 13 bits signed (|b| <= {chip.BIAS_MANT_MAX}), biasExp "
+                             f"0..{chip.BIAS_EXP_STORED_MAX}", file=where, field=f"/layer/{i}/bias")
         width = lay.n

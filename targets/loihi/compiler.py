@@ -18,8 +18,8 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.passes.fold_linear import fold_linear
-from snncc.passes.quantize import samples_steps
-from snncc.passes.timing import lower_timing
+from snncc.targets.loihi.quantize import samples_steps
+from snncc.targets.loihi.timing import lower_timing
 from snncc.targets.loihi.bundle import netx_compat, write_bundle
 from snncc.targets.loihi.capabilities import LoihiTarget, target  # noqa: F401  (the registered target, re-exported)
 from snncc.targets.loihi.chip_units import in_chip_units

@@ -14,6 +14,7 @@ delay. ``reference_run`` states this literally in numpy (also runnable with floa
 no truncation, wrap or clip, used to check the lowering with quantization switched off);
 ``emulate`` runs the same rules in an event-driven numba kernel (``_kernel.py``: spikes accumulate
 into a ring buffer of future q), the samples of a batch spread over threads. Both count overflows.
+The widths and formats are ``chip.py``'s (read at call time here; the kernel freezes them when compiled).
 """
 
 from __future__ import annotations
@@ -24,10 +25,10 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.limits import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, whole_number
+from snncc.targets.loihi import chip
 from snncc.targets.loihi.network import LoihiNetwork
 
 DEFAULT_GAP = 100                # blank steps between samples in stream mode (the paper's protocol)
-Q_BITS, U_BITS = 21, 23          # magnitude bits; plus a sign bit each
 RECORD_CHOICES = ("outputs", "all")
 MODES = ("batch", "stream")
 
@@ -52,7 +53,7 @@ def wrap(x: np.ndarray, bits: int) -> np.ndarray:
 
 def decay(x: np.ndarray, register) -> np.ndarray:
     """sign(x) * ((|x| * (4096 - register)) >> 12): the chip's truncating decay (register: one or per neuron)."""
-    return np.sign(x) * ((np.abs(x) * (4096 - np.asarray(register, np.int64))) >> 12)
+    return np.sign(x) * ((np.abs(x) * (chip.DECAY_ONE - np.asarray(register, np.int64))) >> chip.DECAY_SHIFT)
 
 
 # -- input padding ---------------------------------------------------------------------------------
@@ -142,12 +143,12 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
         state.append({"u": z.copy(), "v": z.copy(), "ref": np.zeros((batch, layer.n), np.int64)})
         hist.append([])
         rec_s[i], rec_u[i], rec_v[i] = hist[i], [], []
-    def chip(weight, exp):  # w_chip = w * 2**(6 + wgtExp); wgtExp an int or one per synapse
-        exp = np.asarray(exp, np.int64)
-        return np.asarray(weight, dt) * (2.0 ** (6 + exp) if as_float else np.int64(1) << (6 + exp))
+    def w_chip(weight, exp):  # w_chip = w * 2**(6 + wgtExp); wgtExp an int or one per synapse
+        exp = np.asarray(exp, np.int64) + chip.WEIGHT_SHIFT
+        return np.asarray(weight, dt) * (2.0 ** exp if as_float else np.int64(1) << exp)
 
-    ff = [None] + [_by_delay(chip(lay.weight, lay.wgt_exp), lay.delay) for lay in layers[1:]]
-    rec = [None] + [None if lay.weight_rec is None else _by_delay(chip(lay.weight_rec, lay.wgt_exp_rec), lay.delay_rec)
+    ff = [None] + [_by_delay(w_chip(lay.weight, lay.wgt_exp), lay.delay) for lay in layers[1:]]
+    rec = [None] + [None if lay.weight_rec is None else _by_delay(w_chip(lay.weight_rec, lay.wgt_exp_rec), lay.delay_rec)
                     for lay in layers[1:]]
     for t in range(steps):
         for i, layer in enumerate(layers[1:], start=1):
@@ -159,13 +160,13 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
             bias = np.zeros(layer.n, dt) if layer.bias is None else np.asarray(layer.bias, dt) * (
                 2.0 ** layer.bias_exp if as_float else np.int64(1) << layer.bias_exp)
             if as_float:
-                u = st["u"] * ((4096 - np.asarray(layer.i_decay, np.float64)) / 4096) + q
-                v = st["v"] * ((4096 - np.asarray(layer.v_decay, np.float64)) / 4096) + u + bias
+                u = st["u"] * ((chip.DECAY_ONE - np.asarray(layer.i_decay, np.float64)) / chip.DECAY_ONE) + q
+                v = st["v"] * ((chip.DECAY_ONE - np.asarray(layer.v_decay, np.float64)) / chip.DECAY_ONE) + u + bias
             else:
-                qw = wrap(q, Q_BITS)
+                qw = wrap(q, chip.Q_BITS)
                 overflow["q_wrap"] += int(np.count_nonzero(qw != q))
                 u_raw = decay(st["u"], layer.i_decay) + qw
-                u = wrap(u_raw, U_BITS)
+                u = wrap(u_raw, chip.U_BITS)
                 overflow["u_wrap"] += int(np.count_nonzero(u != u_raw))
                 v_raw = decay(st["v"], layer.v_decay) + u + bias
                 v = np.clip(v_raw, layer.vmin, layer.vmax)
@@ -173,7 +174,7 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
             refractory = st["ref"] > 0
             v = np.where(refractory, 0, v)
             ref = np.where(refractory, st["ref"] - 1, st["ref"])
-            threshold = np.asarray(layer.v_th_mant, dt) * (64.0 if as_float else 64)
+            threshold = np.asarray(layer.v_th_mant, dt) * (2.0 ** chip.V_TH_SHIFT if as_float else 1 << chip.V_TH_SHIFT)
             s = v > threshold
             v = np.where(s, 0, v)
             ref = np.where(s, layer.ref_delay - 1, ref)
@@ -227,9 +228,9 @@ class _Program:
 def _chip_weights(weight, exp, where: str) -> np.ndarray:
     """w_chip = w * 2**(6 + wgtExp) as int64 (an integer only for wgtExp >= -6); wgtExp an int or per synapse."""
     exp = np.asarray(exp, np.int64)
-    if exp.size and exp.min() < -6:
-        raise SnnccError("wgtExp below -6 gives fractional chip weights", field=where)
-    return np.asarray(weight, np.int64) << (6 + exp)
+    if exp.size and exp.min() < chip.WGT_EXP_MIN:
+        raise SnnccError(f"wgtExp below {chip.WGT_EXP_MIN} gives fractional chip weights", field=where)
+    return np.asarray(weight, np.int64) << (chip.WEIGHT_SHIFT + exp)
 
 
 @dataclass
@@ -269,13 +270,13 @@ def _sparse_block(weight, exp, delay, where: str) -> SparseBlock:
     post, pre = post[order].astype(np.int64), pre[order].astype(np.int64)
     e = np.asarray(exp, np.int64)
     e = e if e.ndim == 0 else e[post, pre]
-    if np.size(e) and np.min(e) < -6:
-        raise SnnccError("wgtExp below -6 gives fractional chip weights", field=where)
-    chip = w[post, pre].astype(np.int64) << (6 + e)
+    if np.size(e) and np.min(e) < chip.WGT_EXP_MIN:
+        raise SnnccError(f"wgtExp below {chip.WGT_EXP_MIN} gives fractional chip weights", field=where)
+    w_chip = w[post, pre].astype(np.int64) << (chip.WEIGHT_SHIFT + e)
     d = np.asarray(delay, np.int64)
     d = np.full(post.size, int(d.reshape(-1)[0]) if d.size else 0, np.int64) if d.size <= 1 else d[post, pre]
     ptr = np.searchsorted(pre, np.arange(w.shape[1] + 1)).astype(np.int64)
-    return SparseBlock(int(w.shape[1]), int(w.shape[0]), ptr, post, np.ascontiguousarray(chip), d)
+    return SparseBlock(int(w.shape[1]), int(w.shape[0]), ptr, post, np.ascontiguousarray(w_chip), d)
 
 
 def _block(weight, exp, delay, where: str):
@@ -317,9 +318,9 @@ def _program(network: LoihiNetwork) -> _Program:
             wr.append(empty)
             dr.append(empty)
         cells = slice(noff[i], noff[i] + lay.n)
-        keep_u[cells] = 4096 - np.asarray(lay.i_decay, np.int64)
-        keep_v[cells] = 4096 - np.asarray(lay.v_decay, np.int64)
-        vth[cells] = np.asarray(lay.v_th_mant, np.int64) * 64
+        keep_u[cells] = chip.DECAY_ONE - np.asarray(lay.i_decay, np.int64)
+        keep_v[cells] = chip.DECAY_ONE - np.asarray(lay.v_decay, np.int64)
+        vth[cells] = np.asarray(lay.v_th_mant, np.int64) * (1 << chip.V_TH_SHIFT)
         one = all(np.all(a[cells] == a[cells][0]) for a in (keep_u, keep_v, vth)) if lay.n else True
         params[i] = (keep_u[cells][0], keep_v[cells][0], vth[cells][0], lay.ref_delay, lay.vmin, lay.vmax, int(one))
         if lay.bias is not None:

@@ -31,11 +31,12 @@ from dataclasses import replace
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.targets.loihi.chip import DECAY_ONE, WEIGHT_MAX
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 from snncc.targets.loihi.resources import LOIHI1, ChipSpec, axon_list_bits, delay_bits, list_bits
 
-COPY_WEIGHT = 254
-MAX_QUANTUM = 252
+COPY_WEIGHT = WEIGHT_MAX             # a copy relay's weight: the largest (254), its threshold below it
+MAX_QUANTUM = WEIGHT_MAX - 2         # the rate relays' quantum omega: even, 2..252
 
 
 def _dense(weight) -> np.ndarray:
@@ -133,7 +134,7 @@ def relay_layer(layer: LoihiLayer, chip: ChipSpec = LOIHI1) -> tuple[LoihiLayer,
             w_r[row + 1, src] = np.minimum(neg, COPY_WEIGHT)
             w_l[t, row], w_l[t, row + 1] = omega, -omega
     relay = LoihiLayer(name=f"{layer.name}.relay", kind="dense", n=n_relay, weight=w_r, wgt_exp=e,
-                       delay=0, v_th_mant=int(threshold), i_decay=4096, v_decay=0, ref_delay=1,
+                       delay=0, v_th_mant=int(threshold), i_decay=DECAY_ONE, v_decay=0, ref_delay=1,
                        vmin=layer.vmin, vmax=layer.vmax)
     rewired = replace(layer, weight=w_l, delay=d_target)
     exact_timing = d >= 1

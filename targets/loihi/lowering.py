@@ -19,9 +19,9 @@ from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
 from snncc.passes.current_bias import current_biases
-from snncc.passes.quantize import QuantizationRecord, quantize_weights
-from snncc.passes.timing import TimingRecord
-from snncc.targets.loihi import bias_sources
+from snncc.targets.loihi import bias_sources, chip
+from snncc.targets.loihi.quantize import QuantizationRecord, quantize_weights
+from snncc.targets.loihi.timing import TimingRecord
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 
 
@@ -173,27 +173,27 @@ def float_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer]) ->
         # threshold 1 and their voltage bias in units of their own chip threshold (so they fire as on chip)
         theta, i_dec, v_dec = (np.ones(lay.n) for _ in range(3))
         theta[:op.n] = op.threshold
-        i_dec[:op.n], v_dec[:op.n] = 4096.0 * (1.0 - alpha), 4096.0 * (1.0 - beta)
+        i_dec[:op.n], v_dec[:op.n] = chip.DECAY_ONE * (1.0 - alpha), chip.DECAY_ONE * (1.0 - beta)
         i_dec[op.n:] = np.broadcast_to(np.asarray(lay.i_decay, np.float64), (lay.n,))[op.n:]
         v_dec[op.n:] = np.broadcast_to(np.asarray(lay.v_decay, np.float64), (lay.n,))[op.n:]
         t = LoihiLayer(
-            name=lay.name, kind=lay.kind, n=lay.n, weight=_twin_weight(graph, c, lay), wgt_exp=-6, delay=lay.delay,
-            v_th_mant=theta / 64.0, i_decay=i_dec, v_decay=v_dec,
+            name=lay.name, kind=lay.kind, n=lay.n, weight=_twin_weight(graph, c, lay), wgt_exp=-chip.WEIGHT_SHIFT,
+            delay=lay.delay, v_th_mant=theta / 2.0 ** chip.V_TH_SHIFT, i_decay=i_dec, v_decay=v_dec,
             ref_delay=lay.ref_delay, vmin=-math.inf, vmax=math.inf, always_on=lay.always_on,
         )
         if c.rec:
             t.weight_rec = np.zeros((lay.n, lay.n))
             t.weight_rec[:op.n, :op.n] = graph.node(c.rec).weight
-            t.wgt_exp_rec = -6
+            t.wgt_exp_rec = -chip.WEIGHT_SHIFT
             t.delay_rec = lay.delay_rec
         if (op.bias is not None and op.bias_placement == "voltage") or lay.always_on:
             t.bias, t.bias_exp = np.zeros(lay.n), 0
             if op.bias is not None and op.bias_placement == "voltage":
                 t.bias[:op.n] = op.bias
             if lay.always_on:
-                chip = np.asarray(lay.bias[op.n:], np.float64) * 2.0 ** lay.bias_exp
-                vth_chip = np.broadcast_to(np.asarray(lay.v_th_mant, np.float64), (lay.n,))[op.n:] * 64.0
-                t.bias[op.n:] = chip / vth_chip
+                bias_chip = np.asarray(lay.bias[op.n:], np.float64) * 2.0 ** lay.bias_exp
+                vth_chip = np.broadcast_to(np.asarray(lay.v_th_mant, np.float64), (lay.n,))[op.n:] * 2.0 ** chip.V_TH_SHIFT
+                t.bias[op.n:] = bias_chip / vth_chip
         twin_layers.append(t)
     return LoihiNetwork(layers=twin_layers, t_sample=network.t_sample, metadata={})
 

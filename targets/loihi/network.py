@@ -16,6 +16,8 @@ itself through ``weight_rec`` (n, n). Integer fields follow Loihi's registers:
     uses two synapse formats (a fine exponent for the bulk, a coarse one for outliers)
     always_on: the layer's last ``always_on`` units are bias sources (``bias_sources.py``): input
     axons the driver holds at 1 every step, or compartments that fire on their own
+
+The ranges are ``chip.py``'s; vmin / vmax default to its V_MIN / V_MAX when a layer is built.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
+from snncc.targets.loihi import chip
 
 LAYER_KINDS = ("input", "dense", "dense_rec")
 
@@ -40,13 +44,13 @@ class LoihiLayer:
     delay: Any = 0                          # extra synaptic delay (steps), int or int array like weight
     delay_rec: Any = 0
     bias: np.ndarray | None = None          # bias mantissa per neuron
-    bias_exp: int = 6                       # netx reads bias with exponent 6
+    bias_exp: int = chip.NETX_BIAS_EXP      # netx reads bias with exponent 6
     v_th_mant: Any = 0                      # int, or (n,) int array (per-neuron profiles)
     i_decay: Any = 0
     v_decay: Any = 0
     ref_delay: int = 1
-    vmin: int = -(2**23 - 1)
-    vmax: int = 2**23 - 1
+    vmin: int = field(default_factory=lambda: chip.V_MIN)
+    vmax: int = field(default_factory=lambda: chip.V_MAX)
     always_on: int = 0
 
     @property

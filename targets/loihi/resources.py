@@ -28,6 +28,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from snncc.targets.loihi import chip
+
 
 @dataclass(frozen=True)
 class EnergyCosts:
@@ -53,27 +55,29 @@ class EnergyCosts:
 
 @dataclass(frozen=True)
 class ChipSpec:
-    """Per-chip and per-core limits of a neuromorphic chip, plus its synapse-memory encoding."""
+    """Per-chip and per-core limits of a neuromorphic chip, plus its synapse-memory encoding.
+
+    The defaults are Loihi 1's (``chip.py``), read when an instance is built."""
 
     name: str = "Loihi 1"
-    cores_per_chip: int = 128
-    compartments_per_core: int = 1024
-    input_axons_per_core: int = 4096
-    output_axons_per_core: int = 4096
-    synapse_words_per_core: int = 16384
-    word_bits: int = 64
-    weight_bits: int = 8
-    synapses_per_chunk: int = 64
-    chunk_header_bits: int = 4 + 6          # synapse-format id + synapse count
-    min_index_bits: int = 6                 # sparse format: per-synapse compartment index, 6..12 bits
-    max_index_bits: int = 12
-    vth_profiles_per_core: int = 8
-    compartment_profiles_per_core: int = 32
-    voltage_limits_per_core: int = 1        # vmin/vmax are a per-core setting (nengo-loihi sets them per block)
-    max_delay: int = 62
-    cores_per_tile: int = 4
-    mesh_tiles_ew: int = 8                  # tiles per chip, east-west ...
-    mesh_tiles_ns: int = 4                  # ... and north-south (8 x 4 = 32 tiles = 128 cores)
+    cores_per_chip: int = field(default_factory=lambda: chip.CORES_PER_CHIP)
+    compartments_per_core: int = field(default_factory=lambda: chip.COMPARTMENTS_PER_CORE)
+    input_axons_per_core: int = field(default_factory=lambda: chip.INPUT_AXONS_PER_CORE)
+    output_axons_per_core: int = field(default_factory=lambda: chip.OUTPUT_AXONS_PER_CORE)
+    synapse_words_per_core: int = field(default_factory=lambda: chip.SYNAPSE_WORDS_PER_CORE)
+    word_bits: int = field(default_factory=lambda: chip.SYNAPSE_WORD_BITS)
+    weight_bits: int = field(default_factory=lambda: chip.WEIGHT_BITS)
+    synapses_per_chunk: int = field(default_factory=lambda: chip.SYNAPSES_PER_CHUNK)
+    chunk_header_bits: int = field(default_factory=lambda: chip.CHUNK_HEADER_BITS)
+    min_index_bits: int = field(default_factory=lambda: chip.INDEX_BITS_MIN)
+    max_index_bits: int = field(default_factory=lambda: chip.INDEX_BITS_MAX)
+    vth_profiles_per_core: int = field(default_factory=lambda: chip.VTH_PROFILES_PER_CORE)
+    compartment_profiles_per_core: int = field(default_factory=lambda: chip.COMPARTMENT_PROFILES_PER_CORE)
+    voltage_limits_per_core: int = field(default_factory=lambda: chip.VOLTAGE_LIMITS_PER_CORE)
+    max_delay: int = field(default_factory=lambda: chip.MAX_EXTRA_DELAY)
+    cores_per_tile: int = field(default_factory=lambda: chip.CORES_PER_TILE)
+    mesh_tiles_ew: int = field(default_factory=lambda: chip.MESH_TILES_EW)
+    mesh_tiles_ns: int = field(default_factory=lambda: chip.MESH_TILES_NS)
     max_chips: int | None = None            # None: as many chips as needed (multi-chip boards)
     energy: EnergyCosts = field(default_factory=EnergyCosts)
 
@@ -103,7 +107,7 @@ class ChipSpec:
         return cls(**d, energy=energy)
 
 
-LOIHI1 = ChipSpec()
+LOIHI1 = ChipSpec()    # Loihi 1 as chip.py states it when this module is imported
 
 LIMIT_TITLES = {
     "neurons": "compartments per core",

@@ -19,38 +19,68 @@ inputs, than any rule it tried.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 from typing import Callable
 
 import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.passes.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
-                                   quantize_graph)
+from snncc.targets.loihi import chip
+from snncc.targets.loihi.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
+                                          quantize_graph)
 
-OUTLIER_REASON = "max|W| is"
 MIN_RANGE = 1.0 / 8.0
+
+
+class FlagKind(Enum):
+    """Why the screen flagged a projection (or the graph)."""
+
+    OUTLIERS = "outliers"                # max|W| > OUTLIER_RATIO x the median |W != 0|: split exponents may help
+    LOW_RANGE = "low range"              # under one global scale it uses < MIN_RANGE of the 8-bit range
+    GLOBAL_REFUSED = "global refused"    # the paper's global rule cannot be lowered (a register out of range)
+
+
+@dataclass(frozen=True)
+class Flag:
+    """One flag: its kind, and the message printed in the record's reason."""
+
+    kind: FlagKind
+    message: str
+
+    def __str__(self) -> str:
+        return self.message
 
 
 @dataclass
 class Screen:
-    flagged: dict[str, str]      # dense -> why
+    flagged: dict[str, Flag]     # dense (or "graph") -> why
     global_possible: bool
+
+    def of_kind(self, kind: FlagKind) -> set[str]:
+        """The flagged names whose flag is ``kind``."""
+        return {name for name, flag in self.flagged.items() if flag.kind is kind}
+
+    def messages(self) -> dict[str, str]:
+        """name -> message, as recorded in the calibration record."""
+        return {name: flag.message for name, flag in self.flagged.items()}
 
 
 def screen(graph: Graph) -> Screen:
-    flagged: dict[str, str] = {}
+    flagged: dict[str, Flag] = {}
     maxima = {d: projection_max(graph, d, lif) for d, lif in projections(graph)}
     top = max(maxima.values())
-    possible = 0 < top <= 256
+    span = chip.WEIGHT_SPAN
+    possible = 0 < top <= span
     for dense, m in maxima.items():
         w = np.abs(graph.node(dense).weight)
         nz = w[w > 0]
         med = float(np.median(nz)) if nz.size else 0.0
         if med > 0 and m / med > OUTLIER_RATIO:
-            flagged[dense] = f"{OUTLIER_REASON} {m / med:.0f}x the median |W|"
-        elif possible and m * np.floor(256.0 / top) / 256.0 < MIN_RANGE:
-            flagged[dense] = f"uses {100 * m * np.floor(256.0 / top) / 256.0:.1f}% of the 8-bit range under one global scale"
+            flagged[dense] = Flag(FlagKind.OUTLIERS, f"max|W| is {m / med:.0f}x the median |W|")
+        elif possible and m * np.floor(span / top) / span < MIN_RANGE:
+            flagged[dense] = Flag(FlagKind.LOW_RANGE, f"uses {100 * m * np.floor(span / top) / span:.1f}% of the "
+                                  "8-bit range under one global scale")
     return Screen(flagged, possible)
 
 
@@ -75,7 +105,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
     if rule not in ("auto", "split"):
         raise SnnccError("scale must be one of global, per-layer, split, fine, auto", field="--scale")
     sc = screen(graph)
-    outliers = {d for d, why in sc.flagged.items() if why.startswith(OUTLIER_REASON)}
+    outliers = sc.of_kind(FlagKind.OUTLIERS)
     if rule == "split":
         g, r = quantize_graph(graph, "per-layer", split=outliers)
         done = split_projections(r)
@@ -91,7 +121,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
                                   "8-bit range)")
         except SnnccError as ex:   # e.g. a threshold mantissa beyond 17 bits: measure the other rules
             refused["global"] = str(ex)
-            sc.flagged["graph"] = "the paper's global rule cannot be lowered"
+            sc.flagged["graph"] = Flag(FlagKind.GLOBAL_REFUSED, "the paper's global rule cannot be lowered")
             sc.global_possible = False
     candidates: list[tuple[str, Graph, QuantizationRecord, float]] = []
 
@@ -132,6 +162,6 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
         why += "; left out (cannot be lowered): " + "; ".join(f"{k}: {v}" for k, v in refused.items())
     r.reason = why
     r.calibration = {"inputs": calibration, "metric": "mean |spike count difference| per neuron and sample relative "
-                     "to the float model's mean count, mean over layers", "errors": errors, "flagged": sc.flagged,
+                     "to the float model's mean count, mean over layers", "errors": errors, "flagged": sc.messages(),
                      "refused": refused}
     return g, r

@@ -1,8 +1,9 @@
 """Timing lowering for Loihi 1: IR edge delays and refractory periods -> synaptic delays and refDelay.
 
 On Loihi every edge delivers a spike one step after it is sent, plus an optional synaptic delay
-(0..62 steps). A projection pre -> Dense -> post with IR total delay d therefore lowers to an
-extra delay d - 1; the IR refractory period r lowers to refDelay = r.
+(0..62 steps, ``chip.MAX_EXTRA_DELAY``). A projection pre -> Dense -> post with IR total delay d
+therefore lowers to an extra delay d - 1; the IR refractory period r lowers to refDelay = r
+(1..63, ``chip.REF_DELAY_MAX``).
 
     timing="exact": keep the IR's order. A projection with d = 0 cannot be exact step for step;
         the pass then delays whole populations (spike trains identical, shifted by s_P steps):
@@ -24,9 +25,9 @@ from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense, Input
 from snncc.passes.current_bias import current_biases
+from snncc.targets.loihi import chip
 
 TIMINGS = ("exact", "paper")
-MAX_EXTRA_DELAY = 62
 
 
 @dataclass
@@ -36,7 +37,7 @@ class ProjectionTiming:
     post: str
     ir_delay: int        # total IR delay pre -> dense -> post
     loihi_delay: int     # total steps on Loihi (>= 1): 1 (delivery) + extra
-    extra_delay: int     # the synaptic delay programmed (0..62)
+    extra_delay: int     # the synaptic delay programmed (0..chip.MAX_EXTRA_DELAY)
 
 
 @dataclass
@@ -139,12 +140,15 @@ def lower_timing(graph: Graph, mode: str = "exact") -> tuple[Graph, TimingRecord
         d = total_delay(g, pre, dense, post)
         loihi = d + shift[post] - shift[pre]
         extra = loihi - 1
-        if extra > MAX_EXTRA_DELAY:
-            raise SnnccError(f"needs a synaptic delay of {extra} steps; Loihi allows at most {MAX_EXTRA_DELAY}",
+        if extra > chip.MAX_EXTRA_DELAY:
+            raise SnnccError(f"needs a synaptic delay of {extra} steps; Loihi allows at most {chip.MAX_EXTRA_DELAY}",
                              field=f"edge {pre}->{dense}->{post}")
         record.projections.append(ProjectionTiming(pre, dense, post, d, loihi, extra))
     for name, op in g.items():
         if isinstance(op, LIF):
+            if not chip.REF_DELAY_MIN <= op.refractory <= chip.REF_DELAY_MAX:
+                raise SnnccError(f"a refractory period of {op.refractory} steps does not fit Loihi's refDelay "
+                                 f"({chip.REF_DELAY_MIN}..{chip.REF_DELAY_MAX})", field=f"node '{name}'.refractory")
             record.ref_delay[name] = int(op.refractory)
     outs = [n for n, op in g.items() if isinstance(op, LIF) and not any(
         isinstance(g.node(s), Dense) for s in g.successors(n))]

@@ -16,12 +16,13 @@
 
 ``s`` is the layer's scale (the network's w_scale under the paper's global rule). Spikes are
 binary, so each layer may carry its own scale without changing the next layer's input.
-A bias on a population's current (``current_bias.py``) is a weight from an always-on source on
+A bias on a population's current (``snncc/passes/current_bias.py``) is a weight from an always-on source on
 Loihi: it is quantized as one more column of the population's feed-forward projection (same s
 and e) and counts towards that projection's max|W|.
 ``quantize_graph`` returns a new Graph whose float parameters are the quantized ones read back
 in float units (W_q * 2**e / s, theta = vThMant / s, decays 1 - register/4096) plus a
 ``QuantizationRecord`` saying what was done; the input graph is never modified.
+The register formats and ranges are ``chip.py``'s, read at call time.
 """
 
 from __future__ import annotations
@@ -37,13 +38,8 @@ from snncc.ir.graph import Graph
 from snncc.ir.timebase import recording_steps
 from snncc.ir.nodes import LIF, Dense
 from snncc.passes.current_bias import BiasTerm, current_biases, max_abs_bias, restore_biases
+from snncc.targets.loihi import chip
 
-WEIGHT_MIN, WEIGHT_MAX = -256, 254
-V_TH_MANT_MAX = 2**17 - 1
-DECAY_ONE = 4096
-WGT_EXP_MIN, WGT_EXP_MAX = -6, 7     # below -6 the chip weight w_q * 2**(6+e) stops being an integer
-BIAS_MANT_MAX = 2**12 - 1            # Loihi 1: 13-bit signed bias mantissa
-BIAS_EXP_MAX = 7
 SCALE_RULES = ("global", "per-layer", "split", "fine", "auto")
 FINE_V_TH_MANT = 256                 # the fine rule's threshold mantissa (chip threshold 2**14)
 FINE_STEPS = (1.0, 1.125, 1.25, 1.375, 1.5, 1.625, 1.75, 1.875)   # scale multipliers auto measures (one octave)
@@ -56,9 +52,10 @@ def weight_scale(max_abs: float) -> int:
     max_abs = float(max_abs)
     if not (math.isfinite(max_abs) and max_abs > 0):
         raise SnnccError(f"max |W| must be positive and finite to define w_scale, got {max_abs}", field="weights")
-    scale = math.floor(256.0 / max_abs)
+    span = chip.WEIGHT_SPAN
+    scale = math.floor(span / max_abs)
     if scale < 1:
-        raise SnnccError(f"max |W| = {max_abs:g} > 256 gives w_scale 0 under the paper's global rule; "
+        raise SnnccError(f"max |W| = {max_abs:g} > {span} gives w_scale 0 under the paper's global rule; "
                          "use --scale per-layer (weight exponents)", field="weights")
     return int(scale)
 
@@ -66,24 +63,27 @@ def weight_scale(max_abs: float) -> int:
 def quantize_weights(weight: np.ndarray, w_scale: float, wgt_exp: int = 0) -> np.ndarray:
     """clip(round(W * w_scale / 2**wgt_exp / 2) * 2, -256, 254) as int16 (np.round: half to even)."""
     scaled = np.asarray(weight, np.float64) * (float(w_scale) / 2.0 ** wgt_exp)
-    return np.clip(np.round(scaled / 2.0) * 2.0, WEIGHT_MIN, WEIGHT_MAX).astype(np.int16)
+    return np.clip(np.round(scaled / 2.0) * 2.0, chip.WEIGHT_MIN, chip.WEIGHT_MAX).astype(np.int16)
 
 
 def synapse_exponents(values: np.ndarray, scale: float, fine: int, coarse: int) -> np.ndarray:
     """Per synapse: ``fine`` where round(W * s / 2**fine / 2) * 2 fits [-256, 254], else ``coarse``."""
     r = np.round(np.asarray(values, np.float64) * (float(scale) / 2.0 ** fine) / 2.0) * 2.0
-    return np.where((r >= WEIGHT_MIN) & (r <= WEIGHT_MAX), fine, coarse).astype(np.int64)
+    return np.where((r >= chip.WEIGHT_MIN) & (r <= chip.WEIGHT_MAX), fine, coarse).astype(np.int64)
 
 
-def finest_exponents(values: np.ndarray, scale: float, low: int = WGT_EXP_MIN, high: int = WGT_EXP_MAX) -> np.ndarray:
-    """Per synapse: the smallest e in [low, high] where round(W * s / 2**e / 2) * 2 fits [-256, 254]
-    (``high`` where none does: that weight is clipped, and counted as such)."""
+def finest_exponents(values: np.ndarray, scale: float, low: int | None = None, high: int | None = None) -> np.ndarray:
+    """Per synapse: the smallest e in [low, high] (default: the chip's wgtExp range, -6..7) where
+    round(W * s / 2**e / 2) * 2 fits [-256, 254] (``high`` where none does: that weight is clipped,
+    and counted as such)."""
+    low = chip.WGT_EXP_MIN if low is None else low
+    high = chip.WGT_EXP_MAX if high is None else high
     v = np.asarray(values, np.float64)
     out = np.full(v.shape, high, np.int64)
     todo = np.ones(v.shape, bool)
     for e in range(low, high + 1):
         r = np.round(v * (float(scale) / 2.0 ** e) / 2.0) * 2.0
-        fits = todo & (r >= WEIGHT_MIN) & (r <= WEIGHT_MAX)
+        fits = todo & (r >= chip.WEIGHT_MIN) & (r <= chip.WEIGHT_MAX)
         out[fits] = e
         todo &= ~fits
     return out
@@ -101,7 +101,7 @@ def bulk_max(values: np.ndarray, ratio: float = OUTLIER_RATIO) -> float:
 def clipped_to_254(weight: np.ndarray, w_scale: float, wgt_exp: int = 0) -> int:
     """How many weights rounded to +256 (or beyond) and were clipped to 254, or below -256."""
     scaled = np.round(np.asarray(weight, np.float64) * (float(w_scale) / 2.0 ** wgt_exp) / 2.0) * 2.0
-    return int(np.count_nonzero((scaled > WEIGHT_MAX) | (scaled < WEIGHT_MIN)))
+    return int(np.count_nonzero((scaled > chip.WEIGHT_MAX) | (scaled < chip.WEIGHT_MIN)))
 
 
 def decay_register(dt: float, tau: float, discretisation: str = "exp", rounding: str = "truncate") -> int:
@@ -111,22 +111,23 @@ def decay_register(dt: float, tau: float, discretisation: str = "exp", rounding:
         raise SnnccError("time constants and dt must be positive", field="tau")
     to_int = int if rounding == "truncate" else round
     if discretisation == "euler":
-        value = int(to_int(DECAY_ONE * dt / tau))
+        value = int(to_int(chip.DECAY_ONE * dt / tau))
     elif discretisation == "exp":
-        value = int(to_int(DECAY_ONE * (1.0 - math.exp(-dt / tau))))
+        value = int(to_int(chip.DECAY_ONE * (1.0 - math.exp(-dt / tau))))
     else:
         raise SnnccError(f"unknown discretisation {discretisation!r}", field="discretisation")
-    if not 0 <= value <= DECAY_ONE:
-        raise SnnccError(f"decay register {value} outside 0..4096 (dt/tau = {dt / tau:g}: a forward-Euler "
+    if not 0 <= value <= chip.DECAY_ONE:
+        raise SnnccError(f"decay register {value} outside 0..{chip.DECAY_ONE} (dt/tau = {dt / tau:g}: a forward-Euler "
                          "model with dt > tau cannot be expressed)", field="tau")
     return value
 
 
 def threshold_mantissa(theta: float, scale: float, layer: str = "") -> int:
-    """vThMant = round(theta * scale), checked against 1 .. 2**17 - 1."""
+    """vThMant = round(theta * scale), checked against the chip's 1 .. 2**17 - 1."""
     value = round(float(theta) * float(scale))
-    if not 1 <= value <= V_TH_MANT_MAX:
-        raise SnnccError(f"vThMant = round({theta:g} * {scale:g}) = {value} is outside 1..{V_TH_MANT_MAX}",
+    if not chip.V_TH_MANT_MIN <= value <= chip.V_TH_MANT_MAX:
+        raise SnnccError(f"vThMant = round({theta:g} * {scale:g}) = {value} is outside "
+                         f"{chip.V_TH_MANT_MIN}..{chip.V_TH_MANT_MAX}",
                          field=f"node '{layer}'.threshold" if layer else "threshold")
     return int(value)
 
@@ -244,8 +245,8 @@ def exponent_for(max_abs: float, scale: float) -> int:
     """Smallest wgtExp in [-6, 7] with max|W| * scale / 2**e <= 256."""
     if max_abs <= 0:
         return 0
-    e = math.ceil(math.log2(max_abs * scale / 256.0) - 1e-12)
-    return int(min(max(e, WGT_EXP_MIN), WGT_EXP_MAX))
+    e = math.ceil(math.log2(max_abs * scale / chip.WEIGHT_SPAN) - 1e-12)
+    return int(min(max(e, chip.WGT_EXP_MIN), chip.WGT_EXP_MAX))
 
 
 def layer_scales(graph: Graph, rule: str, fine_step: float = 1.0) -> tuple[dict[str, float], int | None]:
@@ -269,14 +270,16 @@ def layer_scales(graph: Graph, rule: str, fine_step: float = 1.0) -> tuple[dict[
             s = FINE_V_TH_MANT * fine_step / top if top > 0 else 1.0
             m = max(maxima[d] for d, l in pairs if l == lif)
             if m > 0:
-                s = min(s, WEIGHT_MAX * 2.0 ** WGT_EXP_MAX / m)
+                s = min(s, chip.WEIGHT_MAX * 2.0 ** chip.WGT_EXP_MAX / m)
             if op.bias is not None and op.bias_placement == "voltage" and np.max(np.abs(op.bias)) > 0:
-                s = min(s, BIAS_MANT_MAX * 2.0 ** BIAS_EXP_MAX / (64.0 * float(np.max(np.abs(op.bias)))))
+                s = min(s, chip.BIAS_MANT_MAX * 2.0 ** chip.BIAS_EXP_MAX
+                        / (2.0 ** chip.V_TH_SHIFT * float(np.max(np.abs(op.bias)))))
             scales[lif] = s
         return scales, None
     for _, lif in pairs:
         m = max(maxima[d] for d, l in pairs if l == lif)
-        scales[lif] = float(math.floor(256.0 / m)) if 0 < m <= 256 else 1.0
+        span = chip.WEIGHT_SPAN
+        scales[lif] = float(math.floor(span / m)) if 0 < m <= span else 1.0
     return scales, None
 
 
@@ -312,12 +315,12 @@ def quantize_graph(
         e = 0 if rule == "global" else exponent_for(max_abs, s)
         carried = current_biases(graph, lif) if bias_carrier(graph, lif) == dense else []
         pq = ProjectionQuant(dense=dense, target=lif, scale=s, wgt_exp=e, max_abs=max_abs, clipped=0, zeroed=0,
-                             rms_error=0.0, range_used=float(max_abs * s / 2.0 ** e / 256.0))
+                             rms_error=0.0, range_used=float(max_abs * s / 2.0 ** e / chip.WEIGHT_SPAN))
         if rule == "fine":
             values = np.concatenate([w.reshape(-1)] + [t.vector for t in carried])
             used = np.unique(finest_exponents(values[values != 0], s)) if np.any(values != 0) else np.array([e])
             pq.per_synapse, pq.exponents_used = True, [int(u) for u in used]
-            pq.wgt_exp, pq.range_used = int(used.min()), float(max_abs * s / 2.0 ** int(used.max()) / 256.0)
+            pq.wgt_exp, pq.range_used = int(used.min()), float(max_abs * s / 2.0 ** int(used.max()) / chip.WEIGHT_SPAN)
         elif dense in split:
             values = np.concatenate([w.reshape(-1)] + [t.vector for t in carried])
             fine = exponent_for(bulk_max(values), s)
@@ -371,7 +374,7 @@ def quantize_graph(
         q.tau_mem = per_neuron(v_dec, lambda r: _tau_for(graph.dt, int(r)))
         if op.bias is not None and op.bias_placement == "voltage":
             mant, bexp = bias_registers(op.bias, s)
-            back = mant.astype(np.float64) * 2.0 ** bexp / (64.0 * s)
+            back = mant.astype(np.float64) * 2.0 ** bexp / (2.0 ** chip.V_TH_SHIFT * s)
             lq.bias_mant, lq.bias_exp = [int(m) for m in mant], int(bexp)
             lq.bias_max_error = float(np.max(np.abs(back - op.bias)))
             q.bias = back
@@ -381,7 +384,7 @@ def quantize_graph(
 
 def _tau_for(dt: float, register: int) -> float:
     """The tau whose exp decay equals 1 - register/4096 (inf when register is 0: no decay)."""
-    keep = 1.0 - register / DECAY_ONE
+    keep = 1.0 - register / chip.DECAY_ONE
     if register == 0:
         return math.inf
     if keep <= 0:
@@ -391,14 +394,15 @@ def _tau_for(dt: float, register: int) -> float:
 
 def bias_registers(bias: np.ndarray, scale: float) -> tuple[np.ndarray, int]:
     """Voltage bias in chip units b * s * 64 as mantissa * 2**exp (13-bit signed mantissa, exp 0..7)."""
-    chip = np.asarray(bias, np.float64) * scale * 64.0
-    peak = float(np.max(np.abs(chip))) if chip.size else 0.0
+    on_chip = np.asarray(bias, np.float64) * scale * 2.0 ** chip.V_TH_SHIFT
+    peak = float(np.max(np.abs(on_chip))) if on_chip.size else 0.0
     exp = 0
-    while peak / 2.0 ** exp > BIAS_MANT_MAX and exp < BIAS_EXP_MAX:
+    while peak / 2.0 ** exp > chip.BIAS_MANT_MAX and exp < chip.BIAS_EXP_MAX:
         exp += 1
-    mant = np.round(chip / 2.0 ** exp)
-    if np.any(np.abs(mant) > BIAS_MANT_MAX):
-        raise SnnccError(f"bias too large for Loihi's 13-bit mantissa with exponent <= {BIAS_EXP_MAX}", field="bias")
+    mant = np.round(on_chip / 2.0 ** exp)
+    if np.any(np.abs(mant) > chip.BIAS_MANT_MAX):
+        raise SnnccError(f"bias too large for Loihi's 13-bit mantissa with exponent <= {chip.BIAS_EXP_MAX}",
+                         field="bias")
     return mant.astype(np.int64), exp
 
 
