@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
+
+if TYPE_CHECKING:
+    from snncc.training.ttc import TTCRecord
 
 
 @dataclass
@@ -13,7 +16,7 @@ class TTCResult:
     mean and median TTC, final accuracy, share never correct, method, notes); ``rule``: the TTC
     rule; ``output`` / ``figure``: the files written (or None)."""
 
-    records: list
+    records: list[TTCRecord]
     rule: str
     output: str | None = None
     figure: str | None = None

@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from snncc.data.encoding import EncodedSet
 
 
 @dataclass
@@ -11,7 +15,7 @@ class EncodeResult:
     """``encoded``: the ``EncodedSet`` (inputs (N, T, 24) uint8, labels, meta); ``written``: the
     files (OUT, and OUT_train / OUT_test for a split); ``bin_ms``: the bin size used."""
 
-    encoded: object
+    encoded: EncodedSet
     written: list[str]
     bin_ms: float
 

@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from snncc.data.encoding import EncodedSet
 
 
 @dataclass
@@ -11,7 +15,7 @@ class FramesResult:
     """``encoded``: the ``EncodedSet`` (inputs (N, T, 12) float32, 0 = rest, 255 = full load; labels;
     meta); ``written``: the files (OUT, and OUT_train / OUT_test for a split)."""
 
-    encoded: object
+    encoded: EncodedSet
     written: list[str]
 
     def as_dict(self) -> dict:

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from snncc.exporters.nir import ExportReport
 
 FORMATS = ("nir",)
 
@@ -15,7 +18,7 @@ class ExportResult:
     delay_nodes, convention, not_honoured); ``notes``: what the frontend assumed in loading."""
 
     format: str
-    report: Any
+    report: ExportReport
     notes: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict:

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
+
+if TYPE_CHECKING:
+    from snncc.hpo.report import HpoReport
+    from snncc.hpo.space import Range
+    from snncc.hpo.study import RunSummary
+    from snncc.frontends.params import PaperParams
 
 SPACE_NOTE = "ranges are snncc's choice; the paper lists the hyper-parameters, not their ranges"
 
@@ -14,7 +20,7 @@ class HpoRunResult:
     """``summaries``: one ``RunSummary`` per step run (study, step, created, budget, trials_run_here,
     notes); ``report_command``: the ``snncc hpo report`` line for the last study."""
 
-    summaries: list
+    summaries: list[RunSummary]
     report_command: str
 
     def as_dict(self) -> list:
@@ -87,7 +93,7 @@ class HpoReportResult:
     """``report``: the ``HpoReport`` (study, storage, plan, counts, rows, best, front, paper_presets,
     synthetic_data, notes); ``figure``: the front figure written (or None)."""
 
-    report: object
+    report: HpoReport
     figure: str | None = None
 
     def as_dict(self) -> dict:
@@ -123,8 +129,8 @@ class HpoSpaceResult:
     """``space``: hyper-parameter -> ``Range`` (low, high, log, integer); ``paper_presets``:
     threshold -> the paper's ``PaperParams``; ``note``: where the ranges come from."""
 
-    space: dict
-    paper_presets: dict
+    space: dict[str, Range]
+    paper_presets: dict[int, PaperParams]
     note: str = SPACE_NOTE
 
     def as_dict(self) -> dict:
