@@ -108,7 +108,10 @@ class Pipeline:
         import snncc.api
         from snncc.errors import SnnccError
 
-        shown = [str(a) for a in args] + [f"{k}={v}" for k, v in options.items()]
+        def text(v) -> str:
+            return f"[{', '.join(map(str, v))}]" if isinstance(v, list) else str(v)
+
+        shown = [text(a) for a in args] + [f"{k}={text(v)}" for k, v in options.items()]
         step = Step(name, [f"snncc.api.{verb}", *shown])
         self.steps.append(step)
         if self.skipped(step, needs):
