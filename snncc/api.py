@@ -26,6 +26,17 @@ _TARGET_HOMES: dict[str, str] = {
 
 # --- model and data verbs: inspect, export, data, train, analyse, hpo ---
 _MODEL_DATA_HOMES: dict[str, str] = {
+    "inspect": "snncc.verbs.inspect:inspect",
+    "export": "snncc.verbs.export:export",
+    "data_synth": "snncc.verbs.data_synth:data_synth",
+    "data_encode": "snncc.verbs.data_encode:data_encode",
+    "data_frames": "snncc.verbs.data_frames:data_frames",
+    "data_analyse": "snncc.verbs.data_analyse:data_analyse",
+    "train": "snncc.verbs.train:train",
+    "analyse_ttc": "snncc.verbs.analyse_ttc:analyse_ttc",
+    "hpo_run": "snncc.verbs.hpo:hpo_run",
+    "hpo_report": "snncc.verbs.hpo:hpo_report",
+    "hpo_space": "snncc.verbs.hpo:hpo_space",
 }
 
 _HOMES = {**_TARGET_HOMES, **_MODEL_DATA_HOMES}

@@ -1,16 +1,19 @@
 #!/usr/bin/env python
-"""The paper's whole pipeline on the SYNTHETIC Braille set, through the snncc command line.
+"""The paper's whole pipeline on the SYNTHETIC Braille set, through snncc's Python API and command line.
 
     python examples/braille/run_pipeline.py                # small settings: a few minutes on 2 CPU cores
     python examples/braille/run_pipeline.py --full         # the paper's settings (300 epochs: days on a CPU)
     python examples/braille/run_pipeline.py --baselines    # + FCN, ResNet, Encoder, TCNN, Inception, TTC, latency
 
-Steps: generate (snncc data synth) -> encode (events th 1 at 5 ms, frames) -> train RSNN th1, LSTM,
-eLSTM (snncc train) -> quantization-aware fine-tuning of the RSNN -> compile for Loihi and Jetson
-(snncc compile) -> measure what each target loses (snncc check) -> a results table beside the
-paper's numbers (results.md and results.json in the output directory). ``--baselines`` adds the
-time-series classifiers (train, compile for Jetson), time to classification of every model
-(snncc analyse ttc, ttc.png) and their batch-1 Jetson-artefact latency in one snncc bench run.
+Steps: generate (snncc.api.data_synth) -> encode (events th 1 at 5 ms, frames: data_encode,
+data_frames) -> train RSNN th1, LSTM, eLSTM (snncc.api.train) -> quantization-aware fine-tuning of the
+RSNN -> compile for Loihi and Jetson (snncc compile) -> measure what each target loses (snncc check)
+-> a results table beside the paper's numbers (results.md and results.json in the output
+directory). ``--baselines`` adds the time-series classifiers (train, compile for Jetson), time to
+classification of every model (snncc.api.analyse_ttc, ttc.png) and their batch-1 Jetson-artefact
+latency in one snncc bench run. The data, training and analysis verbs run in this process through
+``snncc.api`` (their records are the ``--json`` output of the same commands); the target verbs
+run as ``snncc`` commands.
 
 A step whose snncc verb or target is not built in this version is reported as *unavailable*;
 nothing is faked. The data are synthetic, so the numbers are not the paper's and are labelled so.
@@ -96,6 +99,37 @@ class Pipeline:
         print(f"[{step.status:>4}] {name} ({step.seconds} s){': ' + step.message if step.message else ''}", flush=True)
         return step
 
+    def api(self, name: str, verb: str, *args, needs: tuple[str, ...] = (), **options) -> Step:
+        """Call ``snncc.api.<verb>(*args, **options)`` in this process; its ``as_dict()`` is the record.
+
+        An snncc error is the same ``snncc: error: ...`` line the command prints; any other error is
+        a failed step with its type and message.
+        """
+        import snncc.api
+        from snncc.errors import SnnccError
+
+        def text(v) -> str:
+            return f"[{', '.join(map(str, v))}]" if isinstance(v, list) else str(v)
+
+        shown = [text(a) for a in args] + [f"{k}={text(v)}" for k, v in options.items()]
+        step = Step(name, [f"snncc.api.{verb}", *shown])
+        self.steps.append(step)
+        if self.skipped(step, needs):
+            return step
+        print(f"[run ] {name}: snncc.api.{verb}({', '.join(shown)})", flush=True)
+        started = time.perf_counter()
+        try:
+            step.record = getattr(snncc.api, verb)(*args, **options).as_dict()
+            step.status = "ok"
+        except SnnccError as err:
+            step.message = f"snncc: error: {err.line()}"
+            step.status = "unavailable" if NOT_BUILT in step.message else "failed"
+        except Exception as ex:  # reported in the table, never hidden
+            step.status, step.message = "failed", f"{type(ex).__name__}: {ex}"
+        step.seconds = round(time.perf_counter() - started, 1)
+        print(f"[{step.status:>4}] {name} ({step.seconds} s){': ' + step.message if step.message else ''}", flush=True)
+        return step
+
     def python(self, name: str, func, *args, needs: tuple[str, ...] = ()) -> Step:
         """A step done in this process (no snncc verb for it); an error is a failed step."""
         step = Step(name, [func.__name__, *map(str, args)])
@@ -135,17 +169,16 @@ def write_test_split(checkpoint: Path, encoded: Path, dest: Path) -> None:
 def baselines(p: Pipeline, out: Path, frames: Path, events: Path, seed: str) -> None:
     """Train and compile the time-series classifiers; TTC of every trained model; one latency run."""
     for kind in PAPER_BASELINES:
-        p.snncc(f"train {kind}", "train", kind, "--data", str(frames), "--epochs", str(p.settings["baseline_epochs"]),
-                "-o", str(out / f"{kind}.pt"), "--seed", seed, "--json", needs=("encode frames",))
+        p.api(f"train {kind}", "train", kind, data=frames, epochs=p.settings["baseline_epochs"],
+              output=out / f"{kind}.pt", seed=int(seed), needs=("encode frames",))
         p.snncc(f"compile {kind} Jetson", "compile", str(out / f"{kind}.pt"), "--target", "jetson",
                 "-o", str(out / f"{kind}_jetson"), "--json", needs=(f"train {kind}",))
     trained = [(name, ckpt) for name, ckpt in (("train RSNN th1", "rsnn_th1.pt"), ("train LSTM", "lstm.pt"),
                                                ("train eLSTM", "elstm.pt"))
                + tuple((f"train {k}", f"{k}.pt") for k in PAPER_BASELINES) if p.status(name) == "ok"]
     if trained:
-        p.snncc("TTC", "analyse", "ttc", *[str(out / c) for _, c in trained], "--data", str(frames), "--data",
-                str(events), "--figure", str(out / "ttc.png"), "-o", str(out / "ttc.json"), "--json",
-                needs=tuple(n for n, _ in trained))
+        p.api("TTC", "analyse_ttc", [out / c for _, c in trained], data=[frames, events], figure=out / "ttc.png",
+              output=out / "ttc.json", needs=tuple(n for n, _ in trained))
     compiled = [(name, art) for name, art in (("compile RSNN Jetson", "rsnn_th1_jetson"),
                                               ("compile LSTM Jetson", "lstm_jetson"))
                 + tuple((f"compile {k} Jetson", f"{k}_jetson") for k in PAPER_BASELINES) if p.status(name) == "ok"]
@@ -283,20 +316,17 @@ def main(argv: list[str] | None = None) -> int:
     seed = str(args.seed)
     s = settings
 
-    p.snncc("generate", "data", "synth", "-o", str(data), "-n", str(s["repetitions"]), "--seed", seed,
-            "--thresholds", "1", "--json")
-    p.snncc("encode events", "data", "encode", str(data), "--threshold", "1", "--bin", "5", "-o", str(events), "--json",
-            needs=("generate",))
-    p.snncc("encode frames", "data", "frames", str(data), "-o", str(frames), "--json", needs=("generate",))
-    common = ["--seed", seed, "--json"]
-    p.snncc("train RSNN th1", "train", "rsnn", "--threshold", "1", "--data", str(events), "--epochs", str(s["rsnn_epochs"]),
-            "-o", str(out / "rsnn_th1.pt"), *common, needs=("encode events",))
-    p.snncc("train RSNN QAT", "train", "rsnn", "--data", str(events), "--qat-from", str(out / "rsnn_th1.pt"),
-            "--qat-epochs", str(s["qat_epochs"]), "-o", str(out / "rsnn_th1_qat.pt"), *common, needs=("train RSNN th1",))
-    p.snncc("train LSTM", "train", "lstm", "--data", str(frames), "--epochs", str(s["lstm_epochs"]),
-            "-o", str(out / "lstm.pt"), *common, needs=("encode frames",))
-    p.snncc("train eLSTM", "train", "elstm", "--threshold", "1", "--data", str(events), "--epochs", str(s["elstm_epochs"]),
-            "-o", str(out / "elstm.pt"), *common, needs=("encode events",))
+    p.api("generate", "data_synth", out=data, repetitions=s["repetitions"], seed=args.seed, thresholds="1")
+    p.api("encode events", "data_encode", data, threshold=1, bin_ms=5, out=events, needs=("generate",))
+    p.api("encode frames", "data_frames", data, out=frames, needs=("generate",))
+    p.api("train RSNN th1", "train", "rsnn", threshold=1, data=events, epochs=s["rsnn_epochs"],
+          output=out / "rsnn_th1.pt", seed=args.seed, needs=("encode events",))
+    p.api("train RSNN QAT", "train", "rsnn", data=events, qat_from=out / "rsnn_th1.pt", qat_epochs=s["qat_epochs"],
+          output=out / "rsnn_th1_qat.pt", seed=args.seed, needs=("train RSNN th1",))
+    p.api("train LSTM", "train", "lstm", data=frames, epochs=s["lstm_epochs"], output=out / "lstm.pt", seed=args.seed,
+          needs=("encode frames",))
+    p.api("train eLSTM", "train", "elstm", threshold=1, data=events, epochs=s["elstm_epochs"], output=out / "elstm.pt",
+          seed=args.seed, needs=("encode events",))
 
     p.snncc("compile RSNN Loihi", "compile", str(out / "rsnn_th1.pt"), "--target", "loihi", "--scale", "global",
             "-o", str(out / "rsnn_th1.net"), "--json", needs=("train RSNN th1",))

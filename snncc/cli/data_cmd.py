@@ -2,20 +2,15 @@
 
 from __future__ import annotations
 
-import json
 from contextlib import contextmanager
-from dataclasses import asdict
 from pathlib import Path
 from typing import Iterator, Optional
 
-import numpy as np
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
 from snncc.cli.app import app
 from snncc.cli.output import console, err_console, print_json
-from snncc.errors import SnnccError
 
 data_app = typer.Typer(
     help=(
@@ -46,21 +41,11 @@ def _progress(enabled: bool = True) -> Iterator[Progress]:
         yield bar
 
 
-def _parse_thresholds(text: str) -> list[float]:
-    try:
-        ths = [float(x) for x in text.split(",") if x.strip()]
-    except ValueError:
-        raise SnnccError(f"expected comma-separated numbers, got {text!r}", field="--thresholds") from None
-    if not ths or any(not np.isfinite(t) or t <= 0 for t in ths):
-        raise SnnccError("thresholds must be positive numbers", field="--thresholds")
-    return sorted(set(ths))
-
-
-def _fmt_th(th: float) -> str:
-    return f"{th:g}"
-
-
-# --------------------------------------------------------------------------- synth
+def _show(record, json_out: bool) -> None:
+    if json_out:
+        print_json(record.as_dict())
+    else:
+        record.render_text(console)
 
 
 @data_app.command("synth")
@@ -84,55 +69,12 @@ def synth_cmd(
     the published layouts, plus DIR/SYNTHETIC.json (generator parameters, seed). See
     docs/braille_synthetic.md for the model and its calibration.
     """
-    from snncc.data import formats, synth
-    from snncc.data.sigma_delta import encode
-    from snncc.data.sources import MARKER
+    from snncc.api import data_synth
 
-    ths = _parse_thresholds(thresholds)
-    n_total = 27 * repetitions
     with _progress(not json_out) as bar:
-        task = bar.add_task("generating frames", total=n_total)
-        raw, labels = synth.generate(repetitions, seed, progress=lambda k: bar.update(task, completed=k),
-                                     version=generator_version)
-        wtask = bar.add_task("encoding and writing", total=1 + len(ths))
-        formats.write_raw(out / formats.RAW_NAME, raw, labels, release=release)
-        bar.advance(wtask)
-        x = 255 - raw.astype(np.int64)
-        counts = {}
-        for th in ths:
-            ev = encode(x, th)
-            counts[_fmt_th(th)] = len(ev) / (raw.shape[0] * raw.shape[2])
-            formats.write_events(out / formats.events_name(th), ev, labels, release=release)
-            bar.advance(wtask)
-    info = {
-        "synthetic": True,
-        "generator": "snncc.data.synth (physical model, calibrated; see docs/braille_synthetic.md)",
-        "generator_version": generator_version,
-        "seed": seed,
-        "repetitions": repetitions,
-        "release": release,
-        "samples": int(raw.shape[0]),
-        "frames": int(raw.shape[1]),
-        "thresholds": ths,
-        "params": synth.params_dict(version=generator_version),
-    }
-    from snncc.atomic import atomic_path
-
-    with atomic_path(out / MARKER) as tmp:
-        tmp.write_text(json.dumps(info, indent=2, sort_keys=True) + "\n")
-    record = {"out": str(out), "samples": int(raw.shape[0]), "frames": int(raw.shape[1]),
-              "files": [formats.RAW_NAME] + [formats.events_name(t) for t in ths] + [MARKER],
-              "mean_events_per_taxel": counts, "seed": seed, "release": release, "synthetic": True,
-              "generator_version": generator_version}
-    if json_out:
-        print_json(record)
-    else:
-        console.print(f"wrote {raw.shape[0]} synthetic samples ({repetitions} x 27 letters, seed {seed}) to {out}")
-        console.print("mean events per taxel and sample: "
-                      + ", ".join(f"th {k}: {v:.1f}" for k, v in counts.items()))
-
-
-# --------------------------------------------------------------------------- encode
+        record = data_synth(out=out, repetitions=repetitions, seed=seed, release=release, thresholds=thresholds,
+                            generator_version=generator_version, progress=bar)
+    _show(record, json_out)
 
 
 @data_app.command("encode")
@@ -163,24 +105,12 @@ def encode_cmd(
     numpy.round(1000*t/bin) (round half to even), binary, channel = 2*taxel + polarity, 24
     channels, input copies NOT applied (the training code tiles them).
     """
-    from snncc.data.encoding import encode_events, write_with_split
+    from snncc.api import data_encode
 
     with _progress(not json_out) as bar:
-        task = bar.add_task("loading / encoding", total=2)
-        encoded = encode_events(src, threshold, bin_ms, prefer, record_ms_opt, progress=lambda: bar.advance(task))
-        bar.advance(task)
-    written = write_with_split(out, encoded, split_test, seed)
-    record = encoded.summary(written)
-    if json_out:
-        print_json(record)
-        return
-    inputs, meta = encoded.inputs, encoded.meta
-    console.print(f"{inputs.shape[0]} samples x {inputs.shape[1]} bins x 24 channels (th {meta['threshold']:g}, "
-                  f"bin {bin_ms:g} ms) -> {', '.join(written)}")
-    before, after = meta["events_before_binning"], meta["events_after_binning"]
-    lost = 100.0 * (1 - after / before) if before else 0.0
-    console.print(f"events: {before} before binning, {after} after ({lost:.1f} % merged)"
-                  + ("   (synthetic data)" if meta["synthetic"] else ""))
+        record = data_encode(src, out=out, threshold=threshold, bin_ms=bin_ms, prefer=prefer,
+                             record_ms=record_ms_opt, split_test=split_test, seed=seed, progress=bar)
+    _show(record, json_out)
 
 
 @data_app.command("frames")
@@ -193,18 +123,9 @@ def frames_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
     """Write the inverted frames (0 = rest, 255 = full load) as a frame data set for the LSTM."""
-    from snncc.data.encoding import frame_set, write_with_split
+    from snncc.api import data_frames
 
-    encoded = frame_set(src)
-    written = write_with_split(out, encoded, split_test, seed)
-    if json_out:
-        print_json(encoded.summary(written))
-    else:
-        n, t = encoded.inputs.shape[:2]
-        console.print(f"{n} samples x {t} frames x 12 taxels -> {', '.join(written)}")
-
-
-# --------------------------------------------------------------------------- analyse
+    _show(data_frames(src, out=out, split_test=split_test, seed=seed), json_out)
 
 
 @data_app.command("analyse")
@@ -230,182 +151,10 @@ def analyse_cmd(
     frames, time collapsed, PCA-12 over a growing number of frames, binned events with all bins vs
     spatial sums. On a synthetic set it also checks the calibration targets.
     """
-    from snncc.data import analysis, calibration, figures as figs, formats, sources
-    from snncc.data.binning import bin_events, binned_reconstruction, n_bins_for, record_ms
-    from snncc.data.sigma_delta import reconstruct
-
-    from snncc.data.encoding import load_raw_frames
-
-    ths = _parse_thresholds(thresholds)
-    raw_path, rs = load_raw_frames(src, f"the analysis needs the raw frames ({formats.RAW_NAME})")
-    x = rs.inverted()
-    labels = rs.labels
-    n, t, c = x.shape
-    syn = sources.synthetic_info(raw_path)
-    from snncc.data.sigma_delta import encode
+    from snncc.api import data_analyse
 
     with _progress(not json_out) as bar:
-        steps = len(ths) * 2 + (2 if svm else 0) + (2 if event_svm else 0)
-        frame_counts: list[int] = []
-        if pca_step:
-            frame_counts = sorted(set(list(range(1, t + 1, pca_step)) + [t]))
-            steps += len(frame_counts)
-        task = bar.add_task("analysing", total=steps)
-
-        def note(desc: str) -> None:
-            bar.update(task, description=desc)
-
-        events_by_th = {}
-        from_files = {}
-        for th in ths:
-            note(f"events th {th:g}")
-            p = sources.events_file(src, th) if src.is_dir() else None
-            if p is not None:
-                es = formats.load_events(p)
-                if es.events.n_samples != n or not np.array_equal(es.labels, labels):
-                    raise SnnccError("samples or letters differ from the raw-frame file", file=str(p),
-                                     field="letter")
-                events_by_th[th] = es.events
-                from_files[_fmt_th(th)] = str(p)
-            else:
-                events_by_th[th] = encode(x, th)
-                from_files[_fmt_th(th)] = "encoded from raw frames"
-            bar.advance(task)
-        note("encoding table")
-        rows = []
-        base = len(events_by_th[ths[0]]) / (n * c)
-        for th in ths:
-            b = analysis.PAPER_BIN_MS.get(int(th), 5) if float(th).is_integer() else 5
-            try:
-                rows.append(analysis.encoding_row(x, events_by_th[th], th, b, base))
-            except SnnccError as err:
-                raise err.with_file(from_files[_fmt_th(th)])
-            bar.advance(task)
-        vs_bin = analysis.events_vs_bin_size(x.shape, events_by_th)
-        std_events = event_threshold == 1 and event_bin == 5
-        note("the paper's figures: frame SVMs under each protocol, event statistics")
-        paper_figs = calibration.calibration_figures(x, labels, seed=seed, n_jobs=jobs, svm=svm,
-                                                     event_svm=event_svm and std_events, progress=note)
-        svm_res = paper_figs.svm_results() if svm else {}
-        bar.advance(task, 2 if svm else 0)
-        pca_points = []
-        for k in frame_counts:
-            note(f"PCA-12 SVM, first {k} frames")
-            pca_points += analysis.svm_pca_vs_frames(x, labels, [k], seed=seed, n_jobs=jobs)
-            bar.advance(task)
-        ev_svm = paper_figs.event_svm_results() if event_svm and std_events else {}
-        if event_svm and not std_events:
-            ev = events_by_th.get(event_threshold)
-            if ev is None:
-                ev = encode(x, event_threshold)
-            binned = bin_events(ev, event_bin, n_bins_for(record_ms(t), event_bin))
-            note("SVM, binned events")
-            ev_svm = analysis.svm_events(binned, labels, seed=seed, n_jobs=jobs)
-            bar.advance(task, 2)
-    calib = [f.as_dict() for f in paper_figs.figures] if syn else []
-    calib_note = None
-    if syn and n < 27 * 200:
-        calib_note = (f"the targets refer to the default set (200 repetitions per letter); with {n} samples "
-                      "the SVM accuracies are lower (fewer training samples), the event counts are not")
-    fig_files = []
-    if figures is not None:
-        i, k = 0, 1
-        if n:
-            # the sample/taxel with the most activity at th 1 shows the encoding best
-            counts = events_by_th[ths[0]].counts()
-            i, k = np.unravel_index(int(np.argmax(counts)), counts.shape)
-        curves = {}
-        for th in ths:
-            ev = events_by_th[th].select(np.array([i]))
-            before = reconstruct(ev, x[i:i + 1, 0, :], t, th)[0, :, k]
-            b = analysis.PAPER_BIN_MS.get(int(th), 5) if float(th).is_integer() else 5
-            bb = bin_events(ev, b, n_bins_for(record_ms(t), b))
-            after = binned_reconstruction(bb, x[i:i + 1, 0, :], t, b, th)[0, :, k]
-            curves[th] = (before, after)
-        from snncc.data.letters import CLASSES
-
-        fig_files.append(str(figs.reconstruction(figures / "reconstruction.png", x[i, :, k], curves,
-                                                 f"sample {i} ('{CLASSES[labels[i]]}'), taxel {k}")))
-        fig_files.append(str(figs.events_vs_bin_size(figures / "events_vs_bin_size.png", vs_bin)))
-        if pca_points:
-            fig_files.append(str(figs.svm_vs_frames(figures / "svm_vs_frames.png", pca_points,
-                                                    svm_res["raw"].mean_pct if "raw" in svm_res else None)))
-    report = {
-        "source": str(src), "samples": n, "frames": t, "taxels": c, "synthetic": syn is not None,
-        "events_from": from_files,
-        "encoding": [asdict(r) for r in rows],
-        "events_vs_bin_size": {_fmt_th(k): v for k, v in vs_bin.items()},
-        "svm_frames": {k: asdict(v) for k, v in svm_res.items()},
-        "svm_pca_vs_frames": pca_points,
-        "svm_events": ({"threshold": event_threshold, "bin_ms": event_bin,
-                        **{k: asdict(v) for k, v in ev_svm.items()}} if ev_svm else {}),
-        "paper": analysis.PAPER,
-        "paper_figures": paper_figs.as_dict(),
-        "calibration": calib,
-        "calibration_note": calib_note,
-        "figures": fig_files,
-    }
-    if json_out:
-        print_json(report)
-        return
-    _print_report(report)
-
-
-def _print_report(r: dict) -> None:
-    from snncc.data.analysis import PAPER
-
-    tag = "SYNTHETIC data" if r["synthetic"] else "data"
-    console.print(f"[bold]Braille encoding analysis[/bold] — {r['samples']} samples x {r['frames']} frames x "
-                  f"{r['taxels']} taxels ({tag}: {r['source']})")
-    tab = Table(title="Encoding: events per taxel and sample (paper's real-data values below each row)")
-    for col in ("th", "events", "ratio", "MSE", "bin", "binned", "ratio b.", "MSE b.", "lost %", "ISI<1ms %"):
-        tab.add_column(col, justify="right")
-    cols = ("events", "compression", "mse", None, "events_binned", "compression_binned", "mse_binned", None,
-            "isi_below_1ms_pct")
-
-    def paper_row(th):
-        if not float(th).is_integer() or int(th) not in PAPER["events"]:
-            return None
-        return ["paper"] + [("" if k is None else f"{PAPER[k][int(th)]:g}") for k in cols]
-
-    for row in r["encoding"]:
-        th = row["threshold"]
-        tab.add_row(f"{th:g}", f"{row['events']:.1f}", f"{row['compression']:.1f}", f"{row['mse']:.2f}",
-                    f"{row['bin_ms']:g}", f"{row['events_binned']:.1f}", f"{row['compression_binned']:.1f}",
-                    f"{row['mse_binned']:.1f}", f"{row['lost_pct']:.1f}", f"{row['isi_below_1ms_pct']:.2f}")
-        pr = paper_row(th)
-        if pr:
-            tab.add_row(*pr, style="dim")
-    console.print(tab)
-    if r["svm_frames"] or r["svm_events"]:
-        st = Table(title="Linear SVM, one-vs-rest, 5-fold CV")
-        for col in ("features", "accuracy %", "paper %"):
-            st.add_column(col, justify="right")
-        names = {"raw": ("raw frames (all), primary protocol", PAPER["svm_raw"]),
-                 "collapsed": ("time collapsed, primary protocol", PAPER["svm_collapsed"])}
-        for k, v in r["svm_frames"].items():
-            st.add_row(names[k][0], f"{v['mean_pct']:.1f} +- {v['std_pct']:.1f}", f"{names[k][1]:g}")
-        if r["svm_events"]:
-            e = r["svm_events"]
-            st.add_row(f"events th {e['threshold']:g} bin {e['bin_ms']:g} ms, all bins",
-                       f"{e['all_bins']['mean_pct']:.1f} +- {e['all_bins']['std_pct']:.1f}", f"{PAPER['svm_events_all_bins']:g}")
-            st.add_row("events, spatial sums only", f"{e['spatial']['mean_pct']:.1f} +- {e['spatial']['std_pct']:.1f}",
-                       f"{PAPER['svm_events_spatial']:g}")
-        console.print(st)
-    if r["svm_pca_vs_frames"]:
-        pts = ", ".join(f"{p['seconds']:.2f}s {p['mean_pct']:.0f}%" for p in r["svm_pca_vs_frames"])
-        console.print(f"PCA-12 SVM vs frames used: {pts}")
-    if r.get("paper_figures"):
-        title = "The paper's figures: measured vs paper" + (" (calibration of the synthetic generator)"
-                                                               if r["synthetic"] else "")
-        ct = Table(title=title)
-        for col in ("figure", "measured", "paper", "tolerance", "ok", "protocol"):
-            ct.add_column(col, justify="right" if col != "protocol" else "left")
-        for row in r["paper_figures"]["figures"]:
-            ct.add_row(row["name"], f"{row['measured']:.1f}", f"{row['paper']:g}", row["tolerance"],
-                       "yes" if row["ok"] else "[red]NO[/red]", row["protocol"])
-        console.print(ct)
-        if r.get("calibration_note"):
-            console.print(f"note: {r['calibration_note']}")
-    for f in r["figures"]:
-        console.print(f"figure: {f}")
+        record = data_analyse(src, figures=figures, thresholds=thresholds, svm=svm, pca_step=pca_step,
+                              event_svm=event_svm, event_threshold=event_threshold, event_bin=event_bin,
+                              seed=seed, jobs=jobs, progress=bar)
+    _show(record, json_out)

@@ -9,9 +9,6 @@ import typer
 
 from snncc.cli.app import app
 from snncc.cli.output import console, print_json
-from snncc.errors import SnnccError
-
-FORMATS = ("nir",)
 
 
 @app.command("export")
@@ -28,17 +25,12 @@ def export_command(
     """Export a spiking model to NIR. The dt convention is stored in the file's metadata and printed,
     with everything NIR cannot express (refractory periods, reset by subtraction, readout); snncc
     itself restores the identical IR from the exported file."""
-    if to not in FORMATS:
-        raise SnnccError(f"unknown export format {to!r}; choose one of {', '.join(FORMATS)}", field="--to")
-    from snncc.cli.render import print_import_notes
-    from snncc.exporters.nir import export_nir
-    from snncc.frontends import LoadOptions, load_model
+    from snncc.api import export
+    from snncc.cli.render import print_notes
 
-    graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
-    report = export_nir(graph, output, step=nir_dt)
-    print_import_notes(graph)
+    result = export(model, output=output, to=to, params=params, dt=dt, reset=reset, nir_dt=nir_dt)
+    print_notes(result.notes)
     if json_out:
-        print_json({"format": to, **report.__dict__})
-        return
-    for line in report.lines():
-        console.print(line, markup=False)
+        print_json(result.as_dict())
+    else:
+        result.render_text(console)

@@ -8,7 +8,6 @@ from typing import List, Optional
 import typer
 
 from snncc.cli.app import app
-from snncc.errors import SnnccError
 
 hpo_app = typer.Typer(
     help=(
@@ -32,14 +31,8 @@ def _hpo_group(ctx: typer.Context) -> None:
         raise typer.Exit(0)
 
 
-def _storage_url(storage: Optional[str], workdir: Path) -> str:
-    from snncc.hpo.storage import default_url
-
-    return storage or default_url(workdir)
-
-
 @hpo_app.command("run")
-def hpo_run(
+def run_command(
     name: str = typer.Argument(..., help="Study name (step 2's study is NAME-grid). Rerun to resume."),
     data: Path = typer.Option(..., "--data", help="Directory of published Braille files (snncc data synth or Zenodo); an encoded .npz pins time_bin_size."),
     threshold: int = typer.Option(1, "--threshold", help="Sigma-delta threshold of the events (1, 2, 5, 10)."),
@@ -71,45 +64,25 @@ def hpo_run(
     json_out: bool = typer.Option(False, "--json", help="Print the run summary as JSON."),
 ) -> None:
     """Run or resume the search (step 1, step 2 or both) in one worker; start more workers on the same storage."""
-    import torch
-
+    from snncc.api import hpo_run
     from snncc.cli.output import console, err_console, print_json
-    from snncc.hpo.objectives import parse_objectives
-    from snncc.hpo.progress import RichStudyView
-    from snncc.hpo.run import HpoRequest, run_hpo
 
-    if threads < 1:
-        raise SnnccError("must be >= 1", field="--threads")
-    if batch_size < 1:
-        raise SnnccError("must be >= 1", field="--batch-size")
-    torch.set_num_threads(threads)
-    req = HpoRequest(name=name, data=str(data), threshold=threshold, step=step, trials=trials, restarts=restarts,
-                     grid_span=grid_span, objectives=parse_objectives(objectives), ranges=list(ranges or []),
-                     kind=model, epochs=epochs, subset=subset, seed=seed, val_fraction=val_fraction, select=select,
-                     batch_size=batch_size, n_hidden=hidden, energy_samples=energy_samples, emulate_samples=emulate,
-                     pruner=pruner, n_startup=startup, enqueue_preset=preset, storage=storage, workdir=str(workdir),
-                     device=device, heartbeat=heartbeat)
-    view = None if (quiet or json_out) else (lambda study: RichStudyView(study, err_console))
     # Ctrl-C: the running trial is marked FAIL and re-queued (study.Interrupted, a KeyboardInterrupt);
     # the entry point prints its one line and exits with 130; rerunning the command continues
-    summaries = run_hpo(req, view)
+    result = hpo_run(name, data=data, threshold=threshold, step=step, trials=trials, restarts=restarts,
+                     grid_span=grid_span, objectives=objectives, ranges=ranges, model=model, epochs=epochs,
+                     subset=subset, seed=seed, val_fraction=val_fraction, select=select, hidden=hidden,
+                     batch_size=batch_size, energy_samples=energy_samples, emulate=emulate, pruner=pruner,
+                     startup=startup, preset=preset, storage=storage, workdir=workdir, device=device,
+                     threads=threads, heartbeat=heartbeat, progress=None if (quiet or json_out) else err_console)
     if json_out:
-        print_json(summaries)
-        return
-    for s in summaries:
-        b = s.budget
-        console.print(f"study {s.study} ({s.step}): {b['complete']} complete, {b['pruned']} pruned, {b['failed']} failed"
-                      f" of {b['n_trials']}; {len(s.trials_run_here)} run by this worker")
-        for note in s.notes:
-            console.print(f"note: {note}")
-    from snncc.hpo.storage import redact
-
-    console.print(f"report: snncc hpo report {summaries[-1].study}"
-                  + (f" --storage '{redact(storage)}'" if storage else f" --dir {workdir}"))
+        print_json(result.as_dict())
+    else:
+        result.render_text(console)
 
 
 @hpo_app.command("report")
-def hpo_report(
+def report_command(
     study: str = typer.Argument(..., help="Study name."),
     storage: Optional[str] = typer.Option(None, "--storage", help="Optuna storage URL (default: the SQLite file in --dir)."),
     workdir: Path = typer.Option(Path("hpo"), "--dir", help="Directory of the default SQLite storage."),
@@ -118,46 +91,24 @@ def hpo_report(
     json_out: bool = typer.Option(False, "--json", help="Print the report as JSON."),
 ) -> None:
     """Best trials per objective, the Pareto front (accuracy, energy, cores) and the paper's presets."""
+    from snncc.api import hpo_report
     from snncc.cli.output import console, print_json
-    from snncc.hpo.report import study_report
-    from snncc.hpo.storage import open_storage, redact
 
-    url = _storage_url(storage, workdir)
-    if storage is None and not (workdir / "hpo.sqlite3").is_file():
-        raise SnnccError("no study storage here (run snncc hpo run first, or give --storage)",
-                         file=str(workdir / "hpo.sqlite3"), field="--dir")
-    report = study_report(open_storage(url), study, redact(url))
-    written = None
-    if not no_plot:
-        written = report.plot(plot or (workdir / f"{study}-front.png"))
+    result = hpo_report(study, storage=storage, workdir=workdir, output=plot, no_plot=no_plot)
     if json_out:
-        d = report.as_dict()
-        d["figure"] = str(written) if written else None
-        print_json(d)
-        return
-    report.render_text(console)
-    if written:
-        console.print(f"wrote {written}")
+        print_json(result.as_dict())
+    else:
+        result.render_text(console)
 
 
 @hpo_app.command("space")
-def hpo_space(json_out: bool = typer.Option(False, "--json", help="Print as JSON.")) -> None:
+def space_command(json_out: bool = typer.Option(False, "--json", help="Print as JSON.")) -> None:
     """The search space (our ranges) beside the paper's four presets."""
-    from rich.table import Table
-
+    from snncc.api import hpo_space
     from snncc.cli.output import console, print_json
-    from snncc.hpo.space import SEARCH_SPACE
-    from snncc.training.presets import PRESETS
 
+    result = hpo_space()
     if json_out:
-        print_json({"space": {k: r.as_dict() for k, r in SEARCH_SPACE.items()},
-                    "paper_presets": {th: p.as_dict() for th, p in PRESETS.items()},
-                    "note": "ranges are snncc's choice; the paper lists the hyper-parameters, not their ranges"})
-        return
-    t = Table(title="search space (ranges: snncc's choice; the paper gives none) and the paper's presets")
-    for col in ("hyper-parameter", "low", "high", "scale", *[f"th {th}" for th in PRESETS]):
-        t.add_column(col, justify="right")
-    for k, r in SEARCH_SPACE.items():
-        t.add_row(k, f"{r.low:g}", f"{r.high:g}", ("log" if r.log else "linear") + (", int" if r.integer else ""),
-                  *[f"{getattr(p, k):g}" for p in PRESETS.values()])
-    console.print(t)
+        print_json(result.as_dict())
+    else:
+        result.render_text(console)

@@ -20,15 +20,12 @@ def inspect_command(
     json_out: bool = typer.Option(False, "--json", help="Print as JSON."),
 ) -> None:
     """Load a model, validate its IR and print it: nodes, sizes, time constants, delays, reset."""
-    from snncc.cli.render import print_import_notes
-    from snncc.frontends import LoadOptions, load_model
-    from snncc.ir.summary import graph_summary
-    from snncc.ir.summary_text import render_graph_summary
+    from snncc.api import inspect
+    from snncc.cli.render import print_notes
 
-    graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
-    summary = graph_summary(graph)
-    print_import_notes(graph)
+    result = inspect(model, params=params, dt=dt, reset=reset)
+    print_notes(result.notes)
     if json_out:
-        print_json(summary)
+        print_json(result.as_dict())
     else:
-        render_graph_summary(summary, console)
+        result.render_text(console)

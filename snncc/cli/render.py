@@ -10,8 +10,14 @@ if TYPE_CHECKING:
     from snncc.ir.graph import Graph
 
 
+def print_notes(notes: list[str]) -> None:
+    """One ``snncc: note: <line>`` per note, on stderr."""
+    for note in notes:
+        err_console.print(f"snncc: note: {note}", markup=False, soft_wrap=True)
+
+
 def print_import_notes(graph: Graph) -> None:
     """What a frontend assumed (dt inferred, reset chosen, ...): one ``snncc: note:`` line each, on stderr."""
-    source = graph.metadata.get("source_file", "")
-    for note in graph.metadata.get("import_notes") or []:
-        err_console.print(f"snncc: note: {source + ': ' if source else ''}{note}", markup=False, soft_wrap=True)
+    from snncc.frontends import import_notes
+
+    print_notes(import_notes(graph))

@@ -11,7 +11,6 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from snncc.cli.app import app
 from snncc.cli.output import console, err_console, print_json
-from snncc.errors import SnnccError
 
 
 class ModelKind(str, Enum):
@@ -34,27 +33,6 @@ class Order(str, Enum):
 def _progress(quiet: bool) -> Progress:
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                     TimeRemainingColumn(), console=err_console, disable=quiet, transient=False)
-
-
-def render_result(result) -> None:
-    h = result.history
-    console.print(f"[bold]{result.kind}[/bold]: {result.parameters:,} trainable parameters; "
-                  f"{result.data['samples']} samples of {result.data['encoding']} ({result.data['steps']} steps x "
-                  f"{result.data['channels']} channels){' -- SYNTHETIC data' if result.data['synthetic'] else ''}")
-    s = result.split
-    console.print(f"split (seed {s['seed']}): train {s['train']}, val {s['val']}, test {s['test']}")
-    console.print(f"epochs run: {h['epochs_run']}; best epoch {h['best_epoch']}: test accuracy "
-                  f"{100 * h['test_accuracy']:.2f} %" + (f", validation {100 * h['val_accuracy']:.2f} %"
-                                                         if h['val_accuracy'] is not None else ""))
-    console.print(f"note: {h['note']}")
-    if result.quantization:
-        q = result.quantization
-        console.print(f"quantization-aware fine-tuning ({q['epochs']} epochs): float {100 * q['before']['float_test_accuracy']:.2f} %"
-                      f" -> Loihi-quantized {100 * q['before']['quantized_test_accuracy']:.2f} % before "
-                      f"(loss {q['loss_before_points']:.2f} points), {100 * q['after']['quantized_test_accuracy']:.2f} % "
-                      f"after (loss {q['loss_after_points']:.2f} points vs the original float model)")
-        console.print(f"note: {q['note']}")
-    console.print(f"wrote {result.output}")
 
 
 @app.command("train")
@@ -80,24 +58,14 @@ def train_command(
     json_out: bool = typer.Option(False, "--json", help="Print the training record as JSON."),
 ) -> None:
     """Train one of the paper's models with its per-threshold preset and write a checkpoint."""
-    import torch
+    from snncc.api import train
 
-    from snncc.training.pipeline import TrainRequest, finetune, train
-    from snncc.training.presets import parse_overrides
-
-    if threads < 1:
-        raise SnnccError("must be >= 1", field="--threads")
-    if batch_size is not None and batch_size < 1:
-        raise SnnccError("must be >= 1", field="--batch-size")
-    torch.set_num_threads(threads)
-    req = TrainRequest(kind=model.value, data=str(data), output=str(output), threshold=threshold, epochs=epochs,
-                       subset=subset, seed=seed, order=order.value, val_fraction=val_fraction, batch_size=batch_size,
-                       overrides=parse_overrides(overrides), params_file=str(params) if params else None,
-                       qat_from=str(qat_from) if qat_from else None, qat_epochs=qat_epochs,
-                       device=device, lr=lr)
-    progress = _progress(quiet or json_out)  # started by the trainer once the data are loaded and checked
-    result = finetune(req, progress) if req.qat_from else train(req, progress)
+    # started by the trainer once the data are loaded and checked; epoch lines go to stderr even when quiet
+    result = train(model.value, data=data, output=output, threshold=threshold, epochs=epochs, subset=subset,
+                   seed=seed, order=order.value, val_fraction=val_fraction, qat_from=qat_from,
+                   qat_epochs=qat_epochs, overrides=overrides, params=params, batch_size=batch_size, lr=lr,
+                   device=device, threads=threads, progress=_progress(quiet or json_out))
     if json_out:
-        print_json(result)
+        print_json(result.as_dict())
     else:
-        render_result(result)
+        result.render_text(console)

@@ -96,6 +96,13 @@ def load_model(path: str | Path, options: LoadOptions | None = None) -> Graph:
     return graph
 
 
+def import_notes(graph: Graph) -> list[str]:
+    """What the frontend assumed in loading ``graph`` (dt inferred, reset chosen, ...), one line each,
+    prefixed with the source file's name: ``<file>: <note>``."""
+    source = graph.metadata.get("source_file", "")
+    return [f"{source + ': ' if source else ''}{note}" for note in graph.metadata.get("import_notes") or []]
+
+
 def check_loaded(graph: Graph, source: str) -> None:
     """Rules every loader shares after validation: the sample length is bounded, all-zero weights noted.
 

@@ -23,6 +23,22 @@ def default_url(workdir: str | Path) -> str:
     return f"sqlite:///{Path(workdir).resolve() / 'hpo.sqlite3'}"
 
 
+def study_storage_url(storage: str | None, workdir: str | Path, must_exist: bool = False) -> str:
+    """``storage`` when given, else the SQLite file in ``workdir``; ``must_exist``: that file must be
+    there already (reading a study: no storage, no study)."""
+    if storage is not None:
+        return storage
+    if must_exist and not (Path(workdir) / "hpo.sqlite3").is_file():
+        raise SnnccError("no study storage here (run snncc hpo run first, or give --storage)",
+                         file=str(Path(workdir) / "hpo.sqlite3"), field="--dir")
+    return default_url(workdir)
+
+
+def report_command(study: str, storage: str | None, workdir: str | Path) -> str:
+    """The ``snncc hpo report`` command line for ``study`` (the storage URL without its password)."""
+    return f"snncc hpo report {study}" + (f" --storage '{redact(storage)}'" if storage else f" --dir {workdir}")
+
+
 def redact(url: str) -> str:
     """``url`` without its password (for reports and logs)."""
     return re.sub(r"(://[^:/@]+:)[^@]*@", r"\1***@", url)

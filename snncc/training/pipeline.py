@@ -63,6 +63,33 @@ class TrainResult:
     quantization: dict | None = None
     notes: list = field(default_factory=list)
 
+    def as_dict(self) -> dict:
+        """What ``snncc train --json`` prints."""
+        from snncc.records import to_jsonable
+
+        return to_jsonable(self)
+
+    def render_text(self, console) -> None:
+        """Parameters, data, split, the selected epoch's accuracies, QAT's losses, the file written."""
+        h, d, s = self.history, self.data, self.split
+        console.print(f"[bold]{self.kind}[/bold]: {self.parameters:,} trainable parameters; "
+                      f"{d['samples']} samples of {d['encoding']} ({d['steps']} steps x "
+                      f"{d['channels']} channels){' -- SYNTHETIC data' if d['synthetic'] else ''}")
+        console.print(f"split (seed {s['seed']}): train {s['train']}, val {s['val']}, test {s['test']}")
+        console.print(f"epochs run: {h['epochs_run']}; best epoch {h['best_epoch']}: test accuracy "
+                      f"{100 * h['test_accuracy']:.2f} %" + (f", validation {100 * h['val_accuracy']:.2f} %"
+                                                             if h['val_accuracy'] is not None else ""))
+        console.print(f"note: {h['note']}")
+        if self.quantization:
+            q = self.quantization
+            console.print(f"quantization-aware fine-tuning ({q['epochs']} epochs): float "
+                          f"{100 * q['before']['float_test_accuracy']:.2f} % -> Loihi-quantized "
+                          f"{100 * q['before']['quantized_test_accuracy']:.2f} % before (loss "
+                          f"{q['loss_before_points']:.2f} points), {100 * q['after']['quantized_test_accuracy']:.2f} % "
+                          f"after (loss {q['loss_after_points']:.2f} points vs the original float model)")
+            console.print(f"note: {q['note']}")
+        console.print(f"wrote {self.output}")
+
 
 def hyper_parameters(req: TrainRequest) -> PaperParams:
     base = load_params(req.params_file) if req.params_file else paper_preset(req.threshold)

@@ -166,6 +166,28 @@ def plot_accuracy_vs_fraction(records: list[TTCRecord], path: str | Path, title:
 
 
 FIGURE_FORMATS = ("png", "pdf", "svg")
+RULE = ("TTC = the smallest k/T after which the prediction is correct at every later prefix; "
+        "None when wrong on the whole signal; means over the samples with a TTC")
+
+
+def check_figure_path(path: str | Path) -> None:
+    """A figure's format is its suffix, one of ``FIGURE_FORMATS``."""
+    from snncc.errors import SnnccError
+
+    if Path(path).suffix.lstrip(".").lower() not in FIGURE_FORMATS:
+        raise SnnccError(f"the figure must be one of {', '.join(FIGURE_FORMATS)}", file=str(path), field="--figure")
+
+
+def ttc_payload(records: list[TTCRecord]) -> dict:
+    """The records of several models under the rule they follow (what ``--output`` and ``--json`` hold)."""
+    return {"rule": RULE, "models": [r.as_dict() for r in records]}
+
+
+def plot_records(records: list[TTCRecord], path: str | Path) -> None:
+    """Accuracy vs signal fraction of ``records`` in one figure, titled, marked SYNTHETIC when any data are."""
+    synthetic = any("SYNTHETIC" in r.data for r in records)
+    plot_accuracy_vs_fraction(records, path, title="accuracy vs share of the signal seen"
+                              + (" (SYNTHETIC data)" if synthetic else ""))
 
 
 def ttc_of_checkpoints(models: list[str | Path], data: list[str | Path], split: str = "test") -> list[TTCRecord]:
