@@ -19,10 +19,8 @@ def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = 
     (``labels=False``: inputs only, labels returned as None); the first ``limit`` samples."""
     path = Path(path)
     meta: dict = {}
-    try:
-        from snncc.data.dataset import load_dataset
-    except ImportError:
-        load_dataset = None
+    from snncc.data.dataset import load_dataset
+
     if not path.is_file():
         raise SnnccError("file does not exist", file=str(path), field="--data")
     inputs = None
@@ -36,11 +34,10 @@ def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = 
         if inputs.ndim != 3:
             raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
         return tiled(inputs[:limit] if limit is not None else inputs, graph), None, meta
-    if load_dataset is not None:
-        try:
-            inputs, labels, meta = load_dataset(path)
-        except SnnccError:
-            inputs = None
+    try:
+        inputs, labels, meta = load_dataset(path)
+    except SnnccError:   # not a Braille data set: a plain .npz with inputs and labels
+        inputs = None
     if inputs is None:
         try:
             with np.load(path, allow_pickle=False) as z:
