@@ -642,10 +642,18 @@ class Flat:
         self.keep_vf = self.keep_v * 2.0**-12
         self.vth = self.kernel_layout(prog.vth, INT32_MAX)
         self.bias = self.kernel_layout(prog.bias, 0)
+        self._registers: dict[bool, tuple] = {}
         self.fits32 = np.array([0] + [int(_fits32(prog, i, int(q_max[i]))) for i in range(1, layers)], np.int64)
         self.p32 = np.ascontiguousarray(np.clip(np.stack([self.keep_u, self.keep_v, self.vth, self.bias]),
                                                 INT32_MIN, INT32_MAX).astype(np.int32))
 
+
+    def registers(self, wide: bool) -> tuple:
+        """The kernel's per-run tables for an ordinary or a ``wide`` run, computed once each:
+        ``lay`` (see ``_sample``), the wrap constants, ``kl``, the update groups, a state-type proto."""
+        if wide not in self._registers:
+            self._registers[wide] = _registers(self, wide)
+        return self._registers[wide]
 
     def kernel_layout(self, values: np.ndarray, fill: int) -> np.ndarray:
         """Per-compartment int64 ``values`` (the program's layout) in the kernel's padded layout."""
@@ -666,6 +674,26 @@ def update_groups(lay: np.ndarray, inert: np.ndarray) -> np.ndarray:
         else:
             runs.append([i, i + 1])
     return np.array(runs, np.int64).reshape(-1, 2)
+
+
+def _registers(flat: Flat, wide: bool) -> tuple:
+    prog = flat.prog
+    lay = np.zeros((len(prog.n), 6), np.int64)
+    lay[:, 0] = prog.params[:, 3]
+    lay[:, 3] = flat.shift
+    lay[:, 4] = flat.in_range
+    if wide:  # no wrap, no clip: what the network computes without overflow (for the loss split)
+        big = 1 << 61
+        wraps = np.array([big, (big << 1) - 1, big, (big << 1) - 1], np.int64)
+        lay[1:, 1], lay[1:, 2] = -big, big
+    else:
+        wraps = np.array([Q_HALF, Q_MASK, U_HALF, U_MASK], np.int64)
+        lay[:, 1], lay[:, 2] = prog.params[:, 4], prog.params[:, 5]
+    narrow = bool(np.all(lay[1:, 1] >= INT32_MIN) and np.all(lay[1:, 2] <= INT32_MAX))
+    lay[:, 5] = flat.fits32 if narrow and not wide else 0
+    inert = (lay[:, 1] <= 0) & (lay[:, 2] >= 0)        # v = 0 is inside [vmin, vmax]: padding lanes stay 0
+    kl = np.ascontiguousarray(np.stack([flat.koff, flat.kn, np.where(inert, flat.kn, prog.n)], axis=1), np.int64)
+    return lay, wraps, kl, update_groups(lay, inert), np.zeros(0, np.int32 if narrow else np.int64)
 
 
 def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
@@ -697,23 +725,7 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads
     all_u = np.zeros(shape_all, np.int32)
     all_v = np.zeros(shape_all, np.int32)
     ovf = np.zeros((batch, 3), np.int64)
-    lay = np.zeros((layers, 6), np.int64)
-    lay[:, 0] = prog.params[:, 3]
-    lay[:, 3] = flat.shift
-    lay[:, 4] = flat.in_range
-    if wide:  # no wrap, no clip: what the network computes without overflow (for the loss split)
-        big = 1 << 61
-        wraps = np.array([big, (big << 1) - 1, big, (big << 1) - 1], np.int64)
-        lay[1:, 1], lay[1:, 2] = -big, big
-    else:
-        wraps = np.array([Q_HALF, Q_MASK, U_HALF, U_MASK], np.int64)
-        lay[:, 1], lay[:, 2] = prog.params[:, 4], prog.params[:, 5]
-    narrow = bool(np.all(lay[1:, 1] >= INT32_MIN) and np.all(lay[1:, 2] <= INT32_MAX))
-    lay[:, 5] = flat.fits32 if narrow and not wide else 0
-    inert = (lay[:, 1] <= 0) & (lay[:, 2] >= 0)        # v = 0 is inside [vmin, vmax]: padding lanes stay 0
-    kl = np.ascontiguousarray(np.stack([flat.koff, flat.kn, np.where(inert, flat.kn, prog.n)], axis=1), np.int64)
-    groups = update_groups(lay, inert)
-    state_proto = np.zeros(0, np.int32 if narrow else np.int64)
+    lay, wraps, kl, groups, state_proto = flat.registers(wide)
     args = (np.ascontiguousarray(x), prog.n, prog.noff, kl, groups, lay, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni,
             flat.druni, flat.sptr, flat.spost, flat.wsp, flat.rsp, flat.keep_u, flat.keep_v, flat.keep_uf, flat.keep_vf, flat.vth, flat.bias, flat.p32,
             int(prog.ring),
