@@ -44,7 +44,7 @@ from snncc.errors import SnnccError
 Q_HALF, Q_MASK = 1 << 21, (1 << 22) - 1
 U_HALF, U_MASK = 1 << 23, (1 << 24) - 1
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
-LANES = 32      # the kernel layout's unit: every layer starts at, and spans, a multiple of 32 slots
+LANES = 16      # the kernel layout's unit: every layer starts at, and spans, a multiple of 16 slots
 
 
 @njit(cache=True, inline='always')
