@@ -1,16 +1,24 @@
 """The emulator's compiled kernel: the rules of ``emulator.py`` in numba, event-driven.
 
-Per sample and step t, layer by layer:
+Per sample and step t:
 
-1. one fused, vectorised pass over the layer's compartments reads and clears ring slot t of
-   accumulated q, applies the update of ``emulator.py`` and marks the neurons that fire;
-2. the marks become a list of spiking neurons (64 at a time, through bit masks);
+1. one fused, vectorised pass over the compartments of a run of like layers (``update_groups``:
+   the same rules and registers; their q for step t was complete before the step, so layers are
+   independent within it) reads and clears ring slot t of accumulated q, applies the update of
+   ``emulator.py`` and marks the neurons that fire;
+2. per layer, the marks become a list of spiking neurons (64 at a time, through bit masks);
 3. each spike of neuron k adds its row of weights into the ring slot ``t + 1 + delay`` of every
-   layer it projects to (itself when recurrent, the next layer), so the work per step is
-   (compartment updates) + (spikes x fan-out), as on the chip. A sparse projection (``SparseBlock``:
-   a large mostly-zero matrix such as a folded convolution) keeps only its synapses, grouped by
-   source neuron (ptr / post / w, as the chip stores them per input axon): a spike adds just its
-   synapses, each to its post neuron, so its cost is its real fan-out, not a whole dense row.
+   layer it projects to (itself when recurrent, the next layer), four spikes' rows in one pass,
+   so the work per step is (compartment updates) + (spikes x fan-out), as on the chip. A sparse
+   projection (``SparseBlock``: a large mostly-zero matrix such as a folded convolution) keeps
+   only its synapses, grouped by source neuron (ptr / post / w, as the chip stores them per input
+   axon): a spike adds just its synapses, each to its post neuron, so its cost is its real
+   fan-out, not a whole dense row.
+
+State sits in a padded layout (``Flat``: each layer at a multiple of ``LANES`` slots, the padding
+inert), so a pass is whole vectors. The hot loop uses unsigned indices, no slices and inlined
+helpers: a negative-index test stops LLVM's vectoriser, and every array object created or passed
+to a call costs atomic reference counts that outweighed the arithmetic.
 
 Exactness of the narrow types (checked when the program is flattened, never assumed):
 
@@ -21,8 +29,11 @@ Exactness of the narrow types (checked when the program is flattened, never assu
   dense or sparse) fits. A ring slot holds at most one delivery per synapse, so no
   partial sum overflows, and q = acc << shift exactly.
 * u, v, refractory counters are int32 when every layer's [vmin, vmax] fits 32 bits (u is wrapped
-  to 24 bits, v clipped): arithmetic is done in int64 and stored back exactly, the decays through
-  an exact float64 product; else int64 (the overflow-free ``wide`` run).
+  to 24 bits, v clipped), else int64 (the overflow-free ``wide`` run). A layer whose every
+  intermediate provably fits int32 (``_fits32``: q = acc << shift, vThMant * 2**6 and
+  |decay(v)| + |u| + |bias|; the chip's default ranges do) runs in 32-bit lanes (``_update32``:
+  8 lanes a 256-bit vector, the decay split so no product needs 64 bits, ``_decay32``); other
+  32-bit-state layers compute in int64, the decays through an exact float64 product.
 * a layer whose q and u cannot leave their ranges whatever the spikes (``q_u_in_range``) is
   updated without the two wraps, which could change nothing there.
 
