@@ -1,16 +1,24 @@
 """The emulator's compiled kernel: the rules of ``emulator.py`` in numba, event-driven.
 
-Per sample and step t, layer by layer:
+Per sample and step t:
 
-1. one fused, vectorised pass over the layer's compartments reads and clears ring slot t of
-   accumulated q, applies the update of ``emulator.py`` and marks the neurons that fire;
-2. the marks become a list of spiking neurons (64 at a time, through bit masks);
+1. one fused, vectorised pass over the compartments of a run of like layers (``update_groups``:
+   the same rules and registers; their q for step t was complete before the step, so layers are
+   independent within it) reads and clears ring slot t of accumulated q, applies the update of
+   ``emulator.py`` and marks the neurons that fire;
+2. per layer, the marks become a list of spiking neurons (64 at a time, through bit masks);
 3. each spike of neuron k adds its row of weights into the ring slot ``t + 1 + delay`` of every
-   layer it projects to (itself when recurrent, the next layer), so the work per step is
-   (compartment updates) + (spikes x fan-out), as on the chip. A sparse projection (``SparseBlock``:
-   a large mostly-zero matrix such as a folded convolution) keeps only its synapses, grouped by
-   source neuron (ptr / post / w, as the chip stores them per input axon): a spike adds just its
-   synapses, each to its post neuron, so its cost is its real fan-out, not a whole dense row.
+   layer it projects to (itself when recurrent, the next layer), four spikes' rows in one pass,
+   so the work per step is (compartment updates) + (spikes x fan-out), as on the chip. A sparse
+   projection (``SparseBlock``: a large mostly-zero matrix such as a folded convolution) keeps
+   only its synapses, grouped by source neuron (ptr / post / w, as the chip stores them per input
+   axon): a spike adds just its synapses, each to its post neuron, so its cost is its real
+   fan-out, not a whole dense row.
+
+State sits in a padded layout (``Flat``: each layer at a multiple of ``LANES`` slots, the padding
+inert), so a pass is whole vectors. The hot loop uses unsigned indices, no slices and inlined
+helpers: a negative-index test stops LLVM's vectoriser, and every array object created or passed
+to a call costs atomic reference counts that outweighed the arithmetic.
 
 Exactness of the narrow types (checked when the program is flattened, never assumed):
 
@@ -21,8 +29,11 @@ Exactness of the narrow types (checked when the program is flattened, never assu
   dense or sparse) fits. A ring slot holds at most one delivery per synapse, so no
   partial sum overflows, and q = acc << shift exactly.
 * u, v, refractory counters are int32 when every layer's [vmin, vmax] fits 32 bits (u is wrapped
-  to 24 bits, v clipped): arithmetic is done in int64 and stored back exactly, the decays through
-  an exact float64 product; else int64 (the overflow-free ``wide`` run).
+  to 24 bits, v clipped), else int64 (the overflow-free ``wide`` run). A layer whose every
+  intermediate provably fits int32 (``_fits32``: q = acc << shift, vThMant * 2**6 and
+  |decay(v)| + |u| + |bias|; the chip's default ranges do) runs in 32-bit lanes (``_update32``:
+  8 lanes a 256-bit vector, the decay split so no product needs 64 bits, ``_decay32``); other
+  32-bit-state layers compute in int64, the decays through an exact float64 product.
 * a layer whose q and u cannot leave their ranges whatever the spikes (``q_u_in_range``) is
   updated without the two wraps, which could change nothing there.
 
@@ -45,15 +56,43 @@ from snncc.targets.loihi.chip import DECAY_ONE, DECAY_SHIFT, Q_BITS, U_BITS   # 
 Q_HALF, Q_MASK = 1 << Q_BITS, (1 << (Q_BITS + 1)) - 1
 U_HALF, U_MASK = 1 << U_BITS, (1 << (U_BITS + 1)) - 1
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
+LANES = 16      # the kernel layout's unit: every layer starts at, and spans, a multiple of 16 slots
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _add_row(buf, dst, w, src, m):
-    """buf[dst:dst+m] += w[src:src+m] (one spike's weights into one ring slot; vectorised)."""
-    out = buf[dst:dst + m]
-    row = w[src:src + m]
+    """buf[dst:dst+m] += w[src:src+m] (one spike's weights into one ring slot; vectorised).
+
+    Unsigned indices and no slices, here and in the hot functions below: a negative index test
+    stops the vectoriser, and a slice is a new array object whose reference counting costs more
+    than the additions. For the same reason the hot helpers are inlined (``inline='always'``):
+    a call passing arrays pays a reference count for each."""
     for j in range(m):
-        out[j] += row[j]
+        buf[np.uint64(dst + j)] += w[np.uint64(src + j)]
+
+
+@njit(cache=True, inline='always')
+def _add_rows4(buf, dst, w, s0, s1, s2, s3, m):
+    """buf[dst + j] += w[s0 + j] + w[s1 + j] + w[s2 + j] + w[s3 + j]: four spikes' rows in one pass
+    over the ring slot (a quarter of the slot's loads and stores). Exact in the accumulator's
+    width: the sum is taken modulo 2**bits and its true value fits (``Flat``: any partial sum of
+    the weights into a neuron does)."""
+    for j in range(m):
+        buf[np.uint64(dst + j)] += (w[np.uint64(s0 + j)] + w[np.uint64(s1 + j)]
+                                    + w[np.uint64(s2 + j)] + w[np.uint64(s3 + j)])
+
+
+@njit(cache=True, inline='always')
+def _add_rows(buf, dst, w, base, spk, nspk, m):
+    """The rows base + spk[c] * m (c < nspk) of ``w`` added into buf[dst:dst+m], four at a time."""
+    c = 0
+    while c + 4 <= nspk:
+        _add_rows4(buf, dst, w, base + spk[c] * m, base + spk[c + 1] * m, base + spk[c + 2] * m,
+                   base + spk[c + 3] * m, m)
+        c += 4
+    while c < nspk:
+        _add_row(buf, dst, w, base + spk[c] * m, m)
+        c += 1
 
 
 @njit(cache=True)
@@ -202,6 +241,81 @@ def _update_in_range(buf, base, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_
     return nf
 
 
+@njit(cache=True)
+def _decay32(x, keep):
+    """sign(x) * ((|x| * keep) >> 12) in 32-bit lanes, exact for |x| < 2**31 and 0 <= keep <= 4096:
+    with |x| = a * 4096 + b (b < 4096), (|x| * keep) >> 12 = a * keep + ((b * keep) >> 12), and
+    a * keep < 2**31, b * keep < 2**24, so no product needs 64 bits."""
+    s = np.int32(x >> 31)                       # 0 or -1: |x| = (x ^ s) - s, and back
+    a = np.int32((x ^ s) - s)
+    d = np.int32(np.int32(a >> DECAY_SHIFT) * keep + np.int32(np.int32((a & (DECAY_ONE - 1)) * keep) >> DECAY_SHIFT))
+    return np.int32((d ^ s) - s)
+
+
+@njit(cache=True)
+def _fire32(vr, r, lo, hi, th, rd):
+    """The rest of a 32-bit step from v before the clip and the refractory counter r: returns the
+    stored v, the new counter and the spike (clip; refractory hold; strict threshold; reset)."""
+    zero = np.int32(0)
+    vn = min(max(vr, lo), hi)
+    clipped = np.int32(vn != vr)
+    refractory = r > zero
+    vn = zero if refractory else vn
+    r = np.int32(r - np.int32(1)) if refractory else r
+    s = vn > th
+    return (zero if s else vn), (rd if s else r), s, clipped
+
+
+@njit(cache=True, inline='always')
+def _update32(buf, base, u, v, ref, lo, m, p32, ref_delay, vmin, vmax, shift, qh, qm, uh, um, wraps, fired, counts):
+    """``_update`` with every intermediate in 32 bits (8 or 16 lanes a vector, no float), for a layer
+    whose values provably fit (``Flat.fits32``): q = acc << shift, decay(v) + u + bias and vThMant * 2**6
+    all stay within int32. ``wraps`` = 1: the q and u wraps and their counts; 0: the layer's q and u
+    never leave their ranges (``q_u_in_range``), so the wraps could change nothing and are skipped.
+    ``p32`` rows: 4096 - iDecay, 4096 - vDecay, vThMant * 2**6, bias (int32 per compartment).
+    Plain indices, no slices: a slice is a new array object whose reference counting costs about
+    as much as a hundred compartment updates."""
+    sh = np.int32(shift & 31)      # < 32 visibly: the shift stays in 32-bit lanes
+    qh32, qm32, uh32, um32 = np.int32(qh), np.int32(qm), np.int32(uh), np.int32(um)
+    lo32, hi32 = np.int32(vmin), np.int32(vmax)
+    rd = np.int32(ref_delay - 1)
+    cq = np.int32(0)
+    cu = np.int32(0)
+    cv = np.int32(0)
+    nf = np.int32(0)
+    if wraps:
+        for j in range(m):
+            c = np.uint64(lo + j)     # unsigned indices: no wrap-around test, so the loop vectorises
+            k = np.uint64(base + j)
+            q = np.int32(np.int32(buf[k]) << sh)
+            buf[k] = 0
+            qw = np.int32(np.int32((q + qh32) & qm32) - qh32)
+            ur = np.int32(_decay32(np.int32(u[c]), p32[0, c]) + qw)
+            un = np.int32(np.int32((ur + uh32) & um32) - uh32)
+            vr = np.int32(np.int32(_decay32(np.int32(v[c]), p32[1, c]) + un) + p32[3, c])
+            vn, r, s, clipped = _fire32(vr, np.int32(ref[c]), lo32, hi32, p32[2, c], rd)
+            cq = np.int32(cq + np.int32(qw != q))
+            cu = np.int32(cu + np.int32(un != ur))
+            cv = np.int32(cv + clipped)
+            u[c], v[c], ref[c], fired[j] = un, vn, r, s
+            nf = np.int32(nf + np.int32(s))
+    else:
+        for j in range(m):
+            c = np.uint64(lo + j)     # unsigned indices: no wrap-around test, so the loop vectorises
+            k = np.uint64(base + j)
+            un = np.int32(_decay32(np.int32(u[c]), p32[0, c]) + np.int32(np.int32(buf[k]) << sh))
+            buf[k] = 0
+            vr = np.int32(np.int32(_decay32(np.int32(v[c]), p32[1, c]) + un) + p32[3, c])
+            vn, r, s, clipped = _fire32(vr, np.int32(ref[c]), lo32, hi32, p32[2, c], rd)
+            cv = np.int32(cv + clipped)
+            u[c], v[c], ref[c], fired[j] = un, vn, r, s
+            nf = np.int32(nf + np.int32(s))
+    counts[0] += cq
+    counts[1] += cu
+    counts[2] += cv
+    return nf
+
+
 # byte i of a 64-bit word of 0/1 bytes -> bit i of (word * _PACK) >> 56 (no carries reach bits 56..63)
 _PACK = np.uint64(0x0102040810204080)
 _SHIFT56 = np.uint64(56)
@@ -217,18 +331,28 @@ for _i in range(64):
 def _spike_list(fired, m, spk):
     """Indices of the 0/1 bytes fired[0:m] that are 1, into spk; returns how many.
 
-    ``fired`` must be padded to a multiple of 64 beyond m. 64 neurons at a time: their bytes are
-    packed into one 64-bit mask (8 neurons per multiply), then its set bits are visited lowest
-    first, so the cost follows the spikes rather than the neurons (spikes are rare)."""
-    m64 = (m + 63) & ~63
-    fired[m:m64] = 0
-    words = fired[:m64].view(np.uint64)
+    ``fired`` must be padded to a multiple of 64 beyond m (``_spike_list_at`` on its words)."""
+    return _spike_list_at(fired.view(np.uint64), 0, m, spk)
+
+
+@njit(cache=True, inline='always')
+def _spike_list_at(words, at, m, spk):
+    """Indices i < m whose byte at + i is 1, in the 0/1 bytes viewed as uint64 ``words`` (a view
+    made once per chunk; ``at`` a multiple of 8, 64 readable bytes past at + m); returns how many.
+
+    64 neurons at a time: their bytes are packed into one 64-bit mask (8 neurons per multiply),
+    bits past m are masked off, then the set bits are visited lowest first, so the cost follows
+    the spikes rather than the neurons (spikes are rare)."""
     one = np.uint64(1)
+    w0 = at >> 3
     c = 0
-    for g in range(m64 >> 6):
+    for g in range((m + 63) >> 6):
         mask = np.uint64(0)
         for q in range(8):
-            mask |= ((words[g * 8 + q] * _PACK) >> _SHIFT56) << np.uint64(8 * q)
+            mask |= ((words[np.uint64(w0 + g * 8 + q)] * _PACK) >> _SHIFT56) << np.uint64(8 * q)
+        rest = m - (g << 6)
+        if rest < 64:
+            mask &= (one << np.uint64(rest)) - one
         base = g << 6
         while mask != 0:
             low = mask & (~mask + one)
@@ -239,18 +363,26 @@ def _spike_list(fired, m, spk):
 
 
 @njit(cache=True)
-def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v, keep_uf,
-            keep_vf, vth, bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts):
+def _sample(b, x, n, noff, kl, groups, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v, keep_uf,
+            keep_vf, vth, bias, p32, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired,
+            words, spk, counts):
     """One sample from zero state (buffers reset here): the chip's rules, step by step, layer by layer.
 
-    ``lay`` (L+1, 5) int64 per layer: ref_delay, vmin, vmax, weight shift, 1 if q and u stay in range.
+    ``n`` / ``noff``: neurons per layer and their offsets in the outputs; ``kl`` (L+1, 3) int64 per
+    layer: its offset and padded size in the kernel's arrays (``Flat.koff`` / ``Flat.kn``) and how
+    many compartments the update runs over (the padded size when padding lanes are inert, else n).
+    ``groups`` (G, 2): layers first..end-1 updated in one pass (``run_flat``: same rules and
+    registers, padding inert but maybe in the last).
+    ``lay`` (L+1, 6) int64 per layer: ref_delay, vmin, vmax, weight shift, 1 if q and u stay in range,
+    1 if the layer runs in 32-bit lanes (``_update32``; ``p32``: its int32 parameters).
     ``wsp[i]`` / ``rsp[i]``: where layer i's feed-forward / recurrent pointers start in ``sptr``
-    when that block is sparse, else -1 (dense rows at ``woff[i]`` / ``roff[i]``).
+    when that block is sparse, else -1 (dense rows of n weights at ``woff[i]`` / ``roff[i]``).
     """
     steps, width = x.shape[1], x.shape[2]
     n_layers = n.shape[0]
     last = n_layers - 1
-    total = noff[last] + n[last]
+    total = kl[last, 0] + kl[last, 1]
+    xflat = x.reshape(-1)
     buf[:] = 0
     u[:] = 0
     v[:] = 0
@@ -259,66 +391,77 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spo
     qh, qm, uh, um = wraps[0], wraps[1], wraps[2], wraps[3]
     for t in range(steps):
         # input axons: this step's input spikes reach layer 1 one step (+ delay) later
-        xs = x[b, t]
+        row = (b * steps + t) * width      # x is C-contiguous: xflat[row + k] = x[b, t, k]
         for k in range(width):
-            fired[k] = xs[k] != 0
-        nspk = _spike_list(fired, width, spk)
+            fired[np.uint64(k)] = xflat[np.uint64(row + k)] != 0
+        nspk = _spike_list_at(words, 0, width, spk)
+        if record_all:
+            for c in range(nspk):
+                all_s[b, t, spk[c]] = 1
         if wsp[1] >= 0:
-            if record_all:
-                for c in range(nspk):
-                    all_s[b, t, spk[c]] = 1
-            _deliver_sparse(buf, t, ring, total, spk, nspk, noff[1], duni[1], wflat, spost, dflat, sptr, wsp[1])
+            _deliver_sparse(buf, t, ring, total, spk, nspk, kl[1, 0], duni[1], wflat, spost, dflat, sptr, wsp[1])
+        elif duni[1] >= 0:
+            _add_rows(buf, ((t + 1 + duni[1]) % ring) * total + kl[1, 0], wflat, woff[1], spk, nspk, n[1])
         else:
             for c in range(nspk):
-                k = spk[c]
-                if record_all:
-                    all_s[b, t, k] = 1
-                _deliver(buf, t, ring, total, k, noff[1], n[1], wflat, dflat, woff[1], duni[1])
+                _deliver(buf, t, ring, total, spk[c], kl[1, 0], n[1], wflat, dflat, woff[1], duni[1])
         base = (t % ring) * total
-        for i in range(1, n_layers):
-            lo = noff[i]
-            m = n[i]
-            if lay[i, 4]:
-                nf = _update_in_range(buf, base + lo, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
-                                      lay[i, 0], lay[i, 1], lay[i, 2], lay[i, 3], fired, counts)
+        for g in range(groups.shape[0]):
+            # one update over the group's layers (side by side in the kernel layout): their q for
+            # step t was complete before the step began, so they are independent within it
+            first, end = groups[g, 0], groups[g, 1]
+            lo = kl[first, 0]
+            mu = kl[end - 1, 0] + kl[end - 1, 2] - lo
+            if lay[first, 5]:
+                nf = _update32(buf, base + lo, u, v, ref, lo, mu, p32, lay[first, 0], lay[first, 1], lay[first, 2],
+                               lay[first, 3], qh, qm, uh, um, 1 - lay[first, 4], fired, counts)
+            elif lay[first, 4]:
+                nf = _update_in_range(buf, base + lo, u, v, ref, lo, mu, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
+                                      lay[first, 0], lay[first, 1], lay[first, 2], lay[first, 3], fired, counts)
             else:
-                nf = _update(buf, base + lo, u, v, ref, lo, m, keep_u, keep_v, keep_uf, keep_vf, vth, bias, lay[i, 0],
-                             lay[i, 1], lay[i, 2], lay[i, 3], qh, qm, uh, um, fired, counts)
-            if record_all:
-                for j in range(m):
-                    all_s[b, t, lo + j] = fired[j]
-                    all_u[b, t, lo + j] = u[lo + j]
-                    all_v[b, t, lo + j] = v[lo + j]
-            if nf == 0:
-                continue
-            # ring positions this step's spikes go to (uniform delays), computed once per step
-            rec_dst = ((t + 1 + druni[i]) % ring) * total + lo
-            nxt_dst = 0
-            nxt_m = 0
-            if i < last:
-                nxt_dst = ((t + 1 + duni[i + 1]) % ring) * total + noff[i + 1]
+                nf = _update(buf, base + lo, u, v, ref, lo, mu, keep_u, keep_v, keep_uf, keep_vf, vth, bias,
+                             lay[first, 0], lay[first, 1], lay[first, 2], lay[first, 3], qh, qm, uh, um, fired, counts)
+            for i in range(first, end):
+                # layer i's outputs: record, then deliver its spikes into the ring (to itself when
+                # recurrent, to layer i + 1): a dense block's rows four at a time, a sparse block's
+                # synapses one by one. (Inline: a call with many arrays costs a reference count each.)
+                klo = kl[i, 0]
+                at = klo - lo
+                m = n[i]
+                if record_all:
+                    out_lo = noff[i]
+                    for j in range(m):
+                        all_s[b, t, out_lo + j] = fired[at + j]
+                        all_u[b, t, out_lo + j] = u[klo + j]
+                        all_v[b, t, out_lo + j] = v[klo + j]
+                if nf == 0:
+                    continue
+                nspk = _spike_list_at(words, at, m, spk)
+                if nspk == 0:
+                    continue
+                if i == last:
+                    for c in range(nspk):
+                        out_spikes[b, t, spk[c]] = 1
+                if rsp[i] >= 0:                 # to itself (recurrent), sparse
+                    _deliver_sparse(buf, t, ring, total, spk, nspk, klo, druni[i], wflat, spost, dflat, sptr, rsp[i])
+                elif roff[i] >= 0 and druni[i] >= 0:     # to itself (recurrent)
+                    _add_rows(buf, ((t + 1 + druni[i]) % ring) * total + klo, wflat, roff[i], spk, nspk, m)
+                elif roff[i] >= 0:
+                    for c in range(nspk):
+                        _add_row_delays(buf, t, ring, total, klo, wflat, dflat, roff[i] + spk[c] * m, m)
+                if i == last:
+                    continue
+                nxt_lo = kl[i + 1, 0]
                 nxt_m = n[i + 1]
-            nspk = _spike_list(fired, m, spk)
-            if i == last:
-                for c in range(nspk):
-                    out_spikes[b, t, spk[c]] = 1
-            if rsp[i] >= 0:                 # to itself (recurrent), sparse
-                _deliver_sparse(buf, t, ring, total, spk, nspk, lo, druni[i], wflat, spost, dflat, sptr, rsp[i])
-            elif roff[i] >= 0:              # to itself (recurrent)
-                for c in range(nspk):
-                    if druni[i] >= 0:
-                        _add_row(buf, rec_dst, wflat, roff[i] + spk[c] * m, m)
-                    else:
-                        _add_row_delays(buf, t, ring, total, lo, wflat, dflat, roff[i] + spk[c] * m, m)
-            if i < last and wsp[i + 1] >= 0:    # to the next layer, sparse
-                _deliver_sparse(buf, t, ring, total, spk, nspk, noff[i + 1], duni[i + 1], wflat, spost, dflat, sptr,
-                                wsp[i + 1])
-            elif i < last:                  # to the next layer
-                for c in range(nspk):
-                    if duni[i + 1] >= 0:
-                        _add_row(buf, nxt_dst, wflat, woff[i + 1] + spk[c] * nxt_m, nxt_m)
-                    else:
-                        _add_row_delays(buf, t, ring, total, noff[i + 1], wflat, dflat, woff[i + 1] + spk[c] * nxt_m,
+                if wsp[i + 1] >= 0:             # to the next layer, sparse
+                    _deliver_sparse(buf, t, ring, total, spk, nspk, nxt_lo, duni[i + 1], wflat, spost, dflat, sptr,
+                                    wsp[i + 1])
+                elif duni[i + 1] >= 0:          # to the next layer
+                    _add_rows(buf, ((t + 1 + duni[i + 1]) % ring) * total + nxt_lo, wflat, woff[i + 1], spk, nspk,
+                              nxt_m)
+                else:
+                    for c in range(nspk):
+                        _add_row_delays(buf, t, ring, total, nxt_lo, wflat, dflat, woff[i + 1] + spk[c] * nxt_m,
                                         nxt_m)
     ovf[b, 0] = counts[0]
     ovf[b, 1] = counts[1]
@@ -326,22 +469,25 @@ def _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spo
 
 
 @njit(cache=True, nogil=True)
-def _chunk(lo_b, hi_b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v,
-           keep_uf, keep_vf, vth, bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, acc_proto, state_proto):
+def _chunk(lo_b, hi_b, x, n, noff, kl, groups, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v,
+           keep_uf, keep_vf, vth, bias, p32, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, acc_proto,
+           state_proto):
     """Samples lo_b..hi_b-1 one after another, with state allocated once for the chunk.
 
     Runs without the GIL: ``run_flat`` runs chunks of a batch on several Python threads."""
-    total = noff[-1] + n[-1]
+    total = kl[-1, 0] + kl[-1, 1]
     buf = np.zeros(ring * total, acc_proto.dtype)
     u = np.zeros(total, state_proto.dtype)
     v = np.zeros(total, state_proto.dtype)
     ref = np.zeros(total, np.int32)
-    fired = np.zeros(((max(n.max(), x.shape[2]) + 63) & ~63) + 64, np.uint8)
+    fired = np.zeros(((max(total, x.shape[2]) + 63) & ~63) + 64, np.uint8)
+    words = fired.view(np.uint64)
     spk = np.zeros(fired.shape[0] + 8, np.int32)
     counts = np.zeros(3, np.int64)
     for b in range(lo_b, hi_b):
-        _sample(b, x, n, noff, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v, keep_uf,
-                keep_vf, vth, bias, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v, ref, fired, spk, counts)
+        _sample(b, x, n, noff, kl, groups, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v,
+                keep_uf, keep_vf, vth, bias, p32, ring, record_all, out_spikes, all_s, all_u, all_v, ovf, wraps, buf, u, v,
+                ref, fired, words, spk, counts)
 
 
 def _uniform(d: np.ndarray) -> int:
@@ -413,6 +559,19 @@ def _fan_in_abs(block, shift: int, n_post: int) -> np.ndarray:
     return np.bincount(block.post, weights=mag.astype(np.float64), minlength=n_post).astype(np.int64)
 
 
+def _fits32(prog, i: int, q_max: int) -> bool:
+    """Layer i's step can run in 32-bit lanes (``_update32``) without changing a bit: the largest
+    |q| = |acc << shift| (``q_max``) and vThMant * 2**6 fit int32, and so does the widest v before the
+    clip, |decay(v)| + |u| + |bias| <= max(|vmin|, |vmax|) + 2**23 + max |bias| (u is wrapped to 24
+    bits; in-range layers stay below 2**23), which also keeps |v| below 2**31 for ``_decay32``."""
+    cells = slice(int(prog.noff[i]), int(prog.noff[i] + prog.n[i]))
+    vmin, vmax = int(prog.params[i, 4]), int(prog.params[i, 5])
+    bias = int(np.max(np.abs(prog.bias[cells]), initial=0))
+    vth = int(np.max(np.abs(prog.vth[cells]), initial=0))
+    return (q_max <= INT32_MAX and vth <= INT32_MAX
+            and max(abs(vmin), abs(vmax)) + (1 << U_BITS) + bias <= INT32_MAX)
+
+
 class Flat:
     """A program flattened once into the kernel's arrays.
 
@@ -424,6 +583,13 @@ class Flat:
     ``dflat`` holds the delays beside ``wflat`` (empty when every block has one delay). q
     accumulates in the narrowest type that holds the largest per-neuron sum of |w|
     (``narrowest_int``).
+
+    Kernel layout: layer i's compartments sit at ``koff[i]`` in ``kn[i]`` = n rounded up to a
+    multiple of ``LANES`` slots, so every update runs in whole vectors with no scalar remainder
+    (a dense row keeps its n weights: a row's few leftover additions cost little). The padding slots get
+    no synapse, decay 0, bias 0 and threshold 2**31 - 1: from zero state they stay at u = v = 0 and
+    never fire (``run_flat`` updates them only where v = 0 is inside [vmin, vmax], so they never
+    count a clip either).
     """
 
     def __init__(self, prog):
@@ -437,14 +603,18 @@ class Flat:
         druni = np.zeros(layers, np.int64)
         shift = np.zeros(layers, np.int64)
         in_range = np.zeros(layers, np.int64)
+        q_max = np.zeros(layers, np.int64)
         bound = 0
         entries = []                      # (layer, recurrent?, block, delays)
+        self.kn = (np.asarray(prog.n, np.int64) + LANES - 1) // LANES * LANES
+        self.koff = np.concatenate([[0], np.cumsum(self.kn)[:-1]]).astype(np.int64)
         for i in range(1, layers):
             blocks = [prog.wt[i]] + ([prog.wr[i]] if _present(prog.wr[i]) else [])
             shift[i] = _common_shift([_chip_values(w) for w in blocks])
             n_post = int(prog.n[i])
             fan_in_abs = sum(_fan_in_abs(w, int(shift[i]), n_post) for w in blocks)
             bound = max(bound, int(np.max(fan_in_abs, initial=0)))
+            q_max[i] = int(np.max(fan_in_abs, initial=0)) << int(shift[i])
             cells = slice(int(prog.noff[i]), int(prog.noff[i] + n_post))
             in_range[i] = int(q_u_in_range(np.asarray(fan_in_abs, np.int64) << shift[i], prog.keep_u[cells]))
             entries.append((i, False, prog.wt[i], prog.dt_[i]))
@@ -478,12 +648,64 @@ class Flat:
         self.woff, self.roff, self.duni, self.druni, self.shift = woff, roff, duni, druni, shift
         self.wsp, self.rsp = wsp, rsp
         self.in_range = in_range
-        self.keep_u = np.ascontiguousarray(prog.keep_u, np.int64)
-        self.keep_v = np.ascontiguousarray(prog.keep_v, np.int64)
+        self.keep_u = self.kernel_layout(prog.keep_u, 0)
+        self.keep_v = self.kernel_layout(prog.keep_v, 0)
         self.keep_uf = self.keep_u * 2.0**-DECAY_SHIFT   # exact: keep <= 4096, a power-of-two scale
         self.keep_vf = self.keep_v * 2.0**-DECAY_SHIFT
-        self.vth = np.ascontiguousarray(prog.vth, np.int64)
-        self.bias = np.ascontiguousarray(prog.bias, np.int64)
+        self.vth = self.kernel_layout(prog.vth, INT32_MAX)
+        self.bias = self.kernel_layout(prog.bias, 0)
+        self._registers: dict[bool, tuple] = {}
+        self.fits32 = np.array([0] + [int(_fits32(prog, i, int(q_max[i]))) for i in range(1, layers)], np.int64)
+        self.p32 = np.ascontiguousarray(np.clip(np.stack([self.keep_u, self.keep_v, self.vth, self.bias]),
+                                                INT32_MIN, INT32_MAX).astype(np.int32))
+
+
+    def registers(self, wide: bool) -> tuple:
+        """The kernel's per-run tables for an ordinary or a ``wide`` run, computed once each:
+        ``lay`` (see ``_sample``), the wrap constants, ``kl``, the update groups, a state-type proto."""
+        if wide not in self._registers:
+            self._registers[wide] = _registers(self, wide)
+        return self._registers[wide]
+
+    def kernel_layout(self, values: np.ndarray, fill: int) -> np.ndarray:
+        """Per-compartment int64 ``values`` (the program's layout) in the kernel's padded layout."""
+        out = np.full(int(self.kn.sum()), fill, np.int64)
+        for i, (lo, n) in enumerate(zip(self.prog.noff, self.prog.n)):
+            out[self.koff[i]:self.koff[i] + n] = values[lo:lo + n]
+        return out
+
+
+def update_groups(lay: np.ndarray, inert: np.ndarray) -> np.ndarray:
+    """Runs of consecutive layers 1..L the kernel updates in one pass, as (G, 2) [first, end):
+    layer i joins layer i - 1's run when their ``lay`` rows (ref_delay, vmin, vmax, shift, paths)
+    are equal and layer i - 1's padding lanes are inert (updated, so the pass is contiguous)."""
+    runs = []
+    for i in range(1, lay.shape[0]):
+        if runs and np.array_equal(lay[i], lay[i - 1]) and inert[i - 1]:
+            runs[-1][1] = i + 1
+        else:
+            runs.append([i, i + 1])
+    return np.array(runs, np.int64).reshape(-1, 2)
+
+
+def _registers(flat: Flat, wide: bool) -> tuple:
+    prog = flat.prog
+    lay = np.zeros((len(prog.n), 6), np.int64)
+    lay[:, 0] = prog.params[:, 3]
+    lay[:, 3] = flat.shift
+    lay[:, 4] = flat.in_range
+    if wide:  # no wrap, no clip: what the network computes without overflow (for the loss split)
+        big = 1 << 61
+        wraps = np.array([big, (big << 1) - 1, big, (big << 1) - 1], np.int64)
+        lay[1:, 1], lay[1:, 2] = -big, big
+    else:
+        wraps = np.array([Q_HALF, Q_MASK, U_HALF, U_MASK], np.int64)
+        lay[:, 1], lay[:, 2] = prog.params[:, 4], prog.params[:, 5]
+    narrow = bool(np.all(lay[1:, 1] >= INT32_MIN) and np.all(lay[1:, 2] <= INT32_MAX))
+    lay[:, 5] = flat.fits32 if narrow and not wide else 0
+    inert = (lay[:, 1] <= 0) & (lay[:, 2] >= 0)        # v = 0 is inside [vmin, vmax]: padding lanes stay 0
+    kl = np.ascontiguousarray(np.stack([flat.koff, flat.kn, np.where(inert, flat.kn, prog.n)], axis=1), np.int64)
+    return lay, wraps, kl, update_groups(lay, inert), np.zeros(0, np.int32 if narrow else np.int64)
 
 
 def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
@@ -515,21 +737,10 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads
     all_u = np.zeros(shape_all, np.int32)
     all_v = np.zeros(shape_all, np.int32)
     ovf = np.zeros((batch, 3), np.int64)
-    lay = np.zeros((layers, 5), np.int64)
-    lay[:, 0] = prog.params[:, 3]
-    lay[:, 3] = flat.shift
-    lay[:, 4] = flat.in_range
-    if wide:  # no wrap, no clip: what the network computes without overflow (for the loss split)
-        big = 1 << 61
-        wraps = np.array([big, (big << 1) - 1, big, (big << 1) - 1], np.int64)
-        lay[1:, 1], lay[1:, 2] = -big, big
-    else:
-        wraps = np.array([Q_HALF, Q_MASK, U_HALF, U_MASK], np.int64)
-        lay[:, 1], lay[:, 2] = prog.params[:, 4], prog.params[:, 5]
-    narrow = bool(np.all(lay[1:, 1] >= INT32_MIN) and np.all(lay[1:, 2] <= INT32_MAX))
-    state_proto = np.zeros(0, np.int32 if narrow else np.int64)
-    args = (np.ascontiguousarray(x), prog.n, prog.noff, lay, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni,
-            flat.druni, flat.sptr, flat.spost, flat.wsp, flat.rsp, flat.keep_u, flat.keep_v, flat.keep_uf, flat.keep_vf, flat.vth, flat.bias, int(prog.ring),
+    lay, wraps, kl, groups, state_proto = flat.registers(wide)
+    args = (np.ascontiguousarray(x), prog.n, prog.noff, kl, groups, lay, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni,
+            flat.druni, flat.sptr, flat.spost, flat.wsp, flat.rsp, flat.keep_u, flat.keep_v, flat.keep_uf, flat.keep_vf, flat.vth, flat.bias, flat.p32,
+            int(prog.ring),
             record_all, out, all_s, all_u, all_v, ovf, wraps, np.zeros(0, flat.acc_dtype), state_proto)
     workers = max(1, min(batch, config.NUMBA_NUM_THREADS if threads is None else int(threads)))
     if workers == 1:

@@ -73,7 +73,10 @@ def check_inputs(inputs, width: int, source: str | None = None) -> np.ndarray:
     (the rules of ``snncc.inputs.check_batch``, shared with ``snncc run``)."""
     from snncc.inputs import check_batch
 
-    return check_batch(inputs, width, spikes=True, source=source).astype(np.uint8, copy=False)
+    x = np.asarray(inputs)
+    if x.dtype.kind in "bu" and x.size and x.max() <= 1:   # unsigned and at most 1: binary (one pass)
+        return check_batch(x, width, spikes=False, source=source).astype(np.uint8, copy=False)
+    return check_batch(x, width, spikes=True, source=source).astype(np.uint8, copy=False)
 
 
 def _prediction(counts: np.ndarray) -> np.ndarray:
