@@ -15,3 +15,10 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     context_settings={"help_option_names": ["-h", "--help"]},
 )
+
+
+@app.callback()
+def _verbs() -> None:
+    # A group even when only the invoked verb is registered (``main.build_app``): without a
+    # callback, typer would run a lone command as the program itself.
+    pass

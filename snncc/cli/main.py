@@ -29,13 +29,16 @@ def _say(line: str) -> None:
     print(line, file=sys.stderr)
 
 
-def build_app():
-    """The typer app with every verb registered."""
+def build_app(args: list[str] | None = None):
+    """The typer app with the verb ``args`` invoke registered (every verb when ``args`` names none,
+    as for ``snncc --help`` or a mistyped verb): building only one keeps every command's start short."""
     import importlib
 
     from snncc.cli.app import app
 
-    for name in VERB_MODULES:
+    verb = next((a for a in args or () if not a.startswith("-")), None)
+    module = f"{verb}_cmd"
+    for name in (module,) if module in VERB_MODULES else VERB_MODULES:
         importlib.import_module(f"snncc.cli.{name}")
     return app
 
@@ -98,7 +101,7 @@ def _dispatch(args: list[str], debug: bool) -> int:
     # errors derive from the ClickException behind typer.BadParameter (no direct click import).
     click_exception = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
     try:
-        app = build_app()
+        app = build_app(args)
         with protecting(named_inputs(args)):
             result = app(args=args, prog_name="snncc", standalone_mode=False)
         code = result if isinstance(result, int) else 0

@@ -61,3 +61,18 @@ def test_bundle_verbs_import_no_torch_or_sklearn(tmp_path, small_rsnn_checkpoint
         (record,) = run_in_fresh_interpreter([args])
         assert record["code"] == 0, record
         assert not set(record["heavy"]) & {"torch", "sklearn", "pandas", "onnx", "onnxruntime", "matplotlib"}, record
+
+
+def test_a_verb_builds_only_its_own_command():
+    """``snncc VERB ...`` registers VERB alone (the others' modules are not imported) and still runs as
+    a sub-command of the group; ``snncc --help`` lists every verb."""
+    probe = ("import contextlib, io, json, sys\nfrom snncc.cli.main import run\nout = io.StringIO()\n"
+             "with contextlib.redirect_stdout(out):\n    code = run(['map', '--help'])\n"
+             "mods = sorted(m for m in sys.modules if m.startswith('snncc.cli.') and m.endswith('_cmd'))\n"
+             "print(json.dumps({'code': code, 'mods': mods, 'usage': out.getvalue()}))\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    record = json.loads(done.stdout.strip().splitlines()[-1])
+    assert record["code"] == 0
+    assert record["mods"] == ["snncc.cli.map_cmd"]
+    assert "Usage: snncc map [OPTIONS]" in record["usage"]
