@@ -23,7 +23,9 @@ PACK_WINDOW = 512               # packing looks back this many cores (plus cores
 
 
 @dataclass
-class _Slice:
+class PackSlice:
+    """One slice as packing sees it: its size, bits and axons alone on a core, its source layers and profile keys."""
+
     layer: int
     start: int
     stop: int
@@ -37,7 +39,7 @@ class _Slice:
     size_key: float = 0.0
 
 
-def _slice_axons(model: NetworkModel, sl: _Slice) -> np.ndarray:
+def _slice_axons(model: NetworkModel, sl: PackSlice) -> np.ndarray:
     """Sorted global ids of the sources with a nonzero synapse onto the slice."""
     parts = []
     for p in model.into[sl.layer]:
@@ -48,10 +50,11 @@ def _slice_axons(model: NetworkModel, sl: _Slice) -> np.ndarray:
     return np.unique(np.concatenate(parts)) if parts else np.zeros(0, np.int64)
 
 
-def make_slices(model: NetworkModel, bounds: dict[int, np.ndarray]) -> list[_Slice]:
+def make_slices(model: NetworkModel, bounds: dict[int, np.ndarray]) -> list[PackSlice]:
+    """Every slice of every layer (``bounds[i]``: boundaries of layer i) with its usage alone on a core."""
     chip = model.chip
     limits = chip.limits()
-    out: list[_Slice] = []
+    out: list[PackSlice] = []
     for i, b in bounds.items():
         k = len(b) - 1
         ids = np.repeat(np.arange(k, dtype=np.int64), np.diff(b))
@@ -62,7 +65,7 @@ def make_slices(model: NetworkModel, bounds: dict[int, np.ndarray]) -> list[_Sli
         sources = frozenset(model.src_layers(i))
         for s in range(k):
             a, z = int(b[s]), int(b[s + 1])
-            sl = _Slice(i, a, z, z - a, int(usage["synapse_bits"][s]), int(usage["input_axons"][s]), sources,
+            sl = PackSlice(i, a, z, z - a, int(usage["synapse_bits"][s]), int(usage["input_axons"][s]), sources,
                         frozenset(np.unique(vth[a:z]).tolist()), frozenset(np.unique(cx[a:z]).tolist()),
                         frozenset(np.unique(vlim[a:z]).tolist()))
             sl.size_key = max(sl.neurons / limits["neurons"], sl.bits / limits["synapse_bits"],
@@ -71,16 +74,18 @@ def make_slices(model: NetworkModel, bounds: dict[int, np.ndarray]) -> list[_Sli
     return out
 
 
-class _Core:
+class PackedCore:
+    """A core being filled: its slices and the union of their profile keys."""
+
     def __init__(self):
-        self.slices: list[_Slice] = []
+        self.slices: list[PackSlice] = []
         self.vth, self.cx, self.vlim = set(), set(), set()
 
     def axons(self, model: NetworkModel) -> np.ndarray:
         return np.unique(np.concatenate([_slice_axons(model, s) for s in self.slices]))
 
 
-def pack(model: NetworkModel, slices: list[_Slice]) -> list[_Core]:
+def pack(model: NetworkModel, slices: list[PackSlice]) -> list[PackedCore]:
     """First-fit decreasing: each slice (largest first) onto the first open core it fits, else a new core.
 
     Candidates: the last PACK_WINDOW cores opened plus every core fed by one of the slice's source
@@ -91,7 +96,7 @@ def pack(model: NetworkModel, slices: list[_Slice]) -> list[_Core]:
     limits = model.chip.limits()
     n_layers = len(model.layers)
     order = sorted(range(len(slices)), key=lambda j: (-slices[j].size_key, slices[j].layer, slices[j].start))
-    cores: list[_Core] = []
+    cores: list[PackedCore] = []
     cap = len(slices)
     room_n = np.zeros(cap, np.int64)
     room_b = np.zeros(cap, np.int64)
@@ -123,7 +128,7 @@ def pack(model: NetworkModel, slices: list[_Slice]) -> list[_Core]:
                 chosen, new_axons = c, union
                 break
         if chosen is None:
-            cores.append(_Core())
+            cores.append(PackedCore())
             chosen, new_axons = len(cores) - 1, sl.n_axons
             room_n[chosen], room_b[chosen] = limits["neurons"], limits["synapse_bits"]
         core = cores[chosen]
@@ -143,6 +148,7 @@ def pack(model: NetworkModel, slices: list[_Slice]) -> list[_Core]:
 
 
 def assignment(model: NetworkModel, cores: list[list[tuple[int, int, int]]]) -> dict[int, np.ndarray]:
+    """Layer index -> the core of each of its neurons, from cores given as (layer, start, stop) slices."""
     core_of = {i: np.full(model.layers[i].n, -1, np.int64) for i in range(1, len(model.layers))}
     for c, slices in enumerate(cores):
         for i, a, z in slices:

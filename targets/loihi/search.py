@@ -123,6 +123,7 @@ def dp_min_cores(model: NetworkModel, max_cores: int = 100_000):
 
 
 def dp_cores(model: NetworkModel, configs) -> list[list[tuple[int, int, int]]]:
+    """The exact search's neurons-per-layer configs as (layer, start, stop) slices, filled front to back."""
     idx = list(range(1, len(model.layers)))
     start = {i: 0 for i in idx}
     cores = []
@@ -137,6 +138,7 @@ def dp_cores(model: NetworkModel, configs) -> list[list[tuple[int, int, int]]]:
 
 
 def lower_bound(model: NetworkModel, layer_minimum: dict[int, int], dp: int | None) -> tuple[int, str]:
+    """(bound, the reasons that reach it): the largest of the bounds in the module docstring."""
     chip = model.chip
     limits = chip.limits()
     n_total = sum(model.layers[i].n for i in range(1, len(model.layers)))
