@@ -1,11 +1,11 @@
 """Loihi 1 target: HDF5 bundle (netx layout), core map, bit-exact emulator, energy estimate.
 
 The package's face. ``target`` (the registered target) and ``LoihiTarget`` live in
-``capabilities.py`` (light: each capability imports its work on use); ``LoihiArtefact`` and
-``lower_model`` live in ``compiler.py`` (lowering orchestration: quantization, timing, core map,
-validation against the IR reference); they are resolved on first use, so tools that only read,
-map or emulate a bundle (``bundle``, ``emulator``, ``partition``) never import the compiler's
-torch-based reference simulator.
+``capabilities.py`` (light: each capability imports its work on use); ``LoihiArtefact`` lives in
+``artefact.py`` (its text in ``report_text.py``) and ``lower_model`` in ``compiler.py`` (lowering
+orchestration: quantization, timing, core map, validation against the IR reference); they are
+resolved on first use, so tools that only read, map or emulate a bundle (``bundle``, ``emulator``,
+``partition``) never import the compiler's torch-based reference simulator.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 import importlib
 
 _HOMES = {
-    "target": "capabilities", "LoihiTarget": "capabilities", "LoihiArtefact": "compiler", "lower_model": "compiler",
+    "target": "capabilities", "LoihiTarget": "capabilities", "LoihiArtefact": "artefact", "lower_model": "compiler",
     "attach_core_map": "compiler", "count_error": "compiler", "LoweredModel": "compiler",
     "LoihiNetwork": "network",
 }

@@ -10,7 +10,6 @@ when the model states no recording length; --time-steps).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -20,7 +19,7 @@ from snncc.ir.graph import Graph
 from snncc.passes.fold_linear import fold_linear
 from snncc.targets.loihi.quantize import samples_steps
 from snncc.targets.loihi.timing import lower_timing
-from snncc.targets.loihi.bundle import netx_compat, write_bundle
+from snncc.targets.loihi.artefact import LoihiArtefact
 from snncc.targets.loihi.capabilities import LoihiTarget, target  # noqa: F401  (the registered target, re-exported)
 from snncc.targets.loihi.chip_units import in_chip_units
 from snncc.targets.loihi.lowering import build_network, chain, lif_params_check
@@ -32,122 +31,6 @@ DEFAULT_STEPS = 100        # tSample when the model states no recording length
 VALIDATION_BATCH = 4
 CALIBRATION_BATCH = 8
 CALIBRATION_RATE = 0.05
-
-
-@dataclass
-class LoihiArtefact:
-    network: LoihiNetwork
-    quantization: dict[str, Any]
-    timing: dict[str, Any]
-    validation: dict[str, Any]
-    notes: list[str] = field(default_factory=list)
-
-    def write(self, path: str | Path) -> None:
-        write_bundle(self.network, path, extra={"quantization": self.quantization, "timing": self.timing,
-                                                "validation": self.validation})
-
-    def summary(self) -> dict[str, Any]:
-        net = self.network
-        q = self.quantization
-        return {
-            "format": "HDF5 bundle, lava-dl netx layout (+ snncc groups at /snncc)",
-            "t_sample": net.t_sample,
-            "layers": [
-                {"index": i, "name": lay.name, "type": lay.kind, "neurons": lay.n, "bias_sources": lay.always_on,
-                 **({} if i == 0 else {"vThMant": _register_text(lay.v_th_mant), "iDecay": _register_text(lay.i_decay),
-                                       "vDecay": _register_text(lay.v_decay),
-                                       "refDelay": lay.ref_delay, "wgtExp": _exp_text(lay.wgt_exp),
-                                       **({"wgtExpRec": _exp_text(lay.wgt_exp_rec)} if lay.weight_rec is not None
-                                          else {}),
-                                       "delay": _delay_text(lay.delay),
-                                       **({"delay_rec": _delay_text(lay.delay_rec)} if lay.weight_rec is not None else {})})}
-                for i, lay in enumerate(net.layers)
-            ],
-            "scale_rule": q["rule"], "scale_reason": q["reason"], "w_scale": q["w_scale"],
-            "scale_candidates": (q.get("calibration") or {}).get("errors", {}),
-            "weights_clipped": q["clipped_total"],
-            "timing": self.timing["mode"], "timing_changes": self.timing["changes"],
-            "validation": self.validation,
-            "netx_compat": netx_compat(net),
-            "core_map": net.core_map,
-            "notes": self.notes,
-        }
-
-    def render_text(self, console) -> None:
-        s = self.summary()
-        console.print(f"[bold]Loihi bundle[/bold]: tSample {s['t_sample']}, timing '{s['timing']}', "
-                      f"scale rule '{s['scale_rule']}'" + (f", w_scale {s['w_scale']}" if s["w_scale"] else ""))
-        console.print(f"  scale: {s['scale_reason']}")
-        if s["scale_candidates"]:
-            console.print("  scale candidates, measured spike-count error on the calibration inputs (lower is better): "
-                          + ", ".join(f"{k} {v:.4f}" for k, v in s["scale_candidates"].items()))
-        for lay in s["layers"]:
-            sources = lay["bias_sources"]
-            if lay["index"] == 0:
-                console.print(f"  layer 0  input      {lay['neurons'] - sources} axons"
-                              + (f" + {sources} always-on (current biases)" if sources else ""))
-                continue
-            rec = f" wgtExpRec {lay['wgtExpRec']} delay_rec {lay['delay_rec']}" if "wgtExpRec" in lay else ""
-            extra = f" + {sources} bias sources" if sources else ""
-            console.print(f"  layer {lay['index']}  {lay['type']:<9}  {lay['neurons'] - sources} neurons{extra}  "
-                          f"vThMant {lay['vThMant']} "
-                          f"iDecay {lay['iDecay']} vDecay {lay['vDecay']} refDelay {lay['refDelay']} "
-                          f"wgtExp {lay['wgtExp']} delay {lay['delay']}{rec}")
-        if s["weights_clipped"]:
-            console.print(f"  [yellow]{s['weights_clipped']} weight(s) rounded beyond the 8-bit range and were clipped "
-                          "(e.g. +256 -> 254)[/yellow]")
-        for change in s["timing_changes"]:
-            console.print(f"  [yellow]timing: {change}[/yellow]")
-        v = s["validation"]
-        console.print(f"  checked on {v['inputs']}: timing exact {v['timing_exact']}, quantized registers exact "
-                      f"{v['quantized_params_exact']}, emulator kernel exact {v['kernel_exact']}")
-        console.print("  spike agreement, emulator vs float model as trained: "
-                      + ", ".join(f"{k} {100 * a:.2f}%" for k, a in v["emulator_vs_trained"].items())
-                      + f"; predictions {100 * v['prediction_agreement']:.1f}% (quantization-only loss; "
-                      "`snncc check` measures accuracy on data)")
-        if any(v["overflow"].values()):
-            console.print(f"  [yellow]overflow on the check inputs: {v['overflow']}[/yellow]")
-        for note in s["netx_compat"]:
-            console.print(f"  [yellow]netx compatibility: {note}[/yellow]")
-        if s["netx_compat"]:
-            console.print("  [yellow]lava-dl netx ignores the fields above, so Lava would run this bundle differently "
-                          "than the chip semantics snncc emulates.[/yellow]")
-        if s["core_map"] is not None:
-            console.print(f"  core map: {_core_text(s['core_map'])}")
-        for note in s["notes"]:
-            console.print(f"  note: {note}")
-
-
-def _delay_text(delay) -> Any:
-    import numpy as np
-
-    d = np.asarray(delay)
-    return int(d) if d.ndim == 0 else f"per-synapse {int(d.min())}..{int(d.max())}"
-
-
-def _register_text(value) -> Any:
-    import numpy as np
-
-    v = np.asarray(value)
-    return int(v) if v.ndim == 0 else f"per-neuron {int(v.min())}..{int(v.max())} ({len(np.unique(v))} values)"
-
-
-def _exp_text(exp) -> Any:
-    import numpy as np
-
-    e = np.asarray(exp)
-    if e.ndim == 0:
-        return int(e)
-    values, counts = np.unique(e, return_counts=True)
-    return "per-synapse " + ", ".join(f"{int(v)} ({int(c)})" for v, c in zip(values, counts))
-
-
-def _core_text(core_map: dict) -> str:
-    for key in ("total_cores", "cores", "n_cores"):
-        if key in core_map:
-            value = core_map[key]
-            return f"{len(value) if isinstance(value, list) else value} cores"
-    return "recorded in /snncc/core_map"
 
 
 @dataclass

@@ -1,6 +1,8 @@
 """The core map: which neurons sit on which core, and what each core uses of every limit.
 
-One record, three renderings: ``to_dict()`` (JSON, stored in the bundle), ``render_text(console)``
+Typed records: ``CoreMap`` holds one ``CoreRecord`` per core, each with the ``LayerSlice``s placed
+on it and a ``CoreUsage`` (one integer per per-core limit of ``ChipSpec.limits()``). One record,
+three renderings: ``to_dict()`` (JSON, stored in the bundle), ``render_text(console)``
 and ``plot(path)`` (utilisation per core as a PNG). Core ids are global; chip = core // cores
 per chip; tile = (core % cores per chip) // cores per tile (cores placed in id order).
 """
@@ -20,6 +22,8 @@ SHOWN = ("neurons", "input_axons", "output_axons", "synapse_bits")
 
 @dataclass
 class LayerSlice:
+    """Neurons ``start..stop-1`` of one layer, placed on a core."""
+
     layer: str
     index: int          # layer index in the mapped network (0 = input)
     start: int
@@ -30,11 +34,10 @@ class LayerSlice:
         return self.stop - self.start
 
 
-@dataclass
-class CoreRecord:
-    core: int
-    chip: int
-    layers: list[LayerSlice]
+@dataclass(frozen=True)
+class CoreUsage:
+    """What one core uses of each per-core limit (resources.py: ``ChipSpec.limits()`` has the same names)."""
+
     neurons: int
     input_axons: int
     output_axons: int
@@ -43,12 +46,29 @@ class CoreRecord:
     compartment_profiles: int
     voltage_limits: int
 
-    def usage(self) -> dict[str, int]:
+    def as_dict(self) -> dict[str, int]:
         return {k: int(getattr(self, k)) for k in USAGE_FIELDS}
+
+    @classmethod
+    def from_mapping(cls, row) -> "CoreUsage":
+        """From any mapping holding the seven fields (a JSON core row, or per-core values)."""
+        return cls(**{k: int(row[k]) for k in USAGE_FIELDS})
+
+
+@dataclass
+class CoreRecord:
+    """One core: its global id, its chip (id // cores per chip), the slices on it and its usage."""
+
+    core: int
+    chip: int
+    layers: list[LayerSlice]
+    usage: CoreUsage
 
 
 @dataclass
 class CoreMap:
+    """The map of a network on a chip: per-core records, the lower bound, and how it was found."""
+
     chip: ChipSpec
     cores: list[CoreRecord]
     lower_bound: int
@@ -74,10 +94,10 @@ class CoreMap:
 
     def percent(self, core: CoreRecord) -> dict[str, float]:
         limits = self.chip.limits()
-        return {k: round(100.0 * getattr(core, k) / limits[k], 2) for k in USAGE_FIELDS}
+        return {k: round(100.0 * getattr(core.usage, k) / limits[k], 2) for k in USAGE_FIELDS}
 
     def totals(self) -> dict[str, int]:
-        return {k: int(sum(getattr(c, k) for c in self.cores)) for k in SHOWN}
+        return {k: int(sum(getattr(c.usage, k) for c in self.cores)) for k in SHOWN}
 
     def peak_percent(self) -> dict[str, float]:
         return {k: max((self.percent(c)[k] for c in self.cores), default=0.0) for k in USAGE_FIELDS}
@@ -110,7 +130,7 @@ class CoreMap:
         for c in self.cores:
             row = {"core": c.core, "chip": c.chip, "core_in_chip": c.core % self.chip.cores_per_chip,
                    "tile": self.tile_of(c.core)}
-            row.update(c.usage())
+            row.update(c.usage.as_dict())
             row["layers"] = [{"layer": s.layer, "index": s.index, "start": s.start, "stop": s.stop}
                              for s in c.layers]
             row["percent"] = self.percent(c)
@@ -140,7 +160,7 @@ class CoreMap:
         cores = [CoreRecord(core=int(c["core"]), chip=int(c["chip"]),
                             layers=[LayerSlice(s["layer"], int(s["index"]), int(s["start"]), int(s["stop"]))
                                     for s in c["layers"]],
-                            **{k: int(c[k]) for k in USAGE_FIELDS})
+                            usage=CoreUsage.from_mapping(c))
                  for c in d["cores"]]
         return cls(chip=chip, cores=cores, lower_bound=int(d["lower_bound"]),
                    lower_bound_method=d.get("lower_bound_method", ""), method=d.get("method", ""),
@@ -163,7 +183,7 @@ class CoreMap:
             table.add_row(
                 str(c.core), str(c.chip),
                 ", ".join(f"{s.layer}[{s.start}:{s.stop}]" for s in c.layers),
-                *(f"{getattr(c, k):,} ({pct[k]:.1f}%)" for k in SHOWN))
+                *(f"{getattr(c.usage, k):,} ({pct[k]:.1f}%)" for k in SHOWN))
         if len(shown) < len(self.cores):
             table.add_row("...", "", f"{len(self.cores) - len(shown):,} more cores (use --json)", "", "", "", "")
         console.print(table)

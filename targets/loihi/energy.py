@@ -130,7 +130,8 @@ def estimate_energy(network: LoihiNetwork, core_map: CoreMap, spikes: dict[int, 
                     current: dict[int, np.ndarray] | None = None, voltage: dict[int, np.ndarray] | None = None,
                     input_note: str = "") -> EnergyEstimate:
     """The estimate for one emulation: ``spikes[i]`` (B, T, n_i) for every layer i (0 = input)."""
-    from snncc.targets.loihi.partition import NetworkModel, pair_table
+    from snncc.targets.loihi.projections import NetworkModel
+    from snncc.targets.loihi.usage import pair_table
 
     chip = core_map.chip
     costs = chip.energy

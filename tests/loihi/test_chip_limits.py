@@ -114,7 +114,7 @@ def test_core_limits_move_the_resource_model_and_the_mapper(monkeypatch):
     spec = ChipSpec()
     assert spec.limits()["neurons"] == 4
     cmap = map_network(net, spec)
-    assert cmap.n_cores >= 5 and all(core.neurons <= 4 for core in cmap.cores)
+    assert cmap.n_cores >= 5 and all(core.usage.neurons <= 4 for core in cmap.cores)
 
 
 def test_state_widths_move_the_emulators_readable_statement(monkeypatch):
@@ -141,7 +141,7 @@ from snncc.targets.loihi.resources import LOIHI1
 from tests.loihi.helpers import random_network
 cmap = map_network(random_network(0, recurrent=False, bias=False))
 print(json.dumps({"loihi1": LOIHI1.compartments_per_core, "q_half": _kernel.Q_HALF,
-                  "cores": cmap.n_cores, "most": max(c.neurons for c in cmap.cores)}))
+                  "cores": cmap.n_cores, "most": max(c.usage.neurons for c in cmap.cores)}))
 """
 
 

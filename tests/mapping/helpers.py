@@ -41,3 +41,19 @@ def chain(sizes, seed=0, density=1.0, rec=(), **kw) -> LoihiNetwork:
         w_rec = even_weights(rng, (n, n), 10.0, density=density) if i in rec else None
         layers.append(layer(f"l{i}", n, w, kind="dense_rec" if i in rec else "dense", w_rec=w_rec, **kw))
     return LoihiNetwork(layers, t_sample=20)
+
+
+def banded(n, layers, fan_in, seed=0) -> LoihiNetwork:
+    """``layers`` sparse layers of ``n`` neurons (scipy CSR); neuron j listens to ``fan_in`` distinct
+    sources drawn from a window of 4 * fan_in around position j of the previous layer."""
+    import scipy.sparse as sp
+
+    rng = np.random.default_rng(seed)
+    out = [LoihiLayer("input", "input", n)]
+    for li in range(layers):
+        idx = np.arange(fan_in) * 4 + rng.integers(0, 4, size=(n, fan_in)) + (np.arange(n) - 2 * fan_in)[:, None]
+        idx = np.sort(idx % n, axis=1)
+        w = rng.integers(1, 128, size=n * fan_in) * 2 * np.where(rng.random(n * fan_in) < 0.5, -1, 1)
+        weight = sp.csr_matrix((w.astype(np.int16), idx.reshape(-1), np.arange(0, n * fan_in + 1, fan_in)), shape=(n, n))
+        out.append(layer(f"s{li}", n, weight, v_th_mant=64 + li % 3, i_decay=1024, v_decay=256))
+    return LoihiNetwork(out, t_sample=20)

@@ -1,5 +1,5 @@
 """An independent re-check of a core map: per-core usage recomputed from the network and the map's
-neuron ranges alone (plain loops, none of partition.py's code), compared with the limits."""
+neuron ranges alone (plain loops, none of the mapper's code), compared with the limits."""
 
 from __future__ import annotations
 

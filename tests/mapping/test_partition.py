@@ -73,7 +73,7 @@ def test_more_than_128_cores_spans_chips():
     assert cm.n_cores > 128 and cm.n_chips == 2 and cm.lower_bound == cm.n_cores
     chips = {c.chip for c in cm.cores}
     assert chips == {0, 1} and all(c.chip == c.core // 128 for c in cm.cores)
-    assert all(c.neurons <= 1024 and c.synapse_bits <= LOIHI1.synapse_bits_per_core for c in cm.cores)
+    assert all(c.usage.neurons <= 1024 and c.usage.synapse_bits <= LOIHI1.synapse_bits_per_core for c in cm.cores)
 
 
 def test_fixed_size_system_refuses_a_map_that_needs_more_chips():
@@ -126,7 +126,7 @@ def test_threshold_profiles_limit_packing():
         layers.append(layer(f"p{i}", 4, even_weights(rng, (4, 4)), v_th_mant=100 + i))
     net = LoihiNetwork(layers, t_sample=5)
     cm = map_network(net)
-    assert cm.n_cores == 2 and max(c.vth_profiles for c in cm.cores) <= 8
+    assert cm.n_cores == 2 and max(c.usage.vth_profiles for c in cm.cores) <= 8
     assert_valid(net, cm.to_dict(), LOIHI1)
 
 
@@ -136,7 +136,7 @@ def test_sparse_weights_count_only_nonzero_synapses():
     cm = map_network(net)
     assert cm.n_cores == 1
     c = cm.cores[0]
-    assert c.input_axons == n and c.synapse_bits == n * 64
+    assert c.usage.input_axons == n and c.usage.synapse_bits == n * 64
     sparse_net = LoihiNetwork([LoihiLayer("input", "input", n),
                                layer("diag", n, sp.identity(n, dtype=np.int16, format="csr") * 2)], t_sample=5)
     assert map_network(sparse_net).to_dict()["cores"] == cm.to_dict()["cores"]

@@ -1,0 +1,77 @@
+"""The compile report as text: what ``snncc compile --target loihi`` prints from ``LoihiArtefact.summary()``.
+
+Register values read as text: one value -> the integer; per-neuron values -> "per-neuron lo..hi
+(k values)"; per-synapse delays -> "per-synapse lo..hi"; per-synapse weight exponents ->
+"per-synapse e (count), ...".
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from snncc.targets.loihi.coremap import CoreMap
+
+
+def render_compile_report(s: dict[str, Any], console) -> None:
+    """Print ``LoihiArtefact.summary()`` ``s`` for people."""
+    console.print(f"[bold]Loihi bundle[/bold]: tSample {s['t_sample']}, timing '{s['timing']}', "
+                  f"scale rule '{s['scale_rule']}'" + (f", w_scale {s['w_scale']}" if s["w_scale"] else ""))
+    console.print(f"  scale: {s['scale_reason']}")
+    if s["scale_candidates"]:
+        console.print("  scale candidates, measured spike-count error on the calibration inputs (lower is better): "
+                      + ", ".join(f"{k} {v:.4f}" for k, v in s["scale_candidates"].items()))
+    for lay in s["layers"]:
+        sources = lay["bias_sources"]
+        if lay["index"] == 0:
+            console.print(f"  layer 0  input      {lay['neurons'] - sources} axons"
+                          + (f" + {sources} always-on (current biases)" if sources else ""))
+            continue
+        rec = f" wgtExpRec {lay['wgtExpRec']} delay_rec {lay['delay_rec']}" if "wgtExpRec" in lay else ""
+        extra = f" + {sources} bias sources" if sources else ""
+        console.print(f"  layer {lay['index']}  {lay['type']:<9}  {lay['neurons'] - sources} neurons{extra}  "
+                      f"vThMant {lay['vThMant']} "
+                      f"iDecay {lay['iDecay']} vDecay {lay['vDecay']} refDelay {lay['refDelay']} "
+                      f"wgtExp {lay['wgtExp']} delay {lay['delay']}{rec}")
+    if s["weights_clipped"]:
+        console.print(f"  [yellow]{s['weights_clipped']} weight(s) rounded beyond the 8-bit range and were clipped "
+                      "(e.g. +256 -> 254)[/yellow]")
+    for change in s["timing_changes"]:
+        console.print(f"  [yellow]timing: {change}[/yellow]")
+    v = s["validation"]
+    console.print(f"  checked on {v['inputs']}: timing exact {v['timing_exact']}, quantized registers exact "
+                  f"{v['quantized_params_exact']}, emulator kernel exact {v['kernel_exact']}")
+    console.print("  spike agreement, emulator vs float model as trained: "
+                  + ", ".join(f"{k} {100 * a:.2f}%" for k, a in v["emulator_vs_trained"].items())
+                  + f"; predictions {100 * v['prediction_agreement']:.1f}% (quantization-only loss; "
+                  "`snncc check` measures accuracy on data)")
+    if any(v["overflow"].values()):
+        console.print(f"  [yellow]overflow on the check inputs: {v['overflow']}[/yellow]")
+    for note in s["netx_compat"]:
+        console.print(f"  [yellow]netx compatibility: {note}[/yellow]")
+    if s["netx_compat"]:
+        console.print("  [yellow]lava-dl netx ignores the fields above, so Lava would run this bundle differently "
+                      "than the chip semantics snncc emulates.[/yellow]")
+    if s["core_map"] is not None:
+        console.print(f"  core map: {CoreMap.from_dict(s['core_map']).n_cores} cores")
+    for note in s["notes"]:
+        console.print(f"  note: {note}")
+
+
+def delay_text(delay) -> Any:
+    d = np.asarray(delay)
+    return int(d) if d.ndim == 0 else f"per-synapse {int(d.min())}..{int(d.max())}"
+
+
+def register_text(value) -> Any:
+    v = np.asarray(value)
+    return int(v) if v.ndim == 0 else f"per-neuron {int(v.min())}..{int(v.max())} ({len(np.unique(v))} values)"
+
+
+def exp_text(exp) -> Any:
+    e = np.asarray(exp)
+    if e.ndim == 0:
+        return int(e)
+    values, counts = np.unique(e, return_counts=True)
+    return "per-synapse " + ", ".join(f"{int(v)} ({int(c)})" for v, c in zip(values, counts))

@@ -1,0 +1,32 @@
+"""The compile report's text (report_text.py), read from the artefact's summary record."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+from rich.console import Console
+
+from snncc.targets.loihi import target
+from snncc.targets.loihi.report_text import delay_text, exp_text, register_text, render_compile_report
+from tests.loihi.helpers import small_graph
+
+
+def test_register_values_as_text():
+    assert register_text(np.int64(7)) == 7 and delay_text(3) == 3 and exp_text(-2) == -2
+    assert register_text(np.array([3, 5, 5])) == "per-neuron 3..5 (2 values)"
+    assert delay_text(np.array([[0, 4], [2, 1]])) == "per-synapse 0..4"
+    assert exp_text(np.array([[0, 1], [1, 1]])) == "per-synapse 0 (1), 1 (3)"
+
+
+def test_compile_report_counts_the_cores_of_the_recorded_map():
+    art = target.lower(small_graph(seed=1), {"scale": "global"})
+    s = art.summary()
+    s["core_map"] = {**s["core_map"], "cores": s["core_map"]["cores"] * 3}   # the text reads the map's cores
+    buf = io.StringIO()
+    render_compile_report(s, Console(file=buf, width=200, highlight=False, color_system=None))
+    text = buf.getvalue()
+    assert "core map: 3 cores\n" in text and text.startswith("Loihi bundle: tSample 40")
+    buf = io.StringIO()
+    art.render_text(Console(file=buf, width=200, highlight=False, color_system=None))
+    assert "core map: 1 cores\n" in buf.getvalue()
