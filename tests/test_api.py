@@ -208,9 +208,26 @@ def test_hpo_run_and_report(tmp_path, capsys):
     data = tmp_path / "braille"
     api.data_synth(out=data, repetitions=7, seed=5, thresholds="1")
     work = tmp_path / "w"
+    from snncc.hpo.progress import StudyView
+
+    class Seen(StudyView):   # the search's progress protocol, recorded
+        def __init__(self):
+            self.calls = []
+
+        def __getattribute__(self, name):
+            calls = object.__getattribute__(self, "calls")
+            method = object.__getattribute__(self, name)
+            if name == "calls" or not callable(method):
+                return method
+            return lambda *args: (calls.append(name), method(*args))[1]
+
+    view = Seen()
     run = api.hpo_run("s", data=data, step="anneal", trials=1, epochs=1, hidden=8, ranges=["time_bin_size=10",
                       "nb_input_copies=1"], energy_samples=2, batch_size=64, startup=1, preset=False, workdir=work,
-                      device="cpu", pruner="none")
+                      device="cpu", pruner="none", view=view)
+    calls = view.calls
+    assert calls[0] == "study_start" and calls[-1] == "close" and "study_update" in calls
+    assert calls.index("trial_start") < calls.index("trial_epoch") < calls.index("trial_done")
     assert [s.study for s in run.summaries] == ["s"] and run.summaries[0].budget["complete"] == 1
     assert run.as_dict()[0]["study"] == "s" and run.report_command == f"snncc hpo report s --dir {work}"
     assert " ".join(text_of(run).split()).endswith(f"report: snncc hpo report s --dir {work}")
@@ -218,3 +235,73 @@ def test_hpo_run_and_report(tmp_path, capsys):
     assert rep.figure is None and rep.report.counts["complete"] == 1
     assert rep.as_dict() == cli_json(["hpo", "report", "s", "--dir", work, "--no-plot"], capsys)
     assert "Pareto" in text_of(rep)
+
+
+class Calls:
+    """A plain ``progress(done, total, phase)`` that records its calls."""
+
+    def __init__(self):
+        self.calls: list[tuple[int, int, str]] = []
+
+    def __call__(self, done: int, total: int, phase: str) -> None:
+        self.calls.append((done, total, phase))
+
+    def check(self) -> list[tuple[int, int, str]]:
+        """Some calls, 0 <= done <= total, ``done`` never falling while the phase stays; the calls."""
+        assert self.calls
+        for (d0, _, p0), (d1, _, p1) in zip(self.calls, self.calls[1:]):
+            assert p0 != p1 or d1 >= d0, self.calls
+        assert all(isinstance(p, str) and 0 <= d <= t for d, t, p in self.calls), self.calls
+        return self.calls
+
+
+def test_every_verb_taking_progress_reports_through_a_plain_callable(synth_dir, small_rsnn_checkpoint, tmp_path):
+    """One convention: each verb's ``progress`` is ``progress(done, total, phase)``, and no verb needs rich."""
+    import inspect
+
+    taking = {name for name in api.__all__ if "progress" in inspect.signature(getattr(api, name)).parameters}
+    assert taking == {"data_synth", "data_encode", "data_analyse", "train", "check", "emulate", "report", "bench"}
+    seen: dict[str, list] = {}
+
+    p = Calls()
+    api.data_synth(out=tmp_path / "s", repetitions=2, seed=4, thresholds=[1, 2], progress=p)
+    seen["data_synth"] = p.check()
+    assert p.calls[-1] == (27 * 2 + 3, 27 * 2 + 3, "encoding and writing")
+    assert {c[2] for c in p.calls} == {"generating frames", "encoding and writing"}
+    d, _ = synth_dir
+    p = Calls()
+    api.data_encode(d, out=tmp_path / "e.npz", threshold=1, bin_ms=5, progress=p)
+    seen["data_encode"] = p.check()
+    assert p.calls == [(0, 2, "loading / encoding"), (1, 2, "loading / encoding"), (2, 2, "loading / encoding")]
+    p = Calls()
+    api.data_analyse(d, thresholds="1,2", svm=False, pca_step=0, event_svm=False, progress=p)
+    seen["data_analyse"] = p.check()
+    assert [d for d, _, _ in p.calls] == sorted(d for d, _, _ in p.calls) and p.calls[-1][0] == p.calls[-1][1] == 4
+
+    p, epochs = Calls(), []
+    api.train("ffsnn", data=_events_set(tmp_path / "ev.npz"), output=tmp_path / "f.pt", epochs=2, seed=1,
+              batch_size=64, progress=p, on_epoch=epochs.append)
+    seen["train"] = p.check()
+    assert p.calls == [(k, 6, f"epoch {1 + (k - 1) // 3}/2") for k in range(1, 7)]   # 162 samples: 3 batches
+    assert [e.epoch for e in epochs] == [1, 2]
+
+    x = (np.random.default_rng(3).random((3, 20, 24)) < 0.1).astype(np.uint8)
+    np.savez(tmp_path / "d.npz", inputs=x, labels=np.array([0, 1, 2], np.int64))
+    p = Calls()
+    api.check(small_rsnn_checkpoint, target="loihi", data=tmp_path / "d.npz", progress=p)
+    seen["check"] = p.check()
+    api.compile(small_rsnn_checkpoint, target="loihi", output=tmp_path / "m.net")
+    np.save(tmp_path / "x.npy", np.tile(x, (1, 1, 2)))
+    p = Calls()
+    api.emulate(tmp_path / "m.net", input=tmp_path / "x.npy", output=tmp_path / "o.npz", progress=p)
+    seen["emulate"] = p.check()
+    p = Calls()
+    api.report(tmp_path / "m.net", energy=True, samples=2, progress=p)
+    seen["report"] = p.check()
+    api.compile(small_rsnn_checkpoint, target="jetson", output=tmp_path / "j", time_steps=20)
+    p = Calls()
+    api.bench(tmp_path / "j", samples=2, repeats=1, warmup_passes=1, timed_passes=1, progress=p)
+    seen["bench"] = p.check()
+    assert set(seen) == taking
+    for name in ("check", "emulate", "report"):
+        assert seen[name][-1][0] == seen[name][-1][1], (name, seen[name])

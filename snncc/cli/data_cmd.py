@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator, Optional
+from typing import Optional
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from snncc.cli.app import app
-from snncc.cli.output import console, err_console, print_json
+from snncc.cli.output import bar_columns, console, print_json, progress_bar
 
 data_app = typer.Typer(
     help=(
@@ -31,14 +29,9 @@ def _data_group(ctx: typer.Context) -> None:
         raise typer.Exit(0)
 
 
-@contextmanager
-def _progress(enabled: bool = True) -> Iterator[Progress]:
-    bar = Progress(
-        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-        console=err_console, transient=True, disable=not enabled,
-    )
-    with bar:
-        yield bar
+def _progress(enabled: bool = True):
+    """The verb's ``progress(done, total, phase)``: a transient bar on stderr (none when not enabled)."""
+    return progress_bar(*bar_columns(), disable=not enabled)
 
 
 def _show(record, json_out: bool) -> None:

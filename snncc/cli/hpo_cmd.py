@@ -65,6 +65,7 @@ def run_command(
 ) -> None:
     """Run or resume the search (step 1, step 2 or both) in one worker; start more workers on the same storage."""
     from snncc.api import hpo_run
+    from snncc.cli.hpo_view import RichStudyView
     from snncc.cli.output import console, err_console, print_json
 
     # Ctrl-C: the running trial is marked FAIL and re-queued (study.Interrupted, a KeyboardInterrupt);
@@ -74,7 +75,8 @@ def run_command(
                      subset=subset, seed=seed, val_fraction=val_fraction, select=select, hidden=hidden,
                      batch_size=batch_size, energy_samples=energy_samples, emulate=emulate, pruner=pruner,
                      startup=startup, preset=preset, storage=storage, workdir=workdir, device=device,
-                     threads=threads, heartbeat=heartbeat, progress=None if (quiet or json_out) else err_console)
+                     threads=threads, heartbeat=heartbeat,
+                     view=None if (quiet or json_out) else RichStudyView(err_console))
     if json_out:
         print_json(result.as_dict())
     else:

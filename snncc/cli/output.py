@@ -26,10 +26,19 @@ def print_record(record: Any, json_out: bool) -> None:
         record.render_text(console)
 
 
+def bar_columns(remaining: bool = False) -> tuple:
+    """The data and training bars' columns: phase, bar, done/total, elapsed (and time remaining)."""
+    from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
+    return columns + ((TimeRemainingColumn(),) if remaining else ())
+
+
 @contextlib.contextmanager
-def progress_bar(*columns, disable: bool = False):
-    """Yields ``progress(done, total, phase)`` for a verb: a transient bar on stderr, started at the
-    first report that leaves work to do (a run finished in one report shows none)."""
+def progress_bar(*columns, disable: bool = False, transient: bool = True):
+    """Yields ``progress(done, total, phase)`` for a verb: a bar on stderr (removed at the end when
+    ``transient``), started at the first report that leaves work to do (a run finished in one report
+    shows none)."""
     state: dict[str, Any] = {}
 
     def report(done: int, total: int, phase: str = "") -> None:
@@ -40,7 +49,7 @@ def progress_bar(*columns, disable: bool = False):
                 return
             from rich.progress import Progress
 
-            state["bar"] = Progress(*columns, console=err_console, transient=True)
+            state["bar"] = Progress(*columns, console=err_console, transient=transient)
             state["bar"].start()
             state["task"] = state["bar"].add_task(phase, total=total)
         state["bar"].update(state["task"], completed=done, total=total, description=phase)

@@ -7,10 +7,9 @@ from pathlib import Path
 from typing import List, Optional
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from snncc.cli.app import app
-from snncc.cli.output import console, err_console, print_json
+from snncc.cli.output import bar_columns, console, err_console, print_json, progress_bar
 
 
 class ModelKind(str, Enum):
@@ -30,9 +29,12 @@ class Order(str, Enum):
     loihi = "loihi"
 
 
-def _progress(quiet: bool) -> Progress:
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                    TimeRemainingColumn(), console=err_console, disable=quiet, transient=False)
+def _epoch_line(record) -> None:
+    """One finished epoch on stderr: loss, train/test(/val) accuracy, seconds."""
+    val = record.val_accuracy
+    err_console.print(f"epoch {record.epoch}: loss {record.loss:.4f}  train {100 * record.train_accuracy:.2f} %  "
+                      f"test {100 * record.test_accuracy:.2f} %" + (f"  val {100 * val:.2f} %" if val is not None else "")
+                      + f"  ({record.seconds:.1f} s)")
 
 
 @app.command("train")
@@ -60,11 +62,13 @@ def train_command(
     """Train one of the paper's models with its per-threshold preset and write a checkpoint."""
     from snncc.api import train
 
-    # started by the trainer once the data are loaded and checked; epoch lines go to stderr even when quiet
-    result = train(model.value, data=data, output=output, threshold=threshold, epochs=epochs, subset=subset,
-                   seed=seed, order=order.value, val_fraction=val_fraction, qat_from=qat_from,
-                   qat_epochs=qat_epochs, overrides=overrides, params=params, batch_size=batch_size, lr=lr,
-                   device=device, threads=threads, progress=_progress(quiet or json_out))
+    # the bar starts at the first batch, once the data are loaded and checked; epoch lines go to stderr
+    # even when quiet
+    with progress_bar(*bar_columns(remaining=True), disable=quiet or json_out, transient=False) as progress:
+        result = train(model.value, data=data, output=output, threshold=threshold, epochs=epochs, subset=subset,
+                       seed=seed, order=order.value, val_fraction=val_fraction, qat_from=qat_from,
+                       qat_epochs=qat_epochs, overrides=overrides, params=params, batch_size=batch_size, lr=lr,
+                       device=device, threads=threads, progress=progress, on_epoch=_epoch_line)
     if json_out:
         print_json(result.as_dict())
     else:

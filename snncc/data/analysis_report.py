@@ -19,11 +19,21 @@ from snncc.errors import SnnccError
 
 
 def _counter(progress, total: int):
-    """(note(text), advance(k)) on one task of ``progress`` (a rich ``Progress``; None: no-ops)."""
+    """(note(text), advance(k)) reporting ``progress(done, total, phase)``: note names the phase
+    (first "analysing"), advance adds k steps done (None: no-ops)."""
     if progress is None:
         return (lambda _text: None), (lambda _k=1: None)
-    task = progress.add_task("analysing", total=total)
-    return (lambda text: progress.update(task, description=text)), (lambda k=1: progress.advance(task, k))
+    state = {"done": 0, "phase": "analysing"}
+
+    def note(text: str) -> None:
+        state["phase"] = text
+        progress(state["done"], total, text)
+
+    def advance(k: int = 1) -> None:
+        state["done"] = min(total, state["done"] + k)
+        progress(state["done"], total, state["phase"])
+
+    return note, advance
 
 
 def paper_bin_ms(th: float) -> float:
@@ -93,7 +103,7 @@ def analyse_braille(src: str | Path, thresholds: Sequence[float] = (1, 2, 5, 10)
     """The report of ``snncc data analyse`` (see the module doc) as a plain dict.
 
     ``pca_step``: a PCA-12 SVM every N frames (0: none); ``figures``: a directory to write the
-    PNG figures into; ``progress``: a rich ``Progress`` to show the steps on (None: none).
+    PNG figures into; ``progress``: ``progress(done, total, phase)`` over the steps (None: none).
     """
     from snncc.data import analysis, calibration, formats, sources
     from snncc.data.binning import bin_events, n_bins_for, record_ms

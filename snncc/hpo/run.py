@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING
 
 from snncc.errors import SnnccError
 from snncc.hpo.annealing import evenly_spaced_restarts
@@ -16,6 +16,9 @@ from snncc.hpo.objective import TrialObjective
 from snncc.hpo.space import search_space, space_as_dict
 from snncc.hpo.storage import default_url, open_storage
 from snncc.hpo.study import StudyPlan, best_params, grid_plan, load_study, run_study, worker_name
+
+if TYPE_CHECKING:
+    from snncc.hpo.progress import StudyView
 
 
 @dataclass
@@ -78,8 +81,11 @@ def check_request(req: HpoRequest) -> None:
         raise SnnccError("must be 1, 2, 5 or 10 (the paper's presets)", field="--threshold")
 
 
-def run_hpo(req: HpoRequest, view_factory: Callable | None = None) -> list:
-    """Run (or resume) the requested step(s); returns one ``RunSummary`` per step run."""
+def run_hpo(req: HpoRequest, view: StudyView | None = None) -> list:
+    """Run (or resume) the requested step(s); returns one ``RunSummary`` per step run.
+
+    ``view``: the progress callbacks (``snncc.hpo.progress.StudyView``), told ``study_start(name)``
+    before each step and ``close()`` after it; None: silent."""
     from snncc.hpo.data import load_source
 
     check_request(req)
@@ -95,13 +101,11 @@ def run_hpo(req: HpoRequest, view_factory: Callable | None = None) -> list:
     summaries = []
 
     def factory(study, plan):
-        return TrialObjective(plan, source, req.workdir, req.device, view=current_view["view"], worker=worker)
-
-    current_view: dict = {"view": None}
+        return TrialObjective(plan, source, req.workdir, req.device, view=view, worker=worker)
 
     def run(plan):
-        view = view_factory(plan.name) if view_factory is not None else None
-        current_view["view"] = view
+        if view is not None:
+            view.study_start(plan.name)
         try:
             return run_study(plan, storage, factory, view=view)
         finally:

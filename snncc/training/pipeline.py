@@ -6,6 +6,7 @@ Also quantization-aware fine-tuning from a trained checkpoint, on the same split
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from typing import Callable
 
 import numpy as np
 import torch
@@ -22,7 +23,8 @@ from snncc.training.data import EVENT_KINDS, FRAME_DT_S, TrainingData, load_trai
 from snncc.training.presets import OptimiserSettings, paper_preset, with_overrides
 from snncc.training.qat import loihi_quantization, quantized_forward
 from snncc.data.split import Split, stratified_split
-from snncc.training.trainer import History, TrainSettings, accuracy, build_model, train_model
+from snncc.training.trainer import EpochRecord, History, TrainSettings, accuracy, build_model, train_model
+from snncc.verbs import VerbProgress
 
 KINDS = ("rsnn", "ffsnn", "lstm", "elstm") + BASELINE_KINDS
 N_SNN_OUTPUTS = 28   # 27 letters + 1 spare class (the authors' network)
@@ -213,10 +215,12 @@ def _metadata(req, hp, data, split, history: History, extra=None) -> dict:
     return meta
 
 
-def train(req: TrainRequest, progress=None, data: TrainingData | None = None, on_epoch=None) -> TrainResult:
+def train(req: TrainRequest, progress: VerbProgress | None = None, data: TrainingData | None = None,
+          on_epoch: Callable[[EpochRecord], None] | None = None) -> TrainResult:
     """Train a model from scratch and write its checkpoint (``data``: already loaded, else from req.data).
 
-    ``on_epoch(record)``: called after each epoch with its ``EpochRecord`` (see ``train_model``).
+    ``progress(done, total, "epoch e/E")``: after each batch; ``on_epoch(record)``: after each epoch
+    with its ``EpochRecord`` (see ``train_model``).
     """
     if req.kind not in KINDS:
         raise SnnccError(f"unknown model {req.kind!r} (known: {', '.join(KINDS)})", field="model")
@@ -242,8 +246,10 @@ def train(req: TrainRequest, progress=None, data: TrainingData | None = None, on
                        notes=[history.note] + ([] if not data.facts()["synthetic"] else ["trained on SYNTHETIC data"]))
 
 
-def finetune(req: TrainRequest, progress=None, data: TrainingData | None = None) -> TrainResult:
-    """Quantization-aware fine-tuning of a trained spiking checkpoint, on its own split."""
+def finetune(req: TrainRequest, progress: VerbProgress | None = None, data: TrainingData | None = None,
+             on_epoch: Callable[[EpochRecord], None] | None = None) -> TrainResult:
+    """Quantization-aware fine-tuning of a trained spiking checkpoint, on its own split
+    (``progress``, ``on_epoch``: as for ``train``)."""
     device = resolve_device(req.device)
     obj = load_torch_file(req.qat_from)
     if not is_checkpoint(obj):
@@ -274,7 +280,7 @@ def finetune(req: TrainRequest, progress=None, data: TrainingData | None = None)
     settings = _settings(req, hp, req.qat_epochs)
     torch.manual_seed(req.seed)
     history = train_model(model, train_set, test_set, settings, val=val_set, forward=quantized_forward, progress=progress,
-                          keep_start=True, device=device)
+                          keep_start=True, device=device, on_epoch=on_epoch)
     after = {"float_test_accuracy": accuracy(model, *test_set),
              "quantized_test_accuracy": accuracy(model, *test_set, forward=quantized_forward),
              "quantization": asdict(loihi_quantization(model))}

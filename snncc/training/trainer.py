@@ -18,6 +18,7 @@ import torch
 from torch import nn
 
 from snncc.models import LSTMClassifier, SpikingClassifier
+from snncc.verbs import VerbProgress
 from snncc.training.loss import LossParts, lstm_loss, mse_sigmoid_loss, snn_loss, spike_count_prediction
 
 Forward = Callable[[nn.Module, torch.Tensor], object]
@@ -148,7 +149,7 @@ def train_model(
     settings: TrainSettings,
     val: tuple[torch.Tensor, torch.Tensor] | None = None,
     forward: Forward = plain_forward,
-    progress=None,
+    progress: VerbProgress | None = None,
     select: str | None = None,
     keep_start: bool = False,
     device=None,
@@ -158,7 +159,8 @@ def train_model(
 
     ``select`` is "test" (default without ``val``), "val" (default with it) or "last".
     ``keep_start``: the starting weights compete as epoch 0 (fine-tuning never returns worse
-    weights, on the selection metric, than it was given). ``progress``: a ``rich.progress.Progress``.
+    weights, on the selection metric, than it was given). ``progress(done, total, "epoch e/E")``:
+    called after each batch, ``done`` counting batches over all epochs (None: silent).
     ``device``: a ``torch.device`` to train on (default: where the model is); the data stay on the
     CPU and each batch is moved to it. ``on_epoch(record)``: called after each epoch (e.g. a
     hyper-parameter search reporting intermediate values); an exception it raises stops training.
@@ -171,24 +173,18 @@ def train_model(
     history = History(selected_on=select, note=SELECTION_NOTES[select])
     optimiser = make_optimiser(model, settings)
     scheduler = make_scheduler(optimiser, settings)
-    n = x_train.shape[0]
-    task = None
-    if progress is not None:
-        progress.start()
-        task = progress.add_task("training", total=settings.epochs * max(1, -(-n // settings.batch_size)))
     try:
-        _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select,
+        _epochs(model, x_train, y_train, test, val, settings, forward, progress, optimiser, history, select,
                 keep_start, scheduler, on_epoch)
     finally:
-        if progress is not None:
-            progress.stop()
         model.to("cpu")
     return history
 
 
-def _epochs(model, x_train, y_train, test, val, settings, forward, progress, task, optimiser, history, select,
+def _epochs(model, x_train, y_train, test, val, settings, forward, progress, optimiser, history, select,
             keep_start=False, scheduler=None, on_epoch=None):
     n = x_train.shape[0]
+    total_batches, batches_done = settings.epochs * -(-n // settings.batch_size), 0
     best_metric, best_state = -1.0, None
     if keep_start and select != "last":
         test_acc = accuracy(model, test[0], test[1], forward=forward)
@@ -216,8 +212,9 @@ def _epochs(model, x_train, y_train, test, val, settings, forward, progress, tas
             correct += int((predictions_of(model, outputs) == yb).sum())
             if is_spiking(model):
                 hidden_spikes += float(outputs[1].detach().sum())
+            batches_done += 1
             if progress is not None:
-                progress.update(task, advance=1, description=f"epoch {epoch}/{settings.epochs}")
+                progress(batches_done, total_batches, f"epoch {epoch}/{settings.epochs}")
         test_acc = accuracy(model, test[0], test[1], forward=forward)
         val_acc = accuracy(model, val[0], val[1], forward=forward) if val is not None and val[0].shape[0] else None
         record = EpochRecord(epoch, total_loss / n, total_nll / n, correct / n, test_acc, val_acc,
@@ -232,11 +229,6 @@ def _epochs(model, x_train, y_train, test, val, settings, forward, progress, tas
             history.best_epoch = epoch
             history.best_test_accuracy = test_acc
             history.best_val_accuracy = val_acc
-        if progress is not None:
-            progress.console.print(
-                f"epoch {epoch}: loss {record.loss:.4f}  train {100 * record.train_accuracy:.2f} %  "
-                f"test {100 * test_acc:.2f} %" + (f"  val {100 * val_acc:.2f} %" if val_acc is not None else "")
-                + f"  ({record.seconds:.1f} s)")
         if on_epoch is not None:
             on_epoch(record)
     if best_state is not None:

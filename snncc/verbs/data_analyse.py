@@ -6,6 +6,8 @@ import os
 from dataclasses import asdict, dataclass
 from typing import Iterable
 
+from snncc.verbs import VerbProgress
+
 
 @dataclass
 class AnalysisResult:
@@ -47,11 +49,12 @@ class AnalysisResult:
 def data_analyse(src: str | os.PathLike, *, figures: str | os.PathLike | None = None,
                  thresholds: str | Iterable[float] = "1,2,5,10", svm: bool = True, pca_step: int = 6,
                  event_svm: bool = True, event_threshold: float = 1.0, event_bin: float = 5.0, seed: int = 0,
-                 jobs: int = 2, progress=None) -> AnalysisResult:
+                 jobs: int = 2, progress: VerbProgress | None = None) -> AnalysisResult:
     """Analyse ``src`` (a directory of published files; raw frames required): encoding per
     threshold, frame SVMs (``svm``), PCA-12 SVM every ``pca_step`` frames (0: none), binned-event
     SVMs (``event_svm`` at ``event_threshold`` / ``event_bin`` ms), the paper's figures; PNG figures
-    into ``figures``. ``progress``: a ``rich.progress.Progress`` (None: none)."""
+    into ``figures``. ``progress``: ``progress(done, total, phase)`` over the steps, the phase naming
+    the one running (None: none)."""
     from pathlib import Path
 
     from snncc.data.analysis_report import analyse_braille

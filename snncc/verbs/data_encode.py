@@ -6,6 +6,8 @@ import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from snncc.verbs import VerbProgress
+
 if TYPE_CHECKING:
     from snncc.data.encoding import EncodedSet
 
@@ -37,20 +39,24 @@ class EncodeResult:
 
 def data_encode(src: str | os.PathLike, *, out: str | os.PathLike, threshold: float | None = None,
                 bin_ms: float = 5.0, prefer: str = "auto", record_ms: float | None = None,
-                split_test: float | None = None, seed: int = 0, progress=None) -> EncodeResult:
+                split_test: float | None = None, seed: int = 0, progress: VerbProgress | None = None) -> EncodeResult:
     """Encode ``src`` (a directory of published files or one .pkl) into ``out`` (.npz).
 
     Events follow the authors' rule (``snncc.data.encoding``); ``bin_ms`` is ``--bin``, ``prefer``
     is ``--from`` (auto, events or raw); ``split_test`` also writes a stratified OUT_train /
-    OUT_test split seeded by ``seed``. ``progress``: a ``rich.progress.Progress`` (None: none).
+    OUT_test split seeded by ``seed``. ``progress``: ``progress(done, 2, "loading / encoding")``
+    after loading and after encoding (None: none).
     """
     from pathlib import Path
 
     from snncc.data.encoding import encode_events, write_with_split
+    from snncc.verbs import counting
 
     check_split(split_test)
-    task = None if progress is None else progress.add_task("loading / encoding", total=2)
-    tick = None if progress is None else (lambda: progress.advance(task))
+    advanced = counting(progress, 2, "loading / encoding")
+    tick = None if advanced is None else (lambda: advanced(1))
+    if progress is not None:
+        progress(0, 2, "loading / encoding")
     encoded = encode_events(Path(src), threshold, bin_ms, prefer, record_ms, progress=tick)
     if tick is not None:
         tick()

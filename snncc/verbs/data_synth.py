@@ -6,6 +6,8 @@ import os
 from dataclasses import asdict, dataclass
 from typing import Iterable
 
+from snncc.verbs import VerbProgress
+
 
 @dataclass
 class SynthResult:
@@ -35,11 +37,12 @@ class SynthResult:
 
 def data_synth(*, out: str | os.PathLike, repetitions: int = 200, seed: int = 0, release: int = 1,
                thresholds: str | Iterable[float] = "1,2,5,10", generator_version: int = 2,
-               progress=None) -> SynthResult:
+               progress: VerbProgress | None = None) -> SynthResult:
     """Generate 27 x ``repetitions`` synthetic samples into ``out`` (raw frames, one event file per
     threshold, SYNTHETIC.json); the same seed gives byte-identical files. ``release``: 1 = list of
-    dicts (Zenodo 6556273), 2 = pandas DataFrame (Zenodo 7050094). ``progress``: a
-    ``rich.progress.Progress`` to show the two steps on (None: none)."""
+    dicts (Zenodo 6556273), 2 = pandas DataFrame (Zenodo 7050094). ``progress``:
+    ``progress(done, total, phase)`` over 27 x ``repetitions`` samples ("generating frames") then
+    1 + len(thresholds) files ("encoding and writing"), one count (None: none)."""
     from pathlib import Path
 
     from snncc.data.synth_set import write_synthetic_set
@@ -51,12 +54,19 @@ def data_synth(*, out: str | os.PathLike, repetitions: int = 200, seed: int = 0,
         if value < low or (high is not None and value > high):
             raise SnnccError(f"must be >= {low}" + (f" and <= {high}" if high is not None else ""), field=name)
     ths = parse_thresholds(thresholds)
-    frames = files = None
+    samples, total = 27 * repetitions, 27 * repetitions + 1 + len(ths)
+    written = [0]
+
+    def on_frames(k: int) -> None:
+        progress(k, total, "generating frames")
+
+    def on_file() -> None:
+        written[0] += 1
+        progress(samples + written[0], total, "encoding and writing")
+
     if progress is not None:
-        frames = progress.add_task("generating frames", total=27 * repetitions)
-        files = progress.add_task("encoding and writing", total=1 + len(ths))
-    record = write_synthetic_set(
-        Path(out), repetitions, seed, release, ths, generator_version,
-        on_frames=None if progress is None else (lambda k: progress.update(frames, completed=k)),
-        on_file=None if progress is None else (lambda: progress.advance(files)))
+        progress(0, total, "generating frames")
+    record = write_synthetic_set(Path(out), repetitions, seed, release, ths, generator_version,
+                                 on_frames=None if progress is None else on_frames,
+                                 on_file=None if progress is None else on_file)
     return SynthResult(**record)

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
 if TYPE_CHECKING:
+    from snncc.hpo.progress import StudyView
     from snncc.hpo.report import HpoReport
     from snncc.hpo.space import Range
     from snncc.hpo.study import RunSummary
@@ -45,13 +46,15 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
             seed: int = 0, val_fraction: float = 0.2, select: str = "val", hidden: int | None = None,
             batch_size: int = 128, energy_samples: int = 16, emulate: int = 0, pruner: str = "median",
             startup: int = 3, preset: bool = True, storage: str | None = None, workdir: str | os.PathLike = "hpo",
-            device: str = "auto", threads: int = 1, heartbeat: int = 30, progress=None) -> HpoRunResult:
+            device: str = "auto", threads: int = 1, heartbeat: int = 30, view: StudyView | None = None) -> HpoRunResult:
     """Run or resume the search ``name`` (step 2's study is NAME-grid) in this worker (see docs/hpo.md).
 
     ``objectives``: a comma list or sequence (``pareto`` = accuracy,energy,cores); ``ranges``:
     ``KEY=LOW:HIGH`` / ``KEY=VALUE`` overrides (``--range``); ``workdir`` is ``--dir``;
-    ``storage`` an Optuna URL (default: SQLite in ``workdir``). ``progress``: a rich ``Console`` to
-    show the study's bars on (None: none). Ctrl-C re-queues the running trial and raises
+    ``storage`` an Optuna URL (default: SQLite in ``workdir``). ``view``: the search's progress
+    callbacks, a ``snncc.hpo.progress.StudyView`` (study_start, study_update, waiting,
+    trial_start, trial_epoch, trial_phase, trial_done, trial_error, close; the CLI draws them as
+    rich bars); None: silent. Ctrl-C re-queues the running trial and raises
     ``snncc.hpo.study.Interrupted``.
     """
     import torch
@@ -73,12 +76,6 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
                      batch_size=batch_size, n_hidden=hidden, energy_samples=energy_samples, emulate_samples=emulate,
                      pruner=pruner, n_startup=startup, enqueue_preset=preset, storage=storage, workdir=str(workdir),
                      device=device, heartbeat=heartbeat)
-    view = None
-    if progress is not None:
-        from snncc.hpo.progress import RichStudyView
-
-        def view(study):
-            return RichStudyView(study, progress)
     before = torch.get_num_threads()
     torch.set_num_threads(threads)
     try:

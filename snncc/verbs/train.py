@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING, Mapping, Sequence
+from typing import TYPE_CHECKING, Callable, Mapping, Sequence
+
+from snncc.verbs import VerbProgress
 
 if TYPE_CHECKING:
     from snncc.training.pipeline import TrainResult
+    from snncc.training.trainer import EpochRecord
 
 
 def _overrides(overrides: Sequence[str] | Mapping[str, object] | None) -> dict:
@@ -22,15 +25,16 @@ def train(model: str, *, data: str | os.PathLike, output: str | os.PathLike, thr
           qat_from: str | os.PathLike | None = None, qat_epochs: int = 3,
           overrides: Sequence[str] | Mapping[str, object] | None = None, params: str | os.PathLike | None = None,
           batch_size: int | None = None, lr: float | None = None, device: str = "auto", threads: int = 1,
-          progress=None) -> TrainResult:
+          progress: VerbProgress | None = None, on_epoch: Callable[[EpochRecord], None] | None = None) -> TrainResult:
     """Train ``model`` (rsnn, ffsnn, lstm, elstm, fcn, resnet, encoder, tcnn, inception) on ``data``
     (an encoded .npz or a directory of published pickles) and write the checkpoint ``output``.
 
     ``qat_from``: quantization-aware fine-tuning of that rsnn/ffsnn checkpoint instead (same split);
     ``overrides``: preset values (``--set``), ``["tau_mem=0.05"]`` or ``{"tau_mem": 0.05}``;
     ``params``: the authors' parameters file instead of the preset; ``threads``: torch CPU threads
-    during the call. ``progress``: a ``rich.progress.Progress`` the trainer starts once the data
-    are loaded (bars, and one line per epoch on its console); None: silent.
+    during the call. ``progress(done, total, "epoch e/E")``: called after each batch once the data
+    are loaded, ``done`` counting batches over all epochs; ``on_epoch(record)``: called after each
+    epoch with its ``snncc.training.trainer.EpochRecord`` (the CLI prints its line); None: silent.
     """
     import torch
 
@@ -48,6 +52,7 @@ def train(model: str, *, data: str | os.PathLike, output: str | os.PathLike, thr
     before = torch.get_num_threads()
     torch.set_num_threads(threads)
     try:
-        return finetune(req, progress) if req.qat_from else train_model(req, progress)
+        run = finetune if req.qat_from else train_model
+        return run(req, progress, on_epoch=on_epoch)
     finally:
         torch.set_num_threads(before)
