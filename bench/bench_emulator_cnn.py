@@ -92,8 +92,9 @@ def main(argv=None) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         bundle = args.bundle or str(Path(tmp) / "cnn.net")
         if args.bundle is None:
-            subprocess.run(["snncc", "compile", str(GRAPH), "--target", "loihi", "-o", bundle], check=True,
-                           capture_output=True)
+            import snncc.api as api
+
+            api.compile(GRAPH, target="loihi", output=bundle)
         kernels = {"this": None} | ({"baseline": args.baseline_rev} if args.baseline_rev else {})
         prepare = {}
         for name, rev in kernels.items():

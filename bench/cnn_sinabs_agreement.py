@@ -18,11 +18,8 @@ ONNX Runtime against the IR (output spikes, argmax).
 from __future__ import annotations
 
 import argparse
-import contextlib
-import io
 import json
 import resource
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -71,7 +68,7 @@ def main(argv=None) -> int:
 
     import onnxruntime as ort
 
-    from snncc.cli.main import run
+    import snncc.api as api
     from snncc.frontends import LoadOptions, load_model
     from snncc.ir.nodes import LIF
     from snncc.ir.simulate import simulate
@@ -89,12 +86,8 @@ def main(argv=None) -> int:
         timings = {}
         for target, dest in (("loihi", tmp / "cnn.net"), ("jetson", tmp / "jet")):
             t0 = time.perf_counter()
-            with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
-                code = run(["compile", str(args.graph), "--target", target, "-o", str(dest), "--time-steps",
-                            str(args.steps)] + (["--scale", args.scale] if target == "loihi" else []))
-            if code:
-                print(err.getvalue(), file=sys.stderr)
-                return code
+            api.compile(args.graph, target=target, output=dest, time_steps=args.steps,
+                        scale=args.scale if target == "loihi" else None)
             timings[target] = round(time.perf_counter() - t0, 1)
         out["compile_seconds"] = timings
         net = read_bundle(tmp / "cnn.net")

@@ -33,12 +33,9 @@ TARGETS = {"rsnn_th1": {"paper": 79.9, "tolerance": 5.0, "never_above": 88.0, "m
 
 def write_set(out: Path, reps: int, seed: int, version: int) -> None:
     """The synthetic set in the published layout (raw frames + th-1 events + SYNTHETIC.json)."""
-    from snncc.cli.main import run
+    import snncc.api as api
 
-    code = run(["data", "synth", "-o", str(out), "-n", str(reps), "--seed", str(seed), "--thresholds", "1",
-                "--generator-version", str(version), "--json"])
-    if code != 0:
-        raise SystemExit(f"snncc data synth failed ({code})")
+    api.data_synth(out=out, repetitions=reps, seed=seed, thresholds="1", generator_version=version)
 
 
 def train_one(kind: str, data: Path, epochs: int, seed: int, device: str, out: Path, **kw) -> dict:

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The paper's whole pipeline on the SYNTHETIC Braille set, through snncc's Python API and command line.
+"""The paper's whole pipeline on the SYNTHETIC Braille set, through snncc's Python API.
 
     python examples/braille/run_pipeline.py                # small settings: a few minutes on 2 CPU cores
     python examples/braille/run_pipeline.py --full         # the paper's settings (300 epochs: days on a CPU)
@@ -7,29 +7,26 @@
 
 Steps: generate (snncc.api.data_synth) -> encode (events th 1 at 5 ms, frames: data_encode,
 data_frames) -> train RSNN th1, LSTM, eLSTM (snncc.api.train) -> quantization-aware fine-tuning of the
-RSNN -> compile for Loihi and Jetson (snncc compile) -> measure what each target loses (snncc check)
+RSNN -> compile for Loihi and Jetson (snncc.api.compile) -> measure what each target loses (check)
 -> a results table beside the paper's numbers (results.md and results.json in the output
 directory). ``--baselines`` adds the time-series classifiers (train, compile for Jetson), time to
 classification of every model (snncc.api.analyse_ttc, ttc.png) and their batch-1 Jetson-artefact
-latency in one snncc bench run. The data, training and analysis verbs run in this process through
-``snncc.api`` (their records are the ``--json`` output of the same commands); the target verbs
-run as ``snncc`` commands.
+latency in one bench run. Every step runs in this process through ``snncc.api`` (each record is
+the ``--json`` output of the same ``snncc`` command; docs/api.md shows the pairs).
 
-A step whose snncc verb or target is not built in this version is reported as *unavailable*;
-nothing is faked. The data are synthetic, so the numbers are not the paper's and are labelled so.
+A step that fails is reported as failed with its error line, and the steps that need it as
+skipped; nothing is faked. The data are synthetic, so the numbers are not the paper's and are
+labelled so.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-
-NOT_BUILT = "not built in this version of snncc yet"
 
 PAPER = {  # real data, the paper's figures (accuracy, %)
     "rsnn_th1_pytorch": 79.90,
@@ -55,7 +52,7 @@ BASELINE_FULL = {"baseline_epochs": 300}
 class Step:
     name: str
     argv: list[str]
-    status: str = "pending"          # ok | failed | unavailable | skipped
+    status: str = "pending"          # ok | failed | skipped
     seconds: float = 0.0
     message: str = ""
     record: dict | None = None
@@ -76,29 +73,6 @@ class Pipeline:
             print(f"[skip] {step.name}: {step.message}", flush=True)
         return bool(blocked)
 
-    def snncc(self, name: str, *args: str, needs: tuple[str, ...] = ()) -> Step:
-        """Run one ``snncc`` command (``--json`` output parsed when the verb prints it)."""
-        step = Step(name, ["snncc", *args])
-        self.steps.append(step)
-        if self.skipped(step, needs):
-            return step
-        print(f"[run ] {name}: snncc {' '.join(args)}", flush=True)
-        started = time.perf_counter()
-        proc = subprocess.run([sys.executable, "-m", "snncc.cli.main", *args], capture_output=True, text=True)
-        step.seconds = round(time.perf_counter() - started, 1)
-        err_lines = [l for l in proc.stderr.strip().splitlines() if l.startswith("snncc:")]
-        if proc.returncode == 0:
-            step.status = "ok"
-            try:
-                step.record = json.loads(proc.stdout)
-            except json.JSONDecodeError:
-                step.record = None
-        else:
-            step.message = err_lines[-1] if err_lines else (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
-            step.status = "unavailable" if NOT_BUILT in step.message else "failed"
-        print(f"[{step.status:>4}] {name} ({step.seconds} s){': ' + step.message if step.message else ''}", flush=True)
-        return step
-
     def api(self, name: str, verb: str, *args, needs: tuple[str, ...] = (), **options) -> Step:
         """Call ``snncc.api.<verb>(*args, **options)`` in this process; its ``as_dict()`` is the record.
 
@@ -107,6 +81,7 @@ class Pipeline:
         """
         import snncc.api
         from snncc.errors import SnnccError
+        from snncc.records import to_jsonable
 
         def text(v) -> str:
             return f"[{', '.join(map(str, v))}]" if isinstance(v, list) else str(v)
@@ -119,11 +94,11 @@ class Pipeline:
         print(f"[run ] {name}: snncc.api.{verb}({', '.join(shown)})", flush=True)
         started = time.perf_counter()
         try:
-            step.record = getattr(snncc.api, verb)(*args, **options).as_dict()
+            step.record = to_jsonable(getattr(snncc.api, verb)(*args, **options).as_dict())
             step.status = "ok"
         except SnnccError as err:
             step.message = f"snncc: error: {err.line()}"
-            step.status = "unavailable" if NOT_BUILT in step.message else "failed"
+            step.status = "failed"
         except Exception as ex:  # reported in the table, never hidden
             step.status, step.message = "failed", f"{type(ex).__name__}: {ex}"
         step.seconds = round(time.perf_counter() - started, 1)
@@ -171,8 +146,8 @@ def baselines(p: Pipeline, out: Path, frames: Path, events: Path, seed: str) -> 
     for kind in PAPER_BASELINES:
         p.api(f"train {kind}", "train", kind, data=frames, epochs=p.settings["baseline_epochs"],
               output=out / f"{kind}.pt", seed=int(seed), needs=("encode frames",))
-        p.snncc(f"compile {kind} Jetson", "compile", str(out / f"{kind}.pt"), "--target", "jetson",
-                "-o", str(out / f"{kind}_jetson"), "--json", needs=(f"train {kind}",))
+        p.api(f"compile {kind} Jetson", "compile", out / f"{kind}.pt", target="jetson", output=out / f"{kind}_jetson",
+              needs=(f"train {kind}",))
     trained = [(name, ckpt) for name, ckpt in (("train RSNN th1", "rsnn_th1.pt"), ("train LSTM", "lstm.pt"),
                                                ("train eLSTM", "elstm.pt"))
                + tuple((f"train {k}", f"{k}.pt") for k in PAPER_BASELINES) if p.status(name) == "ok"]
@@ -183,9 +158,8 @@ def baselines(p: Pipeline, out: Path, frames: Path, events: Path, seed: str) -> 
                                               ("compile LSTM Jetson", "lstm_jetson"))
                 + tuple((f"compile {k} Jetson", f"{k}_jetson") for k in PAPER_BASELINES) if p.status(name) == "ok"]
     if compiled:
-        p.snncc("bench Jetson artefacts", "bench", *[str(out / a) for _, a in compiled], "--samples", "32",
-                "--repeats", "3", "--warmup-passes", "1", "--timed-passes", "2", "--json",
-                needs=tuple(n for n, _ in compiled))
+        p.api("bench Jetson artefacts", "bench", [out / a for _, a in compiled], samples=32, repeats=3,
+              warmup_passes=1, timed_passes=2, needs=tuple(n for n, _ in compiled))
 
 
 def pct(x) -> str:
@@ -328,14 +302,14 @@ def main(argv: list[str] | None = None) -> int:
     p.api("train eLSTM", "train", "elstm", threshold=1, data=events, epochs=s["elstm_epochs"], output=out / "elstm.pt",
           seed=args.seed, needs=("encode events",))
 
-    p.snncc("compile RSNN Loihi", "compile", str(out / "rsnn_th1.pt"), "--target", "loihi", "--scale", "global",
-            "-o", str(out / "rsnn_th1.net"), "--json", needs=("train RSNN th1",))
-    p.snncc("compile RSNN QAT Loihi", "compile", str(out / "rsnn_th1_qat.pt"), "--target", "loihi", "--scale", "global",
-            "-o", str(out / "rsnn_th1_qat.net"), "--json", needs=("train RSNN QAT",))
-    p.snncc("compile RSNN Jetson", "compile", str(out / "rsnn_th1.pt"), "--target", "jetson",
-            "-o", str(out / "rsnn_th1_jetson"), "--json", needs=("train RSNN th1",))
-    p.snncc("compile LSTM Jetson", "compile", str(out / "lstm.pt"), "--target", "jetson",
-            "-o", str(out / "lstm_jetson"), "--json", needs=("train LSTM",))
+    for name, model, target, artefact, needs in (
+        ("compile RSNN Loihi", "rsnn_th1.pt", "loihi", "rsnn_th1.net", "train RSNN th1"),
+        ("compile RSNN QAT Loihi", "rsnn_th1_qat.pt", "loihi", "rsnn_th1_qat.net", "train RSNN QAT"),
+        ("compile RSNN Jetson", "rsnn_th1.pt", "jetson", "rsnn_th1_jetson", "train RSNN th1"),
+        ("compile LSTM Jetson", "lstm.pt", "jetson", "lstm_jetson", "train LSTM"),
+    ):
+        scale = {"scale": "global"} if target == "loihi" else {}
+        p.api(name, "compile", out / model, target=target, output=out / artefact, **scale, needs=(needs,))
 
     # snncc check on each model's own test split (the samples it was not trained on)
     for ckpt, encoded, name, needs in ((out / "rsnn_th1.pt", events, "rsnn_test.npz", "train RSNN th1"),
@@ -347,9 +321,8 @@ def main(argv: list[str] | None = None) -> int:
         ("check RSNN Jetson", "rsnn_th1.pt", "jetson", "rsnn_test.npz", "compile RSNN Jetson"),
         ("check LSTM Jetson", "lstm.pt", "jetson", "lstm_test.npz", "compile LSTM Jetson"),
     ):
-        extra = ["--scale", "global"] if target == "loihi" else []
-        p.snncc(name, "check", str(out / model), "--target", target, "--data", str(out / test), *extra, "--json",
-                needs=(needs, f"test split {test}"))
+        scale = {"scale": "global"} if target == "loihi" else {}
+        p.api(name, "check", out / model, target=target, data=out / test, **scale, needs=(needs, f"test split {test}"))
 
     if args.baselines:
         baselines(p, out, frames, events, seed)

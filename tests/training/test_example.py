@@ -18,19 +18,20 @@ def _module():
 def test_failed_steps_are_reported_and_dependants_skipped(tmp_path):
     rp = _module()
     p = rp.Pipeline(tmp_path, {"rsnn_epochs": 1}, 0)
-    failed = p.snncc("train RSNN th1", "train", "rsnn", "--data", str(tmp_path / "missing.npz"), "-o", str(tmp_path / "m.pt"))
-    assert failed.status == "failed" and "missing.npz" in failed.message
-    skipped = p.snncc("compile RSNN Loihi", "compile", str(tmp_path / "m.pt"), "--target", "loihi", "-o", "x",
-                      needs=("train RSNN th1",))
+    failed = p.api("train RSNN th1", "train", "rsnn", data=tmp_path / "missing.npz", output=tmp_path / "m.pt")
+    assert failed.status == "failed" and failed.message.startswith("snncc: error: ") and "missing.npz" in failed.message
+    skipped = p.api("compile RSNN Loihi", "compile", tmp_path / "m.pt", target="loihi", output=tmp_path / "x.net",
+                    needs=("train RSNN th1",))
     assert skipped.status == "skipped" and "train RSNN th1" in skipped.message
-    p.steps.append(rp.Step("check RSNN Loihi", [], "unavailable", 0.0, f"snncc: error: x: {rp.NOT_BUILT}"))
+    assert not (tmp_path / "x.net").exists()
+    p.steps.append(rp.Step("check RSNN Loihi", [], "failed", 0.0, "snncc: error: x: no such file"))
     res = rp.results(p)
     assert "SYNTHETIC" in res["data"] and "TEST epoch" in res["selection"]
     rows = {r["model"]: r for r in res["rows"]}
     assert rows["RSNN th1, float (PyTorch, authors' order)"] == {
         "model": "RSNN th1, float (PyTorch, authors' order)", "ours_percent": None, "paper_percent": 79.90}
     text = rp.markdown(res)
-    assert "| train RSNN th1 | failed |" in text and "| check RSNN Loihi | unavailable |" in text
+    assert "| train RSNN th1 | failed |" in text and "| check RSNN Loihi | failed |" in text
     assert "78.32 %" in text and "96.92 %" in text and "82.31 %" in text
 
 
