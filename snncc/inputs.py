@@ -70,35 +70,23 @@ def check_dataset(inputs, labels, graph, *, source: str | None = None) -> None:
 
 
 # -- input files and seeded random inputs ----------------------------------------------------------
-def load_spike_input(path, field: str = "--input") -> np.ndarray:
-    """One .npy array (no pickles; an .npz archive is refused), as ``snncc emulate --input`` reads it."""
+def load_array(path, field: str = "--input", *, npz_inputs: bool = True) -> np.ndarray:
+    """A .npy array (no pickles); a .npz data set gives its ``inputs`` array (``snncc run --input``),
+    or is refused with ``npz_inputs=False`` (``snncc emulate --input`` takes one .npy array)."""
     from pathlib import Path
 
     path = Path(path)
     if not path.is_file():
         raise SnnccError("file does not exist", file=str(path), field=field)
     try:
-        x = np.load(path, allow_pickle=False)
-    except Exception as ex:
-        raise SnnccError(f"not a .npy array ({type(ex).__name__})", file=str(path), field=field) from None
-    if not isinstance(x, np.ndarray):
-        raise SnnccError("expected one .npy array, got an .npz archive", file=str(path), field=field)
-    return x
-
-
-def load_array(path, field: str = "--input") -> np.ndarray:
-    """A .npy array (no pickles), or the ``inputs`` of a .npz data set (``snncc run --input``)."""
-    from pathlib import Path
-
-    path = Path(path)
-    if not path.is_file():
-        raise SnnccError("file not found", file=str(path), field=field)
-    try:
         obj = np.load(path, allow_pickle=False)
     except (ValueError, OSError, EOFError) as ex:
-        raise SnnccError(f"not a readable .npy/.npz array ({type(ex).__name__})", file=str(path), field=field) from None
+        kinds = ".npy/.npz" if npz_inputs else ".npy"
+        raise SnnccError(f"not a readable {kinds} array ({type(ex).__name__})", file=str(path), field=field) from None
     if isinstance(obj, np.lib.npyio.NpzFile):
         with obj:
+            if not npz_inputs:
+                raise SnnccError("expected one .npy array, got an .npz archive", file=str(path), field=field)
             if "inputs" not in obj.files:
                 raise SnnccError(f"a .npz input needs an 'inputs' array (has {sorted(obj.files)})", file=str(path),
                                  field="inputs")

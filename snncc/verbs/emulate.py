@@ -57,13 +57,13 @@ def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path,
     """Emulate ``bundle`` on the spikes in ``input`` (.npy) and write the results to ``output`` (.npz,
     atomically). ``stream``: one continuous run with ``gap`` blank steps (default 100) between samples."""
     from snncc.atomic import write_npz_atomic
-    from snncc.inputs import load_spike_input
+    from snncc.inputs import load_array
     from snncc.targets import capability, get_target
 
     if record not in ("outputs", "all"):
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
     emulate = capability(get_target(target), "emulate")
-    x = load_spike_input(input)
+    x = load_array(input, npz_inputs=False)
     total = int(x.shape[0]) if x.ndim == 3 else 1
     emulation = emulate(Path(bundle), x, record=record, stream=stream, gap=gap, source=str(input),
                         progress=counting(progress, total, "emulating"))
