@@ -13,8 +13,8 @@ dataclass derived from ``TargetOptions``), and offers any of these capabilities,
     estimate(source, inputs, *, note, progress)                -> Record     (snncc report --energy)
     bench(artefacts, *, data, samples, ..., progress)          -> Record     (snncc bench)
 
-``progress`` is ``progress(n)`` (n more samples done), except for ``bench``: ``progress(phase,
-done, total)`` (the protocol has phases: warm-up, timing).
+``progress`` is ``progress(n)`` (n more samples done), except for ``bench``: ``progress(done,
+total, phase)``, as the verbs report (the protocol has phases: warm-up, timing).
 
 A third party implements only the capabilities it has; ``capability(target, "check")`` returns
 the bound method or refuses in one line. Options are settings only (what the user chose); runtime

@@ -70,10 +70,9 @@ def bench_artefacts(artefacts: str | Path | list[str | Path], *, target: str = "
         if value < 1:
             raise SnnccError("must be >= 1 (warm-up passes >= 0)", field=name)
     bench = capability(get_target(target), "bench")
-    report = None if progress is None else (lambda phase, done, total: progress(done, total, phase))
     record = bench(paths, data=None if data is None else Path(data), samples=samples, power=power,
                    power_root=Path(power_root), rail=rail, repeats=repeats, warmup_passes=warmup_passes,
-                   timed_passes=timed_passes, stream=stream, backend=backend, progress=report)
+                   timed_passes=timed_passes, stream=stream, backend=backend, progress=progress)
     if len(paths) > 1:
         return ComparisonResult(record)
     return BenchResult(str(paths[0]), repeats, record)

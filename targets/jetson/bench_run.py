@@ -27,8 +27,8 @@ def _data_label(data: Path, meta: dict, n: int) -> str:
 def bench_one(artefact: Path, *, data: Path | None = None, samples: int = 64, power: bool = False,
               power_root: Path = Path("/"), rail: str = "VDD_IN", repeats: int = 3, warmup_passes: int = 6,
               timed_passes: int = 6, stream: bool = False, backend: str = "auto",
-              progress: Callable[[str, int, int], None] | None = None):
-    """``BenchRecord`` of one artefact; ``progress(phase, samples_done, total)`` as the protocol goes."""
+              progress: Callable[[int, int, str], None] | None = None):
+    """``BenchRecord`` of one artefact; ``progress(samples_done, total, phase)`` as the protocol goes."""
     from snncc.targets.jetson.benchmark import run_protocol
     from snncc.targets.jetson.power import PowerSampler
     from snncc.targets.jetson.run_artefact import open_runner
@@ -52,7 +52,7 @@ def bench_one(artefact: Path, *, data: Path | None = None, samples: int = 64, po
     def tick(phase: str, k: int) -> None:
         done[0] += k
         if progress is not None:
-            progress(phase, done[0], total)
+            progress(done[0], total, phase)
 
     try:
         record = run_protocol(runner, inputs, labels, data_label=label, warmup_passes=warmup_passes,
