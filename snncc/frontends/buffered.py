@@ -28,4 +28,7 @@ def compile_buffered(path: str | Path, target: str, options: dict):
     if target != "jetson":
         raise SnnccError(f"a {kind} (convolutional, buffered) has no IR graph and compiles only with --target jetson",
                          file=str(path), field="--target")
-    return lower_checkpoint(path, obj, options)
+    from snncc.targets import get_target, target_options
+
+    typed = target_options(get_target("jetson"), options)   # refuses an option Jetson does not take
+    return lower_checkpoint(path, obj, typed.as_dict())

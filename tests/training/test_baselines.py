@@ -122,6 +122,9 @@ def test_bad_records_and_kinds_give_one_line(frames_set, tmp_path, capsys):
         assert err.count("\n") == 1 and f"architecture.{key}" in err
     assert run(["compile", str(ckpt), "--target", "loihi", "-o", str(tmp_path / "x.net")]) == 2
     assert "only with --target jetson" in capsys.readouterr().err
+    assert run(["compile", str(ckpt), "--target", "jetson", "--scale", "global", "-o", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--scale: does not apply to --target jetson" in err
     assert not (tmp_path / "out").exists() and not (tmp_path / "x.net").exists()
 
 
