@@ -25,9 +25,11 @@ difficulty a real recording has. Per repetition (trial) ``r``:
 * **Taxel gain and saturation.** Per taxel (a sensor property, fixed per seed) gain
   ``exp(N(0, taxel_gain_sigma))`` and saturation ``saturation * exp(N(0, saturation_sigma))``; per
   trial a small gain jitter ``exp(N(0, trial_gain_sigma))``. Load = ``S_i (1 - exp(-p / S_i))``,
-  times ``exp(j_r N(0, 1))`` per frame and taxel, ``j_r = load_jitter exp(N(0,
-  load_jitter_level_sigma))`` (micro-slips of the loaded fabric: a fluctuation proportional to the
-  load, so only pressed taxels flicker; its strength varies from trial to trial).
+  times ``exp(j_ri N(0, 1))`` per frame and taxel, ``j_ri = load_jitter exp(N(0,
+  load_jitter_level_sigma)) exp(N(0, load_jitter_taxel_sigma))`` (micro-slips of the loaded fabric:
+  a fluctuation proportional to the load, so only pressed taxels flicker; its strength varies from
+  trial to trial and, with how the fabric sits on each taxel, from taxel to taxel: a pressed taxel's
+  events mark *when* it is loaded, while its event total varies independently of the letter).
 * **Sensor.** Rest offset per taxel ``U(0, offset_max)`` + per-trial jitter, linear drift
   ``N(0, drift_sigma)`` counts/s, a slow AR(1) fluctuation (``wobble_sigma``, ``wobble_rho``: fabric
   creep, arm vibration) and white noise, both scaled per trial by ``exp(N(0, noise_level_sigma))``
@@ -75,9 +77,9 @@ class SynthParamsV2:
     yaw_sigma: float = 4.0
     tilt_sigma: float = 0.04
     speed_sigma: float = 0.12
-    onset_sigma: float = 0.085
-    stick_min: float = 0.95
-    stick_max: float = 1.0
+    onset_sigma: float = 0.1
+    stick_min: float = 0.6
+    stick_max: float = 0.9
     slip_min: float = 2.5
     slip_max: float = 5.0
     p_slip: float = 0.03
@@ -89,12 +91,13 @@ class SynthParamsV2:
     offset_max: float = 5.0
     offset_jitter: float = 0.5
     drift_sigma: float = 1.0
-    noise_sigma: float = 0.15
-    wobble_sigma: float = 0.3
+    noise_sigma: float = 0.05
+    wobble_sigma: float = 0.1
     wobble_rho: float = 0.6
     noise_level_sigma: float = 0.2
-    load_jitter: float = 0.06  # relative, per frame and taxel: micro-slips of the loaded fabric
-    load_jitter_level_sigma: float = 0.8  # log-normal per trial factor on load_jitter
+    load_jitter: float = 0.055  # relative, per frame and taxel: micro-slips of the loaded fabric
+    load_jitter_level_sigma: float = 0.4  # log-normal per trial factor on load_jitter
+    load_jitter_taxel_sigma: float = 0.8  # log-normal per trial and taxel factor on load_jitter
 
 
 DEFAULT_PARAMS_V2 = SynthParamsV2()
@@ -184,6 +187,8 @@ def generate_v2(
             lj = p.load_jitter
             if p.load_jitter_level_sigma > 0:
                 lj = lj * np.exp(rng.normal(0.0, p.load_jitter_level_sigma, size=(r, 1, 1)))
+            if p.load_jitter_taxel_sigma > 0:
+                lj = lj * np.exp(rng.normal(0.0, p.load_jitter_taxel_sigma, size=(r, 1, 12)))
             load *= np.exp(lj * rng.normal(0.0, 1.0, size=load.shape))
         signal = offset + drift + load + noise + wobble
         frames[label * r:(label + 1) * r] = np.clip(np.rint(255.0 - signal), 0, 255).astype(np.uint8)
