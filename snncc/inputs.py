@@ -73,6 +73,7 @@ def check_dataset(inputs, labels, graph, *, source: str | None = None) -> None:
 def load_array(path, field: str = "--input", *, npz_inputs: bool = True) -> np.ndarray:
     """A .npy array (no pickles); a .npz data set gives its ``inputs`` array (``snncc run --input``),
     or is refused with ``npz_inputs=False`` (``snncc emulate --input`` takes one .npy array)."""
+    import zipfile
     from pathlib import Path
 
     path = Path(path)
@@ -80,7 +81,7 @@ def load_array(path, field: str = "--input", *, npz_inputs: bool = True) -> np.n
         raise SnnccError("file does not exist", file=str(path), field=field)
     try:
         obj = np.load(path, allow_pickle=False)
-    except (ValueError, OSError, EOFError) as ex:
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as ex:   # not .npy / a broken .npz
         kinds = ".npy/.npz" if npz_inputs else ".npy"
         raise SnnccError(f"not a readable {kinds} array ({type(ex).__name__})", file=str(path), field=field) from None
     if isinstance(obj, np.lib.npyio.NpzFile):

@@ -11,22 +11,13 @@ from snncc.errors import SnnccError
 from snncc.verbs import VerbProgress, counting
 
 
-def _load_npy(path: Path) -> np.ndarray:
-    if not path.is_file():
-        raise SnnccError("file does not exist", file=str(path))
-    try:
-        return np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as ex:
-        raise SnnccError(f"not a readable .npy array ({type(ex).__name__})", file=str(path))
-
-
 def report_energy(bundle: str | Path, *, target: str = "loihi", energy: bool = False, data: str | Path | None = None,
                   input: str | Path | None = None, limit: int | None = None, samples: int | None = None,
                   rate: float | None = None, seed: int | None = None, progress: VerbProgress | None = None):
     """The target's energy report (``as_dict``, ``render_text``) for ``bundle``. Inputs: ``data`` (a data
     set .npz), ``input`` (a spike .npy), or ``samples`` seeded random samples (default 8) with spike
     probability ``rate`` (default 0.05) per channel and step, ``seed`` (default 0)."""
-    from snncc.inputs import RandomSpikes
+    from snncc.inputs import RandomSpikes, load_array
     from snncc.targets import capability, get_target
 
     if not energy:
@@ -47,7 +38,7 @@ def report_energy(bundle: str | Path, *, target: str = "loihi", energy: bool = F
         x, source, note = load_dataset(data)[0], str(data), f"data set {data.name}"
     elif input is not None:
         input = Path(input)
-        x, source, note = _load_npy(input), str(input), f"input file {input.name}"
+        x, source, note = load_array(input, npz_inputs=False), str(input), f"input file {input.name}"
     else:
         x, source, note = RandomSpikes(8 if samples is None else samples, 0.05 if rate is None else rate,
                                        0 if seed is None else seed), None, ""

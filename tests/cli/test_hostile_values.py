@@ -188,6 +188,17 @@ def test_emulate_and_run_share_input_rules(files, tmp_path, capsys, name, needle
     refused(capsys, ["run", files / "jet", "-i", x, "--stream", "-o", out], needle=needle, out=out, inputs=[x])
 
 
+def test_broken_archive_input_is_one_line_everywhere(files, tmp_path, capsys):
+    """A file that starts like a zip archive but is not one (numpy raises BadZipFile)."""
+    bad = tmp_path / "bad.npy"
+    bad.write_bytes(b"PK\x03\x04" + b"not a zip archive" * 4)
+    out = tmp_path / "o.npz"
+    refused(capsys, ["emulate", files / "m.net", "-i", bad, "-o", out], needle="BadZipFile", out=out, inputs=[bad])
+    refused(capsys, ["run", files / "jet", "-i", bad, "-o", out], needle="BadZipFile", out=out, inputs=[bad])
+    refused(capsys, ["report", files / "m.net", "--energy", "--input", bad], needle="BadZipFile", inputs=[bad])
+    refused(capsys, ["check", files / "m.pt", "--data", bad], needle="BadZipFile", inputs=[bad])
+
+
 def test_stream_gap_bounded(files, tmp_path, capsys):
     out = tmp_path / "o.npz"
     args = ["emulate", files / "m.net", "-i", files / "x.npy", "-o", out]
