@@ -14,10 +14,8 @@ unrolled sequence model; default recording_length_s / dt from the graph's metada
 
 from __future__ import annotations
 
-import hashlib
-import os
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +28,7 @@ from snncc.ir.timebase import recording_steps
 from snncc.targets.base import JetsonOptions, Progress, TargetOptions, target_options
 from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
 from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
-from snncc.targets.jetson.manifest import build_manifest, manifest_bytes, write_artefact
+from snncc.targets.jetson.manifest import ArtefactFiles, build_manifest, manifest_bytes
 from snncc.targets.jetson.plan import GraphPlan, plan_graph
 from snncc.targets.jetson.recipe import build_engine_script
 from snncc.targets.jetson.validate import validate_export
@@ -67,27 +65,13 @@ def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> int:
     return steps
 
 
-@dataclass
-class JetsonArtefact:
+class JetsonArtefact(ArtefactFiles):
     """The artefact's files (bytes, in write order) and its manifest."""
 
-    files: dict[str, bytes]
-    manifest: dict
-    notes: list[str] = field(default_factory=list)
-
-    def write(self, path: str | os.PathLike) -> None:
-        write_artefact(path, self.files)
-
     def summary(self) -> dict[str, Any]:
-        m = self.manifest
-        v = m["validation"]
+        v = self.manifest["validation"]
         return {
-            "model": m["model"],
-            "files": {n: {"bytes": len(d), "sha256": hashlib.sha256(d).hexdigest()} for n, d in self.files.items()},
-            "jetpack": m["jetpack"], "opset": m["opset"], "tensorrt": m["tensorrt"],
-            "time_steps": m["time_steps"], "time_axis": m["time_axis"], "dt": m["dt"],
-            "input": m["input"],
-            "variants": [{k: var[k] for k in ("name", "file", "inputs", "outputs")} for var in m["variants"]],
+            **self.file_summary(),
             "validation": {
                 "reference": v["reference"],
                 "sequence": {k: x for k, x in v["sequence"].items() if k != "operators"},

@@ -13,9 +13,7 @@ build_engine.sh, run.py.
 
 from __future__ import annotations
 
-import hashlib
 import os
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +27,7 @@ from snncc.frontends.checkpoint import is_checkpoint, model_metadata, module_fro
 from snncc.frontends.torchfile import load_torch_file
 from snncc.models.baselines import BASELINE_KINDS, BufferedClassifier
 from snncc.targets.jetson.export import _export, opset_for_jetpack
-from snncc.targets.jetson.manifest import FORMAT, FORMAT_VERSION, manifest_bytes, write_artefact
+from snncc.targets.jetson.manifest import FORMAT, FORMAT_VERSION, ArtefactFiles, manifest_bytes
 from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK, build_engine_script
 from snncc.targets.jetson.validate import VALUE_TOLERANCE, check_structure, session
 from snncc.threads import one_thread
@@ -118,23 +116,13 @@ def build_buffered_manifest(module: BufferedClassifier, meta: dict, opset: int, 
     }
 
 
-@dataclass
-class BufferedArtefact:
-    files: dict[str, bytes]
-    manifest: dict
-    notes: list[str] = field(default_factory=list)
-
-    def write(self, path: str | os.PathLike) -> None:
-        write_artefact(path, self.files)
+class BufferedArtefact(ArtefactFiles):
+    """A buffered classifier's artefact (model.onnx only: no step model)."""
 
     def summary(self) -> dict[str, Any]:
-        m = self.manifest
-        return {"model": m["model"],
-                "files": {n: {"bytes": len(d), "sha256": hashlib.sha256(d).hexdigest()} for n, d in self.files.items()},
-                "jetpack": m["jetpack"], "opset": m["opset"], "tensorrt": m["tensorrt"], "time_steps": m["time_steps"],
-                "time_axis": m["time_axis"], "dt": m["dt"], "input": m["input"],
-                "variants": [{k: v[k] for k in ("name", "file", "inputs", "outputs")} for v in m["variants"]],
-                "validation": {k: v for k, v in m["validation"].items() if k != "operators"}, "notes": self.notes}
+        return {**self.file_summary(),
+                "validation": {k: v for k, v in self.manifest["validation"].items() if k != "operators"},
+                "notes": self.notes}
 
     def render_text(self, console) -> None:
         m, v = self.manifest, self.manifest["validation"]

@@ -8,7 +8,11 @@ snncc version and the validation figures.
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+from dataclasses import dataclass, field
+from typing import Any
 
 import snncc
 from snncc.ir.nodes import LIF
@@ -147,3 +151,28 @@ def replace_refusal(directory) -> str | None:
     if foreign:
         return f"it holds files snncc did not write ({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''})"
     return None
+
+
+@dataclass
+class ArtefactFiles:
+    """A Jetson artefact: its files (bytes, in write order), manifest and notes; both artefact kinds
+    (unrolled SNN/LSTM graphs, buffered classifiers) write and summarise their files this way."""
+
+    files: dict[str, bytes]
+    manifest: dict
+    notes: list[str] = field(default_factory=list)
+
+    def write(self, path: str | os.PathLike) -> None:
+        write_artefact(path, self.files)
+
+    def file_summary(self) -> dict[str, Any]:
+        """The summary's fields both kinds share (model, file sizes and hashes, versions, interface)."""
+        m = self.manifest
+        return {
+            "model": m["model"],
+            "files": {n: {"bytes": len(d), "sha256": hashlib.sha256(d).hexdigest()} for n, d in self.files.items()},
+            "jetpack": m["jetpack"], "opset": m["opset"], "tensorrt": m["tensorrt"],
+            "time_steps": m["time_steps"], "time_axis": m["time_axis"], "dt": m["dt"],
+            "input": m["input"],
+            "variants": [{k: var[k] for k in ("name", "file", "inputs", "outputs")} for var in m["variants"]],
+        }
