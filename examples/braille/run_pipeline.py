@@ -63,6 +63,7 @@ class Pipeline:
     out: Path
     settings: dict
     seed: int
+    device: str = "auto"       # where every training step runs: auto (CUDA when available) | cpu | cuda[:N]
     steps: list[Step] = field(default_factory=list)
 
     def skipped(self, step: Step, needs: tuple[str, ...]) -> bool:
@@ -145,7 +146,7 @@ def baselines(p: Pipeline, out: Path, frames: Path, events: Path, seed: str) -> 
     """Train and compile the time-series classifiers; TTC of every trained model; one latency run."""
     for kind in PAPER_BASELINES:
         p.api(f"train {kind}", "train", kind, data=frames, epochs=p.settings["baseline_epochs"],
-              output=out / f"{kind}.pt", seed=int(seed), needs=("encode frames",))
+              output=out / f"{kind}.pt", seed=int(seed), device=p.device, needs=("encode frames",))
         p.api(f"compile {kind} Jetson", "compile", out / f"{kind}.pt", target="jetson", output=out / f"{kind}_jetson",
               needs=(f"train {kind}",))
     trained = [(name, ckpt) for name, ckpt in (("train RSNN th1", "rsnn_th1.pt"), ("train LSTM", "lstm.pt"),
@@ -213,6 +214,7 @@ def results(p: Pipeline) -> dict:
         "learning": learning(p.record("train RSNN th1"), p.settings),
         "data": "SYNTHETIC Braille set (snncc data synth), NOT the paper's recordings: compare trends, not values",
         "settings": p.settings,
+        "training_device": trained_on(p),
         "selection": "training accuracies are of the best TEST epoch, as the authors selected (optimistic)",
         "rows": rows,
         "steps": [asdict(s) | {"record": None} for s in p.steps],
@@ -220,6 +222,13 @@ def results(p: Pipeline) -> dict:
 
 
 CHANCE_PERCENT = 100.0 / 27
+
+
+def trained_on(p: Pipeline) -> str:
+    """Where the training steps ran (each train record says), else what was asked for."""
+    ran = sorted({r["device"] for s in p.steps if s.name.startswith("train ") and (r := p.record(s.name))
+                  and r.get("device")})
+    return ", ".join(ran) if ran else f"{p.device} (asked; no training step ran)"
 
 
 def learning(record: dict | None, settings: dict) -> dict:
@@ -238,7 +247,7 @@ def learning(record: dict | None, settings: dict) -> dict:
 
 def markdown(res: dict) -> str:
     lines = ["# Braille pipeline results (SYNTHETIC data)", "", f"> {res['data']}.", f"> {res['selection']}.", "",
-             f"Settings: {json.dumps(res['settings'])}", "",
+             f"Settings: {json.dumps(res['settings'])}; trained on: {res.get('training_device', '?')}", "",
              f"Small-run check: {res.get('learning', {}).get('statement', '')}", "",
              "| model | this run (synthetic) | paper (real data) |", "|---|---|---|"]
     for r in res["rows"]:
@@ -272,6 +281,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--baselines", action="store_true",
                     help="also train and compile FCN, ResNet, Encoder, TCNN, Inception; TTC of every model; latency")
+    ap.add_argument("--device", default="auto",
+                    help="where training runs: auto (CUDA when available, else the CPU), cpu, cuda or cuda:N")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=N",
                     help=f"override one setting ({', '.join(SMALL)}), e.g. --set rsnn_epochs=5")
     args = ap.parse_args(argv)
@@ -285,7 +296,7 @@ def main(argv: list[str] | None = None) -> int:
         settings[key] = int(value)
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
-    p = Pipeline(out, settings, args.seed)
+    p = Pipeline(out, settings, args.seed, device=args.device)
     data, events, frames = out / "data", out / "events_th1.npz", out / "frames.npz"
     seed = str(args.seed)
     s = settings
@@ -294,13 +305,13 @@ def main(argv: list[str] | None = None) -> int:
     p.api("encode events", "data_encode", data, threshold=1, bin_ms=5, out=events, needs=("generate",))
     p.api("encode frames", "data_frames", data, out=frames, needs=("generate",))
     p.api("train RSNN th1", "train", "rsnn", threshold=1, data=events, epochs=s["rsnn_epochs"],
-          output=out / "rsnn_th1.pt", seed=args.seed, needs=("encode events",))
+          output=out / "rsnn_th1.pt", seed=args.seed, device=p.device, needs=("encode events",))
     p.api("train RSNN QAT", "train", "rsnn", data=events, qat_from=out / "rsnn_th1.pt", qat_epochs=s["qat_epochs"],
-          output=out / "rsnn_th1_qat.pt", seed=args.seed, needs=("train RSNN th1",))
+          output=out / "rsnn_th1_qat.pt", seed=args.seed, device=p.device, needs=("train RSNN th1",))
     p.api("train LSTM", "train", "lstm", data=frames, epochs=s["lstm_epochs"], output=out / "lstm.pt", seed=args.seed,
-          needs=("encode frames",))
+          device=p.device, needs=("encode frames",))
     p.api("train eLSTM", "train", "elstm", threshold=1, data=events, epochs=s["elstm_epochs"], output=out / "elstm.pt",
-          seed=args.seed, needs=("encode events",))
+          seed=args.seed, device=p.device, needs=("encode events",))
 
     for name, model, target, artefact, needs in (
         ("compile RSNN Loihi", "rsnn_th1.pt", "loihi", "rsnn_th1.net", "train RSNN th1"),

@@ -64,6 +64,7 @@ class TrainResult:
     epochs: list
     quantization: dict | None = None
     notes: list = field(default_factory=list)
+    device: str = "cpu"        # where the epochs ran (the checkpoint itself is always saved on the CPU)
 
     def as_dict(self) -> dict:
         """What ``snncc train --json`` prints."""
@@ -78,10 +79,11 @@ class TrainResult:
                       f"{d['samples']} samples of {d['encoding']} ({d['steps']} steps x "
                       f"{d['channels']} channels){' -- SYNTHETIC data' if d['synthetic'] else ''}")
         console.print(f"split (seed {s['seed']}): train {s['train']}, val {s['val']}, test {s['test']}")
-        console.print(f"epochs run: {h['epochs_run']}; best epoch {h['best_epoch']}: test accuracy "
-                      f"{100 * h['test_accuracy']:.2f} %" + (f", validation {100 * h['val_accuracy']:.2f} %"
-                                                             if h['val_accuracy'] is not None else ""))
-        console.print(f"note: {h['note']}")
+        console.print(f"epochs run: {h['epochs_run']} on {self.device} ({h['seconds']:.1f} s); best epoch "
+                      f"{h['best_epoch']}: test accuracy {100 * h['test_accuracy']:.2f} %"
+                      + (f", validation {100 * h['val_accuracy']:.2f} %" if h['val_accuracy'] is not None else ""))
+        for note in [h["note"]] + [n for n in self.notes if n != h["note"] and "SYNTHETIC" not in n]:
+            console.print(f"note: {note}")
         if self.quantization:
             q = self.quantization
             console.print(f"quantization-aware fine-tuning ({q['epochs']} epochs): float "
@@ -243,7 +245,9 @@ def train(req: TrainRequest, progress: VerbProgress | None = None, data: Trainin
     save_checkpoint(model, req.output, meta)
     return TrainResult(req.kind, req.output, count_trainable(model), hp.as_dict(), asdict(settings), data.facts(),
                        split.summary(), history.summary(), [asdict(e) for e in history.epochs],
-                       notes=[history.note] + ([] if not data.facts()["synthetic"] else ["trained on SYNTHETIC data"]))
+                       notes=[history.note] + [n for n in (history.collapse_note(),) if n]
+                       + ([] if not data.facts()["synthetic"] else ["trained on SYNTHETIC data"]),
+                       device=str(device))
 
 
 def finetune(req: TrainRequest, progress: VerbProgress | None = None, data: TrainingData | None = None,
@@ -296,4 +300,4 @@ def finetune(req: TrainRequest, progress: VerbProgress | None = None, data: Trai
     save_checkpoint(model, req.output, meta)
     return TrainResult(req.kind, req.output, count_trainable(model), hp.as_dict(), asdict(settings), data.facts(),
                        split.summary(), history.summary(), [asdict(e) for e in history.epochs], quantization=record,
-                       notes=[history.note, "epochs selected on the fake-quantized accuracy"])
+                       notes=[history.note, "epochs selected on the fake-quantized accuracy"], device=str(device))

@@ -66,6 +66,21 @@ class History:
     best_test_accuracy: float = float("nan")
     best_val_accuracy: float | None = None
 
+    def collapse_note(self, drop: float = 0.2) -> str | None:
+        """A note when the last epoch's test accuracy fell more than ``drop`` (0..1) below the kept
+        epoch's: the checkpoint holds the kept epoch, but the training itself did not stay there."""
+        if not self.epochs or self.best_epoch < 1 or self.epochs[-1].epoch == self.best_epoch:
+            return None
+        best, last = self.epochs[self.best_epoch - 1], self.epochs[-1]
+        if not best.test_accuracy - last.test_accuracy > drop:
+            return None
+        note = (f"training fell back after epoch {best.epoch}: test accuracy {100 * best.test_accuracy:.1f} % there, "
+                f"{100 * last.test_accuracy:.1f} % at the last epoch ({last.epoch})")
+        if best.hidden_spikes_per_sample is not None and last.hidden_spikes_per_sample is not None:
+            note += (f"; hidden spikes per sample {best.hidden_spikes_per_sample:,.0f} -> "
+                     f"{last.hidden_spikes_per_sample:,.0f}")
+        return note + f"; the checkpoint holds epoch {best.epoch}"
+
     def summary(self) -> dict:
         last = self.epochs[-1] if self.epochs else None
         return {"epochs_run": len(self.epochs), "selected_on": self.selected_on, "note": self.note,

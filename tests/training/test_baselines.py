@@ -71,6 +71,7 @@ def test_train_compile_and_onnx_agree(kind, frames_set, tmp_path, capsys):
     record = json.loads(capsys.readouterr().out)
     assert record["parameters"] == COUNTS[kind][0]
     meta = torch.load(ckpt, weights_only=True)["metadata"]
+    assert record["device"] == meta["trained_on"] == "cpu"     # where it ran, said in --json and the checkpoint
     assert meta["optimiser"]["optimiser"] == "adam" and meta["optimiser"]["batch_size"] == 32
     assert run(["compile", str(ckpt), "--target", "jetson", "-o", str(art), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)

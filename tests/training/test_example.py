@@ -69,3 +69,14 @@ def test_results_state_what_the_small_rsnn_reaches(tmp_path):
     assert "5.0 % -> 9.0 % -> 14.0 %" in text and "chance 3.7 %" in text and "it is learning" in text
     step.record = {"epochs": [{"test_accuracy": 0.04}], "history": {"test_accuracy": 0.04}}
     assert "NOT clearly above chance" in rp.markdown(rp.results(p))
+
+
+def test_results_say_where_training_ran(tmp_path):
+    rp = _module()
+    p = rp.Pipeline(tmp_path, {}, 0, device="cuda")
+    assert rp.results(p)["training_device"] == "cuda (asked; no training step ran)"
+    p.steps.append(rp.Step("train RSNN th1", [], "ok", 1.0, "", {"device": "cpu", "epochs": [], "history": {"test_accuracy": 0.5}}))
+    p.steps.append(rp.Step("train LSTM", [], "ok", 1.0, "", {"device": "cuda:0", "epochs": [], "history": {"test_accuracy": 0.9}}))
+    res = rp.results(p)
+    assert res["training_device"] == "cpu, cuda:0"
+    assert "trained on: cpu, cuda:0" in rp.markdown(res)

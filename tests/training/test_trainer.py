@@ -97,3 +97,20 @@ def test_device_option_resolves_and_refuses_bad_names():
     if not torch.cuda.is_available():
         with pytest.raises(SnnccError, match="no CUDA device"):
             resolve_device("cuda:0")
+
+
+def test_a_training_that_falls_back_after_its_best_epoch_is_named():
+    from snncc.training.trainer import EpochRecord, History
+
+    def rec(epoch, test, spikes):
+        return EpochRecord(epoch, 1.0, 1.0, test, test, None, spikes, 1.0)
+
+    h = History("test", "n", epochs=[rec(1, 0.5, 3000.0), rec(2, 0.83, 2700.0), rec(3, 0.25, 8300.0)], best_epoch=2)
+    note = h.collapse_note()
+    assert note == ("training fell back after epoch 2: test accuracy 83.0 % there, 25.0 % at the last epoch (3); "
+                    "hidden spikes per sample 2,700 -> 8,300; the checkpoint holds epoch 2")
+    assert History("test", "n", epochs=h.epochs[:2], best_epoch=2).collapse_note() is None      # best is last
+    mild = History("test", "n", epochs=[rec(1, 0.83, None), rec(2, 0.70, None)], best_epoch=1)
+    assert mild.collapse_note() is None                                                          # 13 points: noise
+    lstm = History("test", "n", epochs=[rec(1, 0.9, None), rec(2, 0.1, None)], best_epoch=1)
+    assert lstm.collapse_note().endswith("(2); the checkpoint holds epoch 1")                    # no spike counts
