@@ -109,6 +109,17 @@ def main(argv=None) -> int:
     ap.add_argument("--data", type=Path, help="reuse this synthetic set (default: generate one in a temporary folder)")
     ap.add_argument("--out", type=Path, required=True, help="JSON record to write")
     a = ap.parse_args(argv)
+    from snncc.errors import SnnccError
+    from snncc.training.device import resolve_device
+
+    try:
+        resolve_device(a.device)
+    except SnnccError as ex:
+        ap.error(ex.line())
+    if a.lr is not None and not 0 < a.lr < 10:
+        ap.error(f"--lr: must be > 0 and < 10, got {a.lr}")
+    if a.data is not None and not (a.data / "SYNTHETIC.json").is_file():
+        ap.error(f"--data: {a.data}: no SYNTHETIC.json (write the set with snncc data synth -o DIR --thresholds 1)")
     import torch
 
     torch.set_num_threads(a.threads)
@@ -137,7 +148,6 @@ def main(argv=None) -> int:
         if a.lr is not None:
             final_run = f"diagnostic: learning rate {a.lr} instead of 0.0015 (NOT the paper's protocol)"
             record["lr"] = a.lr
-        rsnn = lstm = None
         for kind, key, epochs, kw in (("rsnn", "rsnn_th1", a.rsnn_epochs, {"order": "spytorch"}),
                                       ("lstm", "lstm_frames", a.lstm_epochs, {})):
             if kind in a.skip:
@@ -153,9 +163,8 @@ def main(argv=None) -> int:
 
             record[key] = train_one(kind, d, epochs, train_seed, a.device, Path(tmp) / f"{kind}.pt", on_epoch=partial,
                                     lr=a.lr, **kw)
-            rsnn, lstm = (record[key], lstm) if kind == "rsnn" else (rsnn, record[key])
     record["run"] = final_run
-    record["verdicts"] = verdicts(rsnn, lstm, full and a.lr is None)
+    record["verdicts"] = verdicts(record.get("rsnn_th1"), record.get("lstm_frames"), full and a.lr is None)
     save(record)
     print(json.dumps(record["verdicts"], indent=2))
     return 0

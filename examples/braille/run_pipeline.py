@@ -286,6 +286,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=N",
                     help=f"override one setting ({', '.join(SMALL)}), e.g. --set rsnn_epochs=5")
     args = ap.parse_args(argv)
+    from snncc.errors import SnnccError
+    from snncc.training.device import resolve_device
+
+    try:
+        resolve_device(args.device)          # a bad or absent device stops here, before any step runs
+    except SnnccError as ex:
+        ap.error(ex.line())
     settings = dict(FULL if args.full else SMALL)
     if args.baselines:
         settings.update(BASELINE_FULL if args.full else BASELINE_SMALL)

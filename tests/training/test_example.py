@@ -80,3 +80,13 @@ def test_results_say_where_training_ran(tmp_path):
     res = rp.results(p)
     assert res["training_device"] == "cpu, cuda:0"
     assert "trained on: cpu, cuda:0" in rp.markdown(res)
+
+
+def test_a_bad_device_stops_the_pipeline_before_any_step(tmp_path, capsys):
+    import pytest
+
+    rp = _module()
+    with pytest.raises(SystemExit) as ex:
+        rp.main(["--out", str(tmp_path / "run"), "--device", "tpu"])
+    assert ex.value.code == 2 and "--device: 'tpu' is not a device" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()

@@ -57,3 +57,17 @@ def test_a_reused_set_gives_the_same_figures(tiny_run, tmp_path):
     reused = json.loads(out.read_text())
     assert reused["repetitions"] == 5 and reused["seed"] == reused["train_seed"] == 0 and "lstm_frames" not in reused
     assert reused["rsnn_th1"]["test_accuracy_per_epoch_pct"] == fresh["rsnn_th1"]["test_accuracy_per_epoch_pct"]
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--device", "gpu"], "--device: 'gpu' is not a device"),
+    (["--lr", "0"], "--lr: must be > 0"),
+    (["--data", "NOWHERE"], "no SYNTHETIC.json"),
+])
+def test_bad_options_are_one_line_and_exit_2_before_anything_runs(args, says, tmp_path, capsys):
+    tf = _module()
+    out = tmp_path / "r.json"
+    argv = [a.replace("NOWHERE", str(tmp_path / "none")) for a in args]
+    with pytest.raises(SystemExit) as ex:
+        tf.main(argv + ["--out", str(out)])
+    assert ex.value.code == 2 and says in capsys.readouterr().err and not out.exists()
