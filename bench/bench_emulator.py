@@ -14,7 +14,7 @@ activity measured is printed with the figures: the event-driven kernel's cost gr
 Figures, measured in one process, side by side (each ``--repeat`` times; best and median):
   * kernel (``PreparedNetwork.run``, network prepared once) at batch B (2,048) on 1 thread and on
     all cores: samples/s; at batch 1: ms per sample;
-  * with ``--baseline-rev REV``: the kernel of that git revision (``targets/loihi/_kernel.py``)
+  * with ``--baseline-rev REV``: the kernel of that git revision (``targets/loihi/emulation/kernel.py``)
     on the same network and inputs, checked to give identical results: before vs after;
   * the float32 PyTorch IR reference (``snncc.ir.simulate``) on 1 thread and all cores, on the
     first ``--ir-samples`` (256) samples in chunks of 256 (memory): samples/s; ratio kernel / reference;
@@ -105,8 +105,8 @@ def ms_per(t: dict, samples: int) -> dict:
 
 
 def load_kernel_at(rev: str):
-    """The kernel module ``targets/loihi/_kernel.py`` as it was at git revision ``rev``."""
-    src = subprocess.run(["git", "show", f"{rev}:targets/loihi/_kernel.py"], cwd=REPO, capture_output=True,
+    """The kernel module ``targets/loihi/emulation/kernel.py`` as it was at git revision ``rev``."""
+    src = subprocess.run(["git", "show", f"{rev}:targets/loihi/emulation/kernel.py"], cwd=REPO, capture_output=True,
                          text=True, check=True).stdout
     sha = subprocess.run(["git", "rev-parse", "--short", rev], cwd=REPO, capture_output=True, text=True,
                          check=True).stdout.strip()
@@ -142,7 +142,7 @@ def cli_calls(net, x: np.ndarray, repeat: int, python: str | None = None) -> dic
 
     ``python``: the interpreter whose ``snncc`` to call (another venv, e.g. one installed from an
     earlier revision: the before figure); default this one."""
-    from snncc.targets.loihi.bundle import write_bundle
+    from snncc.targets.loihi.bundle.hdf5 import write_bundle
 
     python = python or sys.executable
     snncc = Path(python).parent / "snncc"
@@ -180,9 +180,9 @@ def cli_calls(net, x: np.ndarray, repeat: int, python: str | None = None) -> dic
 
 ASM_PROBE = """
 import json, re, sys, numpy as np, llvmlite.binding as ll
-from snncc.targets.loihi import _kernel
-from snncc.targets.loihi.bundle import read_bundle
-from snncc.targets.loihi.emulator import PreparedNetwork
+from snncc.targets.loihi.emulation import kernel as _kernel
+from snncc.targets.loihi.bundle.hdf5 import read_bundle
+from snncc.targets.loihi.emulation.emulator import PreparedNetwork
 net = read_bundle(sys.argv[1])
 PreparedNetwork(net).run(np.zeros((1, 3, net.input_width), np.uint8), threads=1)
 asm = _kernel._chunk.inspect_asm(_kernel._chunk.signatures[0])
@@ -195,7 +195,7 @@ print(json.dumps(count))
 
 def asm_vector_width(net) -> dict:
     """Vector registers named in the kernel's machine code, compiled afresh (an empty NUMBA_CACHE_DIR)."""
-    from snncc.targets.loihi.bundle import write_bundle
+    from snncc.targets.loihi.bundle.hdf5 import write_bundle
 
     with tempfile.TemporaryDirectory() as tmp:
         bundle = Path(tmp) / "net.net"
@@ -238,7 +238,7 @@ def main(argv=None) -> dict:
     from snncc.atomic import write_text_atomic
     from snncc.ir.simulate import simulate
     from snncc.targets.loihi import target
-    from snncc.targets.loihi.emulator import PreparedNetwork, _program
+    from snncc.targets.loihi.emulation.emulator import PreparedNetwork, _program
 
     load_before = os.getloadavg()[0]
     uptime_before = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()

@@ -38,7 +38,7 @@ GRAPH = REPO / "tests" / "data" / "nir" / "cnn_sinabs.nir"
 
 def _kernel(rev: str | None):
     if rev is None:
-        from snncc.targets.loihi import _kernel
+        from snncc.targets.loihi.emulation import kernel as _kernel
 
         return _kernel
     import importlib.util
@@ -46,7 +46,7 @@ def _kernel(rev: str | None):
     spec = importlib.util.spec_from_file_location("bench_emulator", Path(__file__).parent / "bench_emulator.py")
     bench_emulator = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench_emulator)
-    return bench_emulator.load_kernel_at(rev)[0]       # that revision's targets/loihi/_kernel.py
+    return bench_emulator.load_kernel_at(rev)[0]       # that revision's targets/loihi/emulation/kernel.py
 
 
 def _rss_mib() -> float:
@@ -55,8 +55,8 @@ def _rss_mib() -> float:
 
 def prepare_worker(bundle: str, rev: str | None) -> dict:
     """In a fresh process: read the bundle, then time and measure preparing it for the kernel."""
-    from snncc.targets.loihi.bundle import read_bundle
-    from snncc.targets.loihi.emulator import _program
+    from snncc.targets.loihi.bundle.hdf5 import read_bundle
+    from snncc.targets.loihi.emulation.emulator import _program
 
     mod = _kernel(rev)
     net = read_bundle(bundle)
@@ -86,8 +86,8 @@ def main(argv=None) -> dict:
         return {}
 
     from snncc.atomic import write_text_atomic
-    from snncc.targets.loihi.bundle import read_bundle
-    from snncc.targets.loihi.emulator import _program
+    from snncc.targets.loihi.bundle.hdf5 import read_bundle
+    from snncc.targets.loihi.emulation.emulator import _program
 
     with tempfile.TemporaryDirectory() as tmp:
         bundle = args.bundle or str(Path(tmp) / "cnn.net")

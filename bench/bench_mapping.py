@@ -61,7 +61,7 @@ def peak_rss_mb() -> float:
 
 
 def run_once(args) -> dict:
-    from snncc.targets.loihi.partition import map_network
+    from snncc.targets.loihi.mapping.partition import map_network
 
     t0 = time.perf_counter()
     net = synthetic_network(args.neurons, args.fan_in, args.layers, args.connectivity, args.seed)

@@ -72,9 +72,9 @@ def main(argv=None) -> int:
     from snncc.frontends import LoadOptions, load_model
     from snncc.ir.nodes import LIF
     from snncc.ir.simulate import simulate
-    from snncc.targets.loihi.bundle import read_bundle
-    from snncc.targets.loihi.emulator import PreparedNetwork
-    from snncc.targets.loihi.validation import pad
+    from snncc.targets.loihi.bundle.hdf5 import read_bundle
+    from snncc.targets.loihi.emulation.emulator import PreparedNetwork
+    from snncc.targets.loihi.checks.exactness import pad
 
     graph = load_model(args.graph, LoadOptions())
     names = graph.of_kind(LIF)

@@ -62,8 +62,8 @@ def hardware_figures(checkpoint: str | Path, inputs: np.ndarray, labels: np.ndar
     """
     from snncc.frontends import load_model
     from snncc.targets import get_target
-    from snncc.targets.loihi.coremap import CoreMap
-    from snncc.targets.loihi.energy import emulate_and_estimate
+    from snncc.targets.loihi.mapping.coremap import CoreMap
+    from snncc.targets.loihi.estimate.energy import emulate_and_estimate
 
     started = time.perf_counter()
     graph = load_model(Path(checkpoint))

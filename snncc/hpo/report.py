@@ -115,7 +115,7 @@ class HpoReport:
         import matplotlib.pyplot as plt
 
         from snncc.atomic import atomic_path
-        from snncc.targets.loihi.energy import PAPER_RSNN
+        from snncc.targets.loihi.estimate.energy import PAPER_RSNN
 
         done = [r for r in self.rows if r.accuracy is not None and r.energy_uj is not None]
         front = [r for r in done if r.number in set(self.front)]

@@ -8,7 +8,7 @@ The rules (spec loihi.md, section 1), for the whole network at once::
     iDecay  = int(4096 * (1 - exp(-dt / tau_syn)));  vDecay likewise with tau_mem
 
 The integer rules (w_scale, vThMant, decay registers) are the Loihi pass's own
-(``snncc.targets.loihi.quantize``); only the rounding of the weights is restated here, in torch, so that
+(``snncc.targets.loihi.lowering.quantize``); only the rounding of the weights is restated here, in torch, so that
 it can sit in the autograd graph. The fake-quantized forward pass runs the float model with ``W' = w_q / w_scale``, threshold
 ``vThMant / w_scale`` and decays ``(4096 - iDecay) / 4096``, ``(4096 - vDecay) / 4096``: exactly
 the chip's arithmetic in float units, except that the chip truncates the decayed current and
@@ -29,7 +29,7 @@ from torch.func import functional_call
 from snncc.errors import SnnccError
 from snncc.models import SpikingClassifier
 from snncc.targets.loihi.chip import DECAY_ONE, WEIGHT_MAX, WEIGHT_MIN
-from snncc.targets.loihi.quantize import decay_register, threshold_mantissa, weight_scale
+from snncc.targets.loihi.lowering.quantize import decay_register, threshold_mantissa, weight_scale
 
 WEIGHT_RANGE = (WEIGHT_MIN, WEIGHT_MAX)
 

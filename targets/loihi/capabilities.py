@@ -3,12 +3,12 @@
 This module imports nothing heavy, so verbs that only read, map, emulate or estimate a bundle
 never load the compiler's torch-based reference simulator.
 
-    lower     -> LoihiArtefact (compiler.py: timing, quantization, bundle checked by the emulator)
-    check     -> CheckRecord   (check.py: accuracy lost on a labelled data set, and why)
-    agree     -> AgreementRecord (agreement.py: agreement with the float graph, no labels)
-    emulate   -> BundleEmulation (run_bundle.py: a bundle on 0/1 inputs, bit-exact)
-    map       -> CoreMap       (partition.py: populations placed on cores under every limit)
-    estimate  -> EnergyReport  (estimate.py: ESTIMATE of energy and delay per sample)
+    lower     -> LoihiArtefact (lowering/lower.py: timing, quantization, bundle checked by the emulator)
+    check     -> CheckRecord   (checks/accuracy.py: accuracy lost on a labelled data set, and why)
+    agree     -> AgreementRecord (checks/agreement.py: agreement with the float graph, no labels)
+    emulate   -> BundleEmulation (emulation/run_bundle.py: a bundle on 0/1 inputs, bit-exact)
+    map       -> CoreMap       (mapping/partition.py: populations placed on cores under every limit)
+    estimate  -> EnergyReport  (estimate/report.py: ESTIMATE of energy and delay per sample)
 """
 
 from __future__ import annotations
@@ -32,13 +32,13 @@ class LoihiTarget:
 
     def lower(self, graph, options: TargetOptions | Mapping[str, Any] | None = None, *,
               progress: Progress | None = None):
-        from snncc.targets.loihi.compiler import lower_artefact
+        from snncc.targets.loihi.lowering.lower import lower_artefact
 
         return lower_artefact(graph, _settings(target_options(self, options)))
 
     def check(self, graph, inputs, labels, options: TargetOptions | Mapping[str, Any] | None = None, *,
               data: str | None = None, synthetic: bool = False, progress: Progress | None = None):
-        from snncc.targets.loihi.check import check_model
+        from snncc.targets.loihi.checks.accuracy import check_model
 
         opts = target_options(self, options)
         settings = _settings(opts, data=data, synthetic=synthetic, mode="stream" if opts.stream else "batch")
@@ -46,23 +46,23 @@ class LoihiTarget:
 
     def agree(self, graph, inputs, options: TargetOptions | Mapping[str, Any] | None = None, *,
               data: str | None = None, samples: int = 40, density: float = 0.08, noise: float = 0.01):
-        from snncc.targets.loihi.agreement import measure_agreement
+        from snncc.targets.loihi.checks.agreement import measure_agreement
 
         settings = _settings(target_options(self, options), data=data)
         return measure_agreement(graph, settings, inputs, samples=samples, density=density, noise=noise)
 
     def emulate(self, bundle: Path, inputs, *, record: str = "outputs", stream: bool = False, gap: int | None = None,
                 source: str | None = None, progress: Progress | None = None):
-        from snncc.targets.loihi.bundle import read_bundle
-        from snncc.targets.loihi.run_bundle import emulate_bundle
+        from snncc.targets.loihi.bundle.hdf5 import read_bundle
+        from snncc.targets.loihi.emulation.run_bundle import emulate_bundle
 
         return emulate_bundle(read_bundle(bundle), inputs, record=record, stream=stream, gap=gap, source=source,
                               progress=progress)
 
     def map(self, source: Path, options: TargetOptions | Mapping[str, Any] | None = None):
         from snncc.errors import SnnccError
-        from snncc.targets.loihi.partition import map_network
-        from snncc.targets.loihi.sources import load_network
+        from snncc.targets.loihi.mapping.partition import map_network
+        from snncc.targets.loihi.bundle.load import load_network
 
         given = options.as_dict() if isinstance(options, TargetOptions) else dict(options or {})
         network = load_network(source, given.get("timing"), given.get("scale"))
@@ -73,7 +73,7 @@ class LoihiTarget:
 
     def estimate(self, source: Path, inputs, *, data: str | None = None, note: str = "", limit: int | None = None,
                  progress: Progress | None = None):
-        from snncc.targets.loihi.estimate import estimate_bundle
+        from snncc.targets.loihi.estimate.report import estimate_bundle
 
         return estimate_bundle(source, inputs, data=data, note=note, limit=limit, progress=progress)
 

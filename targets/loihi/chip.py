@@ -8,7 +8,7 @@ Micro 2018; nengo-loihi 1.1 (``block.py``, hardware builder); lava-dl ``netx``.
 Some users copy values when they are built: ``resources.ChipSpec()`` when it is constructed (so
 ``resources.LOIHI1`` at import), ``LoihiLayer`` its vmin / vmax when a layer is made, module
 constants derived at import (``fanin.COPY_WEIGHT``, the kernel's wrap masks), and the numba kernel
-(``_kernel.py``) when numba compiles it. Numba's on-disk cache is keyed on ``_kernel.py`` alone,
+(``emulation/kernel.py``) when numba compiles it. Numba's on-disk cache is keyed on ``emulation/kernel.py`` alone,
 so after changing a value the kernel uses (DECAY_SHIFT, DECAY_ONE) remove its cache files.
 """
 

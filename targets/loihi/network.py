@@ -14,7 +14,7 @@ itself through ``weight_rec`` (n, n). Integer fields follow Loihi's registers:
     profile per neuron; the core map keeps at most 8 threshold / 32 compartment profiles a core)
     wgt_exp / wgt_exp_rec: an int, or an int array shaped like the weights when a projection
     uses two synapse formats (a fine exponent for the bulk, a coarse one for outliers)
-    always_on: the layer's last ``always_on`` units are bias sources (``bias_sources.py``): input
+    always_on: the layer's last ``always_on`` units are bias sources (``lowering/bias_sources.py``): input
     axons the driver holds at 1 every step, or compartments that fire on their own
 
 The ranges are ``chip.py``'s; vmin / vmax default to its V_MIN / V_MAX when a layer is built.
@@ -71,7 +71,7 @@ class LoihiNetwork:
     layers: list[LoihiLayer]
     t_sample: int
     metadata: dict[str, Any] = field(default_factory=dict)
-    core_map: dict[str, Any] | None = None   # set by the mapper (targets/loihi/partition.py)
+    core_map: dict[str, Any] | None = None   # set by the mapper (targets/loihi/mapping/partition.py)
 
     @property
     def input_width(self) -> int:

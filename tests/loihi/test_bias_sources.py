@@ -1,4 +1,4 @@
-"""Current biases on Loihi: always-on sources carry them exactly (targets/loihi/bias_sources.py).
+"""Current biases on Loihi: always-on sources carry them exactly (targets/loihi/lowering/bias_sources.py).
 
 A bias on the current (Dense bias, or a LIF bias placed on the current) from IR step k is a synapse
 from a source that spikes every step; compile's own check (validate_lowering) proves that the
@@ -14,11 +14,12 @@ from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense, Input, Output, Readout
 from snncc.passes.current_bias import current_biases
-from snncc.targets.loihi import bias_sources, lower_model
-from snncc.targets.loihi.bundle import read_bundle, write_bundle
-from snncc.targets.loihi.emulator import emulate, reference_run
+from snncc.targets.loihi import lower_model
+from snncc.targets.loihi.lowering import bias_sources
+from snncc.targets.loihi.bundle.hdf5 import read_bundle, write_bundle
+from snncc.targets.loihi.emulation.emulator import emulate, reference_run
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
-from snncc.targets.loihi.validation import validate_lowering
+from snncc.targets.loihi.checks.exactness import validate_lowering
 
 
 def biased_graph(seed=0, refractory=2, d_in=(1, 0), d_rec=(1, 1), d_out=(1, 0), lif_bias=True, n_in=6, n_h=10, n_out=4,

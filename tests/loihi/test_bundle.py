@@ -10,8 +10,8 @@ from hypothesis import strategies as st
 
 from snncc.errors import SnnccError
 from snncc.targets.loihi import target
-from snncc.targets.loihi.bundle import read_bundle, write_bundle
-from snncc.targets.loihi.emulator import emulate
+from snncc.targets.loihi.bundle.hdf5 import read_bundle, write_bundle
+from snncc.targets.loihi.emulation.emulator import emulate
 from snncc_test_helpers import run_cli
 from tests.loihi.helpers import random_network, small_graph
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from snncc.errors import SnnccError
-from snncc.targets.loihi.emulator import emulate, reference_run, wrap
+from snncc.targets.loihi.emulation.emulator import emulate, reference_run, wrap
 from tests.loihi.helpers import chip_model, random_network
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from snncc.targets.loihi._kernel import Flat, _common_shift, _spike_list, narrowest_int, q_u_in_range
-from snncc.targets.loihi.emulator import PreparedNetwork, _program, reference_run
+from snncc.targets.loihi.emulation.kernel import Flat, _common_shift, _spike_list, narrowest_int, q_u_in_range
+from snncc.targets.loihi.emulation.emulator import PreparedNetwork, _program, reference_run
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 from tests.loihi.helpers import random_network
 

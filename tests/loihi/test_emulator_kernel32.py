@@ -7,8 +7,8 @@ import pytest
 from numba import njit
 
 from snncc.errors import SnnccError
-from snncc.targets.loihi._kernel import LANES, Flat, _decay32, _spike_list_at, update_groups
-from snncc.targets.loihi.emulator import PreparedNetwork, _program, check_inputs, decay, reference_run
+from snncc.targets.loihi.emulation.kernel import LANES, Flat, _decay32, _spike_list_at, update_groups
+from snncc.targets.loihi.emulation.emulator import PreparedNetwork, _program, check_inputs, decay, reference_run
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 from tests.loihi.helpers import even, random_network
 from tests.loihi.test_emulator_kernel import _same

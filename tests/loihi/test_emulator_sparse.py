@@ -5,8 +5,8 @@ statement of the chip's rules, with per-synapse delays, split exponents and recu
 import numpy as np
 import pytest
 
-from snncc.targets.loihi import emulator
-from snncc.targets.loihi.emulator import PreparedNetwork, SparseBlock, emulate, reference_run
+from snncc.targets.loihi.emulation import emulator
+from snncc.targets.loihi.emulation.emulator import PreparedNetwork, SparseBlock, emulate, reference_run
 
 from .helpers import random_network
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from snncc.targets.loihi import emulator
-from snncc.targets.loihi._kernel import Flat
-from snncc.targets.loihi.emulator import PreparedNetwork, SparseBlock, _program, reference_run
+from snncc.targets.loihi.emulation import emulator
+from snncc.targets.loihi.emulation.kernel import Flat
+from snncc.targets.loihi.emulation.emulator import PreparedNetwork, SparseBlock, _program, reference_run
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 from tests.loihi.helpers import random_network
 from tests.loihi.test_emulator_kernel import _same

@@ -11,10 +11,10 @@ from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense, Input, Output, Readout
 from snncc.ir.simulate import simulate
 from snncc.targets.loihi import lower_model, target
-from snncc.targets.loihi.check import check_model
-from snncc.targets.loihi.emulator import reference_run
-from snncc.targets.loihi.lowering import float_twin
-from snncc.targets.loihi.validation import loihi_spikes
+from snncc.targets.loihi.checks.accuracy import check_model
+from snncc.targets.loihi.emulation.emulator import reference_run
+from snncc.targets.loihi.lowering.registers import float_twin
+from snncc.targets.loihi.checks.exactness import loihi_spikes
 from tests.loihi.helpers import small_graph
 
 

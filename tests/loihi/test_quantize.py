@@ -10,7 +10,7 @@ import torch
 
 from snncc.errors import SnnccError
 from snncc.frontends import LoadOptions, load_model
-from snncc.targets.loihi.quantize import decay_register, quantize_graph, quantize_weights, samples_steps, weight_scale
+from snncc.targets.loihi.lowering.quantize import decay_register, quantize_graph, quantize_weights, samples_steps, weight_scale
 from snncc.targets.loihi import target
 from snncc_test_helpers import TH1_PARAMS
 from tests.loihi.helpers import small_graph
@@ -103,7 +103,7 @@ def test_per_layer_scale_uses_exponents_and_stays_exact():
 
 def test_split_exponents_keep_small_weights_and_outliers():
     """Outliers keep the exponent that fits them; the bulk gets a finer one (two synapse formats)."""
-    from snncc.targets.loihi.quantize import bulk_max, synapse_exponents
+    from snncc.targets.loihi.lowering.quantize import bulk_max, synapse_exponents
 
     w = np.full((4, 5), 0.01)
     w[0, 0] = 1.0                                     # 100x the rest

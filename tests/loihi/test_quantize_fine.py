@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from snncc.targets.loihi.chip import WEIGHT_MAX
-from snncc.targets.loihi.quantize import decay_register, finest_exponents, quantize_graph, quantize_weights
+from snncc.targets.loihi.lowering.quantize import decay_register, finest_exponents, quantize_graph, quantize_weights
 from snncc.targets.loihi import target
 from tests.loihi.helpers import small_graph
 

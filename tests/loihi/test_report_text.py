@@ -8,7 +8,7 @@ import numpy as np
 from rich.console import Console
 
 from snncc.targets.loihi import target
-from snncc.targets.loihi.report_text import delay_text, exp_text, register_text, render_compile_report
+from snncc.targets.loihi.lowering.report_text import delay_text, exp_text, register_text, render_compile_report
 from tests.loihi.helpers import small_graph
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from snncc.targets.loihi.scaling import Flag, FlagKind, Screen, choose, screen
+from snncc.targets.loihi.lowering.scaling import Flag, FlagKind, Screen, choose, screen
 from tests.loihi.helpers import small_graph
 
 

@@ -7,7 +7,7 @@ from snncc_test_helpers import run_cli
 
 from .helpers import chain, paper_rsnn
 
-bundle_mod = pytest.importorskip("snncc.targets.loihi.bundle")
+bundle_mod = pytest.importorskip("snncc.targets.loihi.bundle.hdf5")
 
 
 @pytest.fixture
@@ -34,7 +34,7 @@ def test_map_bundle_text(rsnn_bundle, capsys):
 
 def test_map_json_revalidates_independently(tmp_path, capsys):
     """The printed JSON, re-checked against the limits from the network alone."""
-    from snncc.targets.loihi.resources import LOIHI1
+    from snncc.targets.loihi.mapping.resources import LOIHI1
 
     from .recheck import assert_valid
 
@@ -47,7 +47,7 @@ def test_map_json_revalidates_independently(tmp_path, capsys):
 
 
 def test_map_model_file_is_lowered_first(small_rsnn_checkpoint, capsys):
-    pytest.importorskip("snncc.targets.loihi.lowering")
+    pytest.importorskip("snncc.targets.loihi.lowering.registers")
     code, out, err = run_cli(["map", small_rsnn_checkpoint, "--json"], capsys)
     assert code == 0, err
     d = json.loads(out)

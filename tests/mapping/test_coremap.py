@@ -1,7 +1,7 @@
 import json
 
-from snncc.targets.loihi.coremap import CoreMap
-from snncc.targets.loihi.partition import map_network
+from snncc.targets.loihi.mapping.coremap import CoreMap
+from snncc.targets.loihi.mapping.partition import map_network
 
 from .helpers import chain, paper_rsnn
 

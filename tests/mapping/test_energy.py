@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from snncc.targets.loihi.energy import PAPER_RSNN, barrier_ns, estimate_energy
+from snncc.targets.loihi.estimate.energy import PAPER_RSNN, barrier_ns, estimate_energy
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
-from snncc.targets.loihi.partition import map_network
-from snncc.targets.loihi.resources import ChipSpec
+from snncc.targets.loihi.mapping.partition import map_network
+from snncc.targets.loihi.mapping.resources import ChipSpec
 
 from .helpers import layer, paper_rsnn
 
@@ -47,8 +47,8 @@ def test_barrier_interpolates_the_table():
 
 
 def test_paper_rsnn_estimate_is_labelled_and_beside_the_paper():
-    pytest.importorskip("snncc.targets.loihi.emulator")
-    from snncc.targets.loihi.energy import emulate_and_estimate
+    pytest.importorskip("snncc.targets.loihi.emulation.emulator")
+    from snncc.targets.loihi.estimate.energy import emulate_and_estimate
 
     net = paper_rsnn(scale=20.0)
     cm = map_network(net)

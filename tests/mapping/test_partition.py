@@ -4,8 +4,8 @@ import scipy.sparse as sp
 
 from snncc.errors import SnnccError
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
-from snncc.targets.loihi.partition import map_network
-from snncc.targets.loihi.resources import LOIHI1, ChipSpec
+from snncc.targets.loihi.mapping.partition import map_network
+from snncc.targets.loihi.mapping.resources import LOIHI1, ChipSpec
 
 from .helpers import chain, even_weights, layer, paper_rsnn
 from .recheck import assert_valid

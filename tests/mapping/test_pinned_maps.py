@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 from rich.console import Console
 
-from snncc.targets.loihi.coremap import USAGE_FIELDS
-from snncc.targets.loihi.partition import map_network
+from snncc.targets.loihi.mapping.coremap import USAGE_FIELDS
+from snncc.targets.loihi.mapping.partition import map_network
 
 from .helpers import banded, chain, paper_rsnn
 

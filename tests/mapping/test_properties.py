@@ -7,8 +7,8 @@ from hypothesis import strategies as st
 
 from snncc.errors import SnnccError
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
-from snncc.targets.loihi.partition import map_network
-from snncc.targets.loihi.resources import LIMIT_TITLES, ChipSpec
+from snncc.targets.loihi.mapping.partition import map_network
+from snncc.targets.loihi.mapping.resources import LIMIT_TITLES, ChipSpec
 
 from .helpers import layer
 from .recheck import assert_valid

@@ -8,9 +8,9 @@ import pytest
 from snncc.cli.main import run
 from snncc.ir import LIF, Dense, Graph, Input, Output, Readout, save_graph, simulate, validate
 from snncc.targets.loihi import lower_model
-from snncc.targets.loihi.bundle import read_bundle
-from snncc.targets.loihi.check import check_model
-from snncc.targets.loihi.relays import relay_agreement, relay_network
+from snncc.targets.loihi.bundle.hdf5 import read_bundle
+from snncc.targets.loihi.checks.accuracy import check_model
+from snncc.targets.loihi.mapping.relays import relay_agreement, relay_network
 
 N_IN, HIDDEN, OUT, STEPS = 4600, 4, 3, 30
 

@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
-from snncc.targets.loihi.partition import map_network
-from snncc.targets.loihi.resources import ChipSpec
+from snncc.targets.loihi.mapping.partition import map_network
+from snncc.targets.loihi.mapping.resources import ChipSpec
 
 from .helpers import even_weights, layer
 
-emulator = pytest.importorskip("snncc.targets.loihi.emulator")
+emulator = pytest.importorskip("snncc.targets.loihi.emulation.emulator")
 NARROW = ChipSpec(name="narrow", input_axons_per_core=32)
 
 

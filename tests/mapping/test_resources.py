@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from snncc.targets.loihi.resources import (
+from snncc.targets.loihi.mapping.resources import (
     LOIHI1,
     ChipSpec,
     axon_list_bits,

@@ -19,9 +19,9 @@ from snncc.frontends import LoadOptions, load_model
 from snncc.ir.nodes import LIF, Conv
 from snncc.ir.simulate import simulate
 from snncc.targets.loihi import lower_model
-from snncc.targets.loihi.bundle import read_bundle
-from snncc.targets.loihi.emulator import emulate
-from snncc.targets.loihi.validation import lead_steps, loihi_spikes, pad
+from snncc.targets.loihi.bundle.hdf5 import read_bundle
+from snncc.targets.loihi.emulation.emulator import emulate
+from snncc.targets.loihi.checks.exactness import lead_steps, loihi_spikes, pad
 
 CNN = Path(__file__).resolve().parents[1] / "data" / "nir" / "cnn_sinabs.nir"
 

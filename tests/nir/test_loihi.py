@@ -14,9 +14,9 @@ from nir_graphs import BrailleRSNN, pattern_inputs, run_cli, sparse_inputs, trai
 from snncc.frontends import LoadOptions, load_model
 from snncc.ir.simulate import simulate
 
-from snncc.targets.loihi.bundle import read_bundle
-from snncc.targets.loihi.emulator import emulate, reference_run
-from snncc.targets.loihi.validation import pad  # noqa: E402
+from snncc.targets.loihi.bundle.hdf5 import read_bundle
+from snncc.targets.loihi.emulation.emulator import emulate, reference_run
+from snncc.targets.loihi.checks.exactness import pad  # noqa: E402
 
 SAMPLES, STEPS = 200, 100
 BIASED_AGREEMENT_BOUND = 0.85   # measured 0.885 on this near-chaotic random graph (see bench/nir_loihi_agreement.py)

@@ -16,7 +16,7 @@ from nir_graphs import run_cli
 from snncc.errors import SnnccError
 from snncc.frontends import LoadOptions, load_model
 from snncc.frontends.nir_legacy import normalise
-from snncc.targets.loihi.agreement import measure_agreement
+from snncc.targets.loihi.checks.agreement import measure_agreement
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "nir"
 GRAPHS = ["braille_zero_2023.nir", "braille_noDelay_noBias_subtract.nir", "braille_subgraph_2023.nir",

@@ -6,7 +6,7 @@ import torch
 
 from snncc.errors import SnnccError
 from snncc.models import SNNConfig, SpikingClassifier
-from snncc.targets.loihi import quantize as loihi_pass
+from snncc.targets.loihi.lowering import quantize as loihi_pass
 from snncc.training.qat import (chip_config, fake_quantize, loihi_quantization, quantize_weights,
                                 quantized_forward)
 

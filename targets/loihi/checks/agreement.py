@@ -118,14 +118,14 @@ def measure_agreement(graph: Graph, options: dict[str, Any], inputs: np.ndarray 
     ``inputs``: (N, T, C) 0/1 spikes; None draws ``samples`` x ``steps`` seeded random spikes of ``density``.
     """
     from snncc.targets.loihi import lower_model
-    from snncc.targets.loihi.emulator import check_inputs, emulate
-    from snncc.targets.loihi.validation import ir_spikes, lead_steps, loihi_spikes, pad
+    from snncc.targets.loihi.emulation.emulator import check_inputs, emulate
+    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
     from snncc.threads import one_thread
     from snncc.ir.simulate import simulate
 
     if not noise >= 0:
         raise SnnccError(f"weight noise must be >= 0, got {noise}", field="--noise")
-    from snncc.targets.loihi.lowering import chain
+    from snncc.targets.loihi.lowering.registers import chain
 
     width = graph.node(chain(graph)[0].pre).width
     if inputs is None:

@@ -21,11 +21,11 @@ import math
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.targets.loihi.packing import assignment, in_network_order, make_slices, pack
-from snncc.targets.loihi.projections import NetworkModel
-from snncc.targets.loihi.resources import LIMIT_TITLES, min_bits_per_synapse
-from snncc.targets.loihi.slicing import dense_bits_curve, layer_slices
-from snncc.targets.loihi.usage import RATIO_KEYS, core_usage, worst_ratio
+from snncc.targets.loihi.mapping.packing import assignment, in_network_order, make_slices, pack
+from snncc.targets.loihi.mapping.projections import NetworkModel
+from snncc.targets.loihi.mapping.resources import LIMIT_TITLES, min_bits_per_synapse
+from snncc.targets.loihi.mapping.slicing import dense_bits_curve, layer_slices
+from snncc.targets.loihi.mapping.usage import RATIO_KEYS, core_usage, worst_ratio
 
 DP_MAX_STATES = 400_000
 DP_MAX_WORK = 4e8

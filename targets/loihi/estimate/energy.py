@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from snncc.targets.loihi.coremap import CoreMap
+from snncc.targets.loihi.mapping.coremap import CoreMap
 from snncc.targets.loihi.network import LoihiNetwork
 
 PAPER_RSNN = {
@@ -130,8 +130,8 @@ def estimate_energy(network: LoihiNetwork, core_map: CoreMap, spikes: dict[int, 
                     current: dict[int, np.ndarray] | None = None, voltage: dict[int, np.ndarray] | None = None,
                     input_note: str = "") -> EnergyEstimate:
     """The estimate for one emulation: ``spikes[i]`` (B, T, n_i) for every layer i (0 = input)."""
-    from snncc.targets.loihi.projections import NetworkModel
-    from snncc.targets.loihi.usage import pair_table
+    from snncc.targets.loihi.mapping.projections import NetworkModel
+    from snncc.targets.loihi.mapping.usage import pair_table
 
     chip = core_map.chip
     costs = chip.energy
@@ -256,7 +256,7 @@ def merge(estimates: list[EnergyEstimate]) -> EnergyEstimate:
 def emulate_and_estimate(network: LoihiNetwork, core_map: CoreMap, inputs: np.ndarray, input_note: str,
                          batch_size: int = 16, progress=None) -> EnergyEstimate:
     """Emulate ``inputs`` (B, T, C) batch by batch with every layer recorded; estimate and merge."""
-    from snncc.targets.loihi.emulator import emulate
+    from snncc.targets.loihi.emulation.emulator import emulate
 
     parts = []
     for start in range(0, inputs.shape[0], batch_size):

@@ -18,7 +18,7 @@ def load_network(source: Path, timing: str | None = None, scale: str | None = No
     if not source.is_file():
         raise SnnccError("file does not exist", file=str(source))
     if h5py.is_hdf5(str(source)):
-        from snncc.targets.loihi.bundle import read_bundle
+        from snncc.targets.loihi.bundle.hdf5 import read_bundle
 
         for flag, value in (("--timing", timing), ("--scale", scale)):
             if value is not None:

@@ -19,10 +19,10 @@ import math
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.targets.loihi._mapkernels import distinct_per_source
-from snncc.targets.loihi.projections import NetworkModel
-from snncc.targets.loihi.resources import LIMIT_TITLES, list_bits, min_bits_per_synapse
-from snncc.targets.loihi.usage import RATIO_KEYS, core_usage, range_usage, worst_ratio
+from snncc.targets.loihi.mapping.kernels import distinct_per_source
+from snncc.targets.loihi.mapping.projections import NetworkModel
+from snncc.targets.loihi.mapping.resources import LIMIT_TITLES, list_bits, min_bits_per_synapse
+from snncc.targets.loihi.mapping.usage import RATIO_KEYS, core_usage, range_usage, worst_ratio
 
 GREEDY_MAX_NEURONS = 20_000     # sparse layers up to this size get greedy maximal slices, larger ones equal slices
 SAMPLE_SLICES = 16              # equal-slice search looks at this many slices, then checks them all

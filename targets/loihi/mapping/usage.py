@@ -10,8 +10,8 @@ For each core (resources.py):
     output axons   = (source neuron on the core, destination core) pairs, charged to the source's core
     vth / compartment profiles / voltage limits = distinct profile keys of its neurons
 
-Counted in one O(synapses) pass per projection (numba, ``_mapkernels.py``) when a layer's cores
-ascend with its neurons, else through (core, source) pairs. ``energy.py`` reads the same pairs.
+Counted in one O(synapses) pass per projection (numba, ``kernels.py``) when a layer's cores
+ascend with its neurons, else through (core, source) pairs. ``estimate/energy.py`` reads the same pairs.
 """
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from snncc.targets.loihi._mapkernels import pair_usage
-from snncc.targets.loihi.projections import NetworkModel, Projection
-from snncc.targets.loihi.resources import ChipSpec, axon_list_bits, list_bits
+from snncc.targets.loihi.mapping.kernels import pair_usage
+from snncc.targets.loihi.mapping.projections import NetworkModel, Projection
+from snncc.targets.loihi.mapping.resources import ChipSpec, axon_list_bits, list_bits
 
 RATIO_KEYS = ("neurons", "input_axons", "synapse_bits", "vth_profiles", "compartment_profiles", "voltage_limits")
 

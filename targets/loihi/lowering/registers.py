@@ -19,9 +19,10 @@ from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
 from snncc.passes.current_bias import current_biases
-from snncc.targets.loihi import bias_sources, chip
-from snncc.targets.loihi.quantize import QuantizationRecord, quantize_weights
-from snncc.targets.loihi.timing import TimingRecord
+from snncc.targets.loihi import chip
+from snncc.targets.loihi.lowering import bias_sources
+from snncc.targets.loihi.lowering.quantize import QuantizationRecord, quantize_weights
+from snncc.targets.loihi.lowering.timing import TimingRecord
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 
 

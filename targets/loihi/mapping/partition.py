@@ -18,13 +18,13 @@ Method (one module per step):
 from __future__ import annotations
 
 from snncc.errors import SnnccError
-from snncc.targets.loihi.coremap import CoreMap, CoreRecord, CoreUsage, LayerSlice
-from snncc.targets.loihi.fanin import split_wide_fan_in
+from snncc.targets.loihi.mapping.coremap import CoreMap, CoreRecord, CoreUsage, LayerSlice
+from snncc.targets.loihi.mapping.fanin import split_wide_fan_in
 from snncc.targets.loihi.network import LoihiNetwork
-from snncc.targets.loihi.projections import NetworkModel
-from snncc.targets.loihi.resources import LOIHI1, ChipSpec, check_core, check_core_count
-from snncc.targets.loihi.search import dp_min_cores, lower_bound, pack_and_repair
-from snncc.targets.loihi.slicing import dense_layer_minimum, slice_layers
+from snncc.targets.loihi.mapping.projections import NetworkModel
+from snncc.targets.loihi.mapping.resources import LOIHI1, ChipSpec, check_core, check_core_count
+from snncc.targets.loihi.mapping.search import dp_min_cores, lower_bound, pack_and_repair
+from snncc.targets.loihi.mapping.slicing import dense_layer_minimum, slice_layers
 
 METHOD = ("per-layer fewest slices (dense: ceil(n / m_max); sparse: greedy maximal or equal) + "
           "first-fit-decreasing packing{dp} + output-axon repair")

@@ -46,7 +46,7 @@ def emulate_bundle(network, inputs, *, record: str = "outputs", stream: bool = F
                    source: str | None = None, progress: Callable[[int], None] | None = None) -> BundleEmulation:
     """Check ``inputs`` against the bundle's width, pad for the output shift, emulate; ``progress(n)``
     after each chunk of n samples (batch mode)."""
-    from snncc.targets.loihi.emulator import PreparedNetwork, check_inputs, emulate, pad
+    from snncc.targets.loihi.emulation.emulator import PreparedNetwork, check_inputs, emulate, pad
 
     x = check_inputs(inputs, network.input_width, source=source)
     shift = int(network.metadata.get("output_shift", 0) or 0)
@@ -67,7 +67,7 @@ def emulate_bundle(network, inputs, *, record: str = "outputs", stream: bool = F
 
 def merge(parts):
     """One EmulationResult from the results of consecutive chunks of samples."""
-    from snncc.targets.loihi.emulator import EmulationResult
+    from snncc.targets.loihi.emulation.emulator import EmulationResult
 
     if len(parts) == 1:
         return parts[0]

@@ -22,8 +22,8 @@ from snncc.errors import SnnccError
 from snncc.threads import one_thread
 from snncc.ir.graph import Graph
 from snncc.ir.simulate import simulate
-from snncc.targets.loihi.emulator import EmulationResult, emulate, lead_steps, pad, reference_run  # noqa: F401
-from snncc.targets.loihi.lowering import ChainLayer, float_twin
+from snncc.targets.loihi.emulation.emulator import EmulationResult, emulate, lead_steps, pad, reference_run  # noqa: F401
+from snncc.targets.loihi.lowering.registers import ChainLayer, float_twin
 from snncc.targets.loihi.network import LoihiNetwork
 
 

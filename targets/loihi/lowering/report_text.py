@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from snncc.targets.loihi.coremap import CoreMap
+from snncc.targets.loihi.mapping.coremap import CoreMap
 
 
 def render_compile_report(s: dict[str, Any], console) -> None:

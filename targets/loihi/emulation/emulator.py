@@ -12,7 +12,7 @@ The chip's arithmetic, per compartment and step t (integers throughout):
 Every edge (input, feed-forward, recurrent) delivers one step after the spike plus its synaptic
 delay. ``reference_run`` states this literally in numpy (also runnable with float arithmetic:
 no truncation, wrap or clip, used to check the lowering with quantization switched off);
-``emulate`` runs the same rules in an event-driven numba kernel (``_kernel.py``: spikes accumulate
+``emulate`` runs the same rules in an event-driven numba kernel (``kernel.py``: spikes accumulate
 into a ring buffer of future q), the samples of a batch spread over threads. Both count overflows.
 The widths and formats are ``chip.py``'s (read at call time here; the kernel freezes them when compiled).
 """
@@ -338,7 +338,7 @@ class PreparedNetwork:
     """
 
     def __init__(self, network: LoihiNetwork):
-        from snncc.targets.loihi._kernel import Flat
+        from snncc.targets.loihi.emulation.kernel import Flat
 
         self.network = network
         self.flat = Flat(_program(network))
@@ -366,7 +366,7 @@ class PreparedNetwork:
     def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int | None = None,
             wide: bool = False, threads: int | None = None) -> EmulationResult:
         """``threads``: threads the samples of a batch are spread over (default: NUMBA_NUM_THREADS)."""
-        from snncc.targets.loihi._kernel import run_flat
+        from snncc.targets.loihi.emulation.kernel import run_flat
 
         if record not in RECORD_CHOICES:
             raise SnnccError(f"record must be one of {RECORD_CHOICES}", field="record")
@@ -412,7 +412,7 @@ def emulate(
 ) -> EmulationResult:
     """Run ``network`` bit-exactly on 0/1 ``inputs`` (T, C) or (B, T, C).
 
-    ``inputs`` carry the model's channels; always-on bias axons (``bias_sources.py``) are added
+    ``inputs`` carry the model's channels; always-on bias axons (``lowering/bias_sources.py``) are added
     here, held at 1 on every step (gaps included). mode "batch": every sample starts from zero state. mode "stream": the paper's protocol, one
     continuous run with ``gap`` blank steps (default 100) after each sample; each sample's outputs are the
     steps of its own window. record "all" keeps every layer's spikes, u and v. ``wide=True``

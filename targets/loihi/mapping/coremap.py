@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from snncc.targets.loihi.resources import LIMIT_TITLES, LOIHI1, ChipSpec
+from snncc.targets.loihi.mapping.resources import LIMIT_TITLES, LOIHI1, ChipSpec
 
 USAGE_FIELDS = ("neurons", "input_axons", "output_axons", "synapse_bits", "vth_profiles",
                 "compartment_profiles", "voltage_limits")

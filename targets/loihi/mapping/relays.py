@@ -19,10 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from snncc.targets.loihi.emulator import EmulationResult, _prediction, emulate
-from snncc.targets.loihi.fanin import row_fan_in
+from snncc.targets.loihi.emulation.emulator import EmulationResult, _prediction, emulate
+from snncc.targets.loihi.mapping.fanin import row_fan_in
 from snncc.targets.loihi.network import LoihiNetwork
-from snncc.targets.loihi.resources import LOIHI1, ChipSpec
+from snncc.targets.loihi.mapping.resources import LOIHI1, ChipSpec
 
 
 @dataclass
@@ -62,7 +62,7 @@ def relay_network(network: LoihiNetwork, chip: ChipSpec = LOIHI1) -> tuple[Loihi
     """(network that runs, plan): ``network`` itself with its core map when no layer needs relays,
     else the mapper's relayed network with tSample, output_shift, population_shifts and the relay
     records in its metadata, and its core map."""
-    from snncc.targets.loihi.partition import map_network
+    from snncc.targets.loihi.mapping.partition import map_network
 
     core_map = map_network(network, chip)
     if not core_map.transforms:

@@ -48,7 +48,7 @@ class EnergyCosts:
     hop_ns_pj: float = 4.0
     hop_ns_ns: float = 6.5
     barrier_min_ns: float = 113.0      # barrier synchronisation across 1 tile ...
-    barrier_max_ns: float = 465.0      # ... and across 32 tiles (linear in between; see energy.py)
+    barrier_max_ns: float = 465.0      # ... and across 32 tiles (linear in between; see estimate/energy.py)
     barrier_max_tiles: int = 32
     source: str = "Davies et al., IEEE Micro 2018, Table 2 (pre-silicon, 0.75 V)"
 

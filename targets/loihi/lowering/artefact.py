@@ -10,9 +10,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from snncc.targets.loihi.bundle import netx_compat, write_bundle
+from snncc.targets.loihi.bundle.hdf5 import netx_compat, write_bundle
 from snncc.targets.loihi.network import LoihiNetwork
-from snncc.targets.loihi.report_text import delay_text, exp_text, register_text
+from snncc.targets.loihi.lowering.report_text import delay_text, exp_text, register_text
 
 
 @dataclass
@@ -55,6 +55,6 @@ class LoihiArtefact:
         }
 
     def render_text(self, console) -> None:
-        from snncc.targets.loihi.report_text import render_compile_report
+        from snncc.targets.loihi.lowering.report_text import render_compile_report
 
         render_compile_report(self.summary(), console)

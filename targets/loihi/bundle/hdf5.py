@@ -6,7 +6,7 @@
               delay (out, in), bias, neuron/{type="LOIHI", vThMant, iDecay, vDecay, refDelay, wgtExp}}
     snncc extensions (netx ignores them): /layer/i/delay_rec, neuron/{wgtExpRec, biasExp},
     /layer/i/alwaysOn (the layer's last k units are bias sources: input axons held at 1 every step,
-    or compartments that fire on their own; see bias_sources.py)
+    or compartments that fire on their own; see lowering/bias_sources.py)
     /snncc/{version, quantization, timing, validation, metadata (JSON strings), source_sha256,
             core_map (JSON, when mapped), netx_compat (what netx would run differently)}
 

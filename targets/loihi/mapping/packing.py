@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from snncc.targets.loihi.projections import NetworkModel
-from snncc.targets.loihi.slicing import equal_bounds
-from snncc.targets.loihi.usage import core_usage
+from snncc.targets.loihi.mapping.projections import NetworkModel
+from snncc.targets.loihi.mapping.slicing import equal_bounds
+from snncc.targets.loihi.mapping.usage import core_usage
 
 PACK_WINDOW = 512               # packing looks back this many cores (plus cores sharing a source layer)
 

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.targets.loihi._mapkernels import transpose_indices
+from snncc.targets.loihi.mapping.kernels import transpose_indices
 from snncc.targets.loihi.network import LAYER_KINDS, LoihiNetwork
-from snncc.targets.loihi.resources import ChipSpec, check_delay, delay_bits
+from snncc.targets.loihi.mapping.resources import ChipSpec, check_delay, delay_bits
 
 
 @dataclass

@@ -76,7 +76,7 @@ def _ir_run(graph: Graph, x: np.ndarray, names: list[str]) -> tuple[np.ndarray, 
 
 def _relays(network):
     """(relayed network, plan) when a layer's fan-in needs relays, else (None, None)."""
-    from snncc.targets.loihi.relays import needs_relays, relay_network
+    from snncc.targets.loihi.mapping.relays import needs_relays, relay_network
 
     if not needs_relays(network):
         return None, None
@@ -87,8 +87,8 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
                 progress: Callable[[int], None] | None = None) -> CheckRecord:
     """Run (a)-(d) over ``inputs`` (N, T, C) 0/1 with ``labels`` (N,); ``progress(n)`` after each chunk."""
     from snncc.targets.loihi import lower_model
-    from snncc.targets.loihi.emulator import check_inputs, emulate
-    from snncc.targets.loihi.validation import lead_steps, loihi_spikes, pad
+    from snncc.targets.loihi.emulation.emulator import check_inputs, emulate
+    from snncc.targets.loihi.checks.exactness import lead_steps, loihi_spikes, pad
 
     lowered = lower_model(graph, dict(options, t_sample=options.get("t_sample") or np.asarray(inputs).shape[1]))
     net = lowered.network
@@ -128,7 +128,7 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
         s_d = loihi_spikes(res, lowered.network, lowered.layers, lowered.timing_record.shifts, steps)
         p_d = np.argmax(s_d[names[-1]].sum(axis=1), axis=1)
         if plan is not None:
-            from snncc.targets.loihi.relays import emulate_relayed
+            from snncc.targets.loihi.mapping.relays import emulate_relayed
 
             kw = {"mode": "stream", "gap": int(options.get("gap", 100))} if mode != "batch" else {}
             s_e = loihi_spikes(emulate_relayed(relayed, plan, pad(x, lead), **kw), lowered.network, lowered.layers,

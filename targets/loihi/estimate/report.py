@@ -36,10 +36,10 @@ def estimate_bundle(source: Path, inputs, *, data: str | None = None, note: str 
     at the bundle's tSample and input width. The first ``limit`` samples are used, fitted to the bundle
     (``fit.py``); ``progress(n)`` after every n samples emulated."""
     from snncc.inputs import RandomSpikes
-    from snncc.targets.loihi.energy import emulate_and_estimate
-    from snncc.targets.loihi.fit import fit_to_bundle
-    from snncc.targets.loihi.partition import map_network
-    from snncc.targets.loihi.sources import load_network
+    from snncc.targets.loihi.estimate.energy import emulate_and_estimate
+    from snncc.targets.loihi.emulation.fit import fit_to_bundle
+    from snncc.targets.loihi.mapping.partition import map_network
+    from snncc.targets.loihi.bundle.load import load_network
 
     network = load_network(Path(source))
     if isinstance(inputs, RandomSpikes):

@@ -33,7 +33,7 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.targets.loihi.chip import DECAY_ONE, WEIGHT_MAX
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
-from snncc.targets.loihi.resources import LOIHI1, ChipSpec, axon_list_bits, delay_bits, list_bits
+from snncc.targets.loihi.mapping.resources import LOIHI1, ChipSpec, axon_list_bits, delay_bits, list_bits
 
 COPY_WEIGHT = WEIGHT_MAX             # a copy relay's weight: the largest (254), its threshold below it
 MAX_QUANTUM = WEIGHT_MAX - 2         # the rate relays' quantum omega: even, 2..252

@@ -1,7 +1,7 @@
 """Lowering a graph to Loihi 1: timing, quantization, a netx-layout HDF5 bundle checked by a bit-exact emulator.
 
 ``lower_artefact(graph, settings)`` (behind ``target.lower``, ``capabilities.py``) returns a
-``LoihiArtefact`` that has already been checked against the IR reference (``validation.py``).
+``LoihiArtefact`` that has already been checked against the IR reference (``checks/exactness.py``).
 Settings (``LoihiOptions.as_dict()``, plus ``t_sample`` for checks): timing ("exact" | "paper"), scale ("auto" | "global" |
 "per-layer" | "split" | "fine"), allow_reset_change (bool), source (model path), time_steps (tSample
 when the model states no recording length; --time-steps).
@@ -17,15 +17,15 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.passes.fold_linear import fold_linear
-from snncc.targets.loihi.quantize import samples_steps
-from snncc.targets.loihi.timing import lower_timing
-from snncc.targets.loihi.artefact import LoihiArtefact
+from snncc.targets.loihi.lowering.quantize import samples_steps
+from snncc.targets.loihi.lowering.timing import lower_timing
+from snncc.targets.loihi.lowering.artefact import LoihiArtefact
 from snncc.targets.loihi.capabilities import LoihiTarget, target  # noqa: F401  (the registered target, re-exported)
-from snncc.targets.loihi.chip_units import in_chip_units
-from snncc.targets.loihi.lowering import build_network, chain, lif_params_check
+from snncc.targets.loihi.lowering.chip_units import in_chip_units
+from snncc.targets.loihi.lowering.registers import build_network, chain, lif_params_check
 from snncc.targets.loihi.network import LoihiNetwork
-from snncc.targets.loihi.partition import map_network
-from snncc.targets.loihi.resources import LOIHI1
+from snncc.targets.loihi.mapping.partition import map_network
+from snncc.targets.loihi.mapping.resources import LOIHI1
 
 DEFAULT_STEPS = 100        # tSample when the model states no recording length
 VALIDATION_BATCH = 4
@@ -50,8 +50,8 @@ class LoweredModel:
 
 def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     """Timing, quantization and register values (no validation)."""
-    from snncc.targets.loihi import scaling
-    from snncc.targets.loihi.validation import ir_spikes, lead_steps, loihi_spikes, pad, random_spikes
+    from snncc.targets.loihi.lowering import scaling
+    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad, random_spikes
 
     timing_mode = options.get("timing") or "exact"
     rule = options.get("scale") or "auto"
@@ -83,7 +83,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
 
     def measure(gq: Graph, rq) -> float:
         """Mean over layers of ``count_error``: per-neuron spike counts against the float model's."""
-        from snncc.targets.loihi.emulator import emulate
+        from snncc.targets.loihi.emulation.emulator import emulate
 
         if "spikes" not in reference:
             reference["spikes"] = ir_spikes(order, calib, names)
@@ -140,9 +140,9 @@ def attach_core_map(network: LoihiNetwork) -> None:
 
 def lower_artefact(graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
     """``target.lower``: lower (``lower_model``), place on cores (relays where fan-in needs them) and
-    check the bundle against the IR reference (``validation.py``)."""
-    from snncc.targets.loihi.relays import needs_relays, relay_agreement, relay_network
-    from snncc.targets.loihi.validation import lead_steps, pad, random_spikes, validate_lowering
+    check the bundle against the IR reference (``checks/exactness.py``)."""
+    from snncc.targets.loihi.mapping.relays import needs_relays, relay_agreement, relay_network
+    from snncc.targets.loihi.checks.exactness import lead_steps, pad, random_spikes, validate_lowering
 
     lowered = lower_model(graph, options)
     notes: list[str] = list(lowered.notes)

@@ -27,7 +27,7 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.targets.loihi import chip
-from snncc.targets.loihi.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
+from snncc.targets.loihi.lowering.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
                                           quantize_graph)
 
 MIN_RANGE = 1.0 / 8.0

@@ -1,0 +1,7 @@
+"""Bit-exact emulation of Loihi 1 compartments.
+
+    emulator.py     the chip's arithmetic, readable, and the entry point ``emulate``
+    kernel.py       the same rules in numba, event-driven (the fast path)
+    run_bundle.py   ``snncc emulate``'s work: a bundle on 0/1 inputs in chunks, outputs' timing shift applied
+    fit.py          data shaped to a bundle's input layer (input copies, tSample)
+"""
