@@ -29,7 +29,7 @@ from snncc.frontends import graph_from_object
 from snncc.models.lstm import LSTMClassifier, LSTMConfig
 from snncc.models.snn import SNNConfig, SpikingClassifier
 from snncc.targets.jetson import target
-from snncc.targets.jetson.runner import ArtefactRunner
+from snncc.targets.jetson.standalone_runner import ArtefactRunner
 
 
 def per_sample_ms(fn, inputs: np.ndarray, repeats: int) -> list[float]:

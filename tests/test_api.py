@@ -148,7 +148,7 @@ def test_data_analyse_without_svms(synth_dir, capsys):
 
 
 def _events_set(path):
-    from snncc.data.dataset import save_dataset
+    from snncc.data.dataset_file import save_dataset
 
     rng = np.random.default_rng(0)
     labels = np.repeat(np.arange(27), 6)

@@ -133,7 +133,7 @@ def write_test_split(checkpoint: Path, encoded: Path, dest: Path) -> None:
     """The test samples of a trained checkpoint's own split, as a data-set file for snncc check."""
     import torch
 
-    from snncc.data.dataset import load_dataset, save_dataset
+    from snncc.data.dataset_file import load_dataset, save_dataset
     from snncc.training.pipeline import assigned
 
     meta_ckpt = torch.load(checkpoint, weights_only=True)["metadata"]

@@ -45,14 +45,14 @@ def paper_bin_ms(th: float) -> float:
 
 def _events_by_threshold(src: Path, x: np.ndarray, labels: np.ndarray, ths: Sequence[float], note, advance):
     """{th: Events} and {th key: where they came from}."""
-    from snncc.data import formats, sources
+    from snncc.data import braille_files, formats
     from snncc.data.sigma_delta import encode
     from snncc.data.thresholds import threshold_key
 
     events_by_th, from_files = {}, {}
     for th in ths:
         note(f"events th {th:g}")
-        p = sources.events_file(src, th) if src.is_dir() else None
+        p = braille_files.events_file(src, th) if src.is_dir() else None
         if p is not None:
             es = formats.load_events(p)
             if es.events.n_samples != x.shape[0] or not np.array_equal(es.labels, labels):
@@ -105,7 +105,7 @@ def analyse_braille(src: str | Path, thresholds: Sequence[float] = (1, 2, 5, 10)
     ``pca_step``: a PCA-12 SVM every N frames (0: none); ``figures``: a directory to write the
     PNG figures into; ``progress``: ``progress(done, total, phase)`` over the steps (None: none).
     """
-    from snncc.data import analysis, calibration, formats, sources
+    from snncc.data import analysis, braille_files, calibration, formats
     from snncc.data.binning import bin_events, n_bins_for, record_ms
     from snncc.data.encoding import load_raw_frames
     from snncc.data.sigma_delta import encode
@@ -117,7 +117,7 @@ def analyse_braille(src: str | Path, thresholds: Sequence[float] = (1, 2, 5, 10)
     x = rs.inverted()
     labels = rs.labels
     n, t, c = x.shape
-    syn = sources.synthetic_info(raw_path)
+    syn = braille_files.synthetic_info(raw_path)
     frame_counts = sorted(set(list(range(1, t + 1, pca_step)) + [t])) if pca_step else []
     steps = len(ths) * 2 + (2 if svm else 0) + (2 if event_svm else 0) + len(frame_counts)
     note, advance = _counter(progress, steps)

@@ -40,24 +40,24 @@ class EncodedSet:
 
 def _events_source(src: Path, threshold: float | None, prefer: str):
     """(event file or None, raw file or None, threshold) for ``src`` and the user's choices."""
-    from snncc.data import formats, sources
+    from snncc.data import braille_files, formats
 
     if src.is_dir():
         if threshold is None:
             raise SnnccError("give --threshold to pick the events of a directory", field="--threshold")
-        ev_path = sources.events_file(src, threshold) if prefer in ("auto", "events") else None
+        ev_path = braille_files.events_file(src, threshold) if prefer in ("auto", "events") else None
         if ev_path is not None:
             return ev_path, None, threshold
         if prefer == "events":
             raise SnnccError(f"no {formats.events_name(threshold)} here", file=str(src))
-        raw_path = sources.raw_file(src)
+        raw_path = braille_files.raw_file(src)
         if raw_path is None:
             raise SnnccError(f"neither {formats.events_name(threshold)} nor {formats.RAW_NAME} here", file=str(src))
         return None, raw_path, threshold
     if formats.sniff(src) == "events":
         if prefer == "raw":
             raise SnnccError("--from raw needs a raw-frame file", file=str(src))
-        from_name = sources.threshold_from_name(src)
+        from_name = braille_files.threshold_from_name(src)
         if threshold is None:
             threshold = from_name
         elif from_name is not None and float(threshold) != from_name:
@@ -80,14 +80,14 @@ def load_events(src: str | Path, threshold: float | None = None, prefer: str = "
     raw frames), ``events`` or ``raw``. The recording length defaults to frames x 25 ms of the raw
     frames (also for an event file beside a raw file), else the paper's 1350 ms.
     """
-    from snncc.data import formats, sources
+    from snncc.data import braille_files, formats
     from snncc.data.binning import record_ms as frames_ms
     from snncc.data.sigma_delta import encode
 
     src = Path(src)
     if prefer not in ("auto", "events", "raw"):
         raise SnnccError(f"expected auto, events or raw, got {prefer!r}", field="--from")
-    sources.require_exists(src)
+    braille_files.require_exists(src)
     ev_path, raw_path, threshold = _events_source(src, threshold, prefer)
     if ev_path is not None:
         es = formats.load_events(ev_path)
@@ -103,7 +103,7 @@ def load_events(src: str | Path, threshold: float | None = None, prefer: str = "
 
 def _meta(kind: str, source: str, threshold, bin_ms, dt_s: float, n_steps: int, extra: dict) -> dict:
     from snncc.data.letters import CLASSES
-    from snncc.data.sources import synthetic_info
+    from snncc.data.braille_files import synthetic_info
 
     syn = synthetic_info(Path(source))
     meta = {"kind": kind, "threshold": threshold, "time_bin_size_ms": bin_ms, "dt_s": dt_s,
@@ -138,11 +138,11 @@ def encode_events(src: str | Path, threshold: float | None = None, bin_ms: float
 def load_raw_frames(src: str | Path, missing: str | None = None):
     """(raw-frame file, its ``RawSet``) for a directory of published files or the raw ``.pkl`` itself;
     ``missing`` is the rule stated when there is none (default: no raw-frame file here)."""
-    from snncc.data import formats, sources
+    from snncc.data import braille_files, formats
 
     src = Path(src)
-    sources.require_exists(src)
-    raw_path = sources.raw_file(src)
+    braille_files.require_exists(src)
+    raw_path = braille_files.raw_file(src)
     if raw_path is None:
         raise SnnccError(missing or f"no {formats.RAW_NAME} here", file=str(src))
     return raw_path, formats.load_raw(raw_path)
@@ -158,7 +158,7 @@ def frame_set(src: str | Path) -> EncodedSet:
 
 def write_with_split(out: str | Path, encoded: EncodedSet, split_test: float | None = None, seed: int = 0) -> list[str]:
     """Write ``out`` (and ``OUT_train``/``OUT_test`` for a stratified ``split_test``); the paths written."""
-    from snncc.data.dataset import save_dataset
+    from snncc.data.dataset_file import save_dataset
     from snncc.data.split import stratified_split
 
     out = Path(out)

@@ -27,7 +27,7 @@ def write_synthetic_set(out: str | Path, repetitions: int, seed: int, release: i
     from snncc.atomic import atomic_path
     from snncc.data import formats, synth
     from snncc.data.sigma_delta import encode
-    from snncc.data.sources import MARKER
+    from snncc.data.braille_files import MARKER
     from snncc.data.thresholds import threshold_key
 
     out = Path(out)

@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from snncc.hpo.annealing import pareto_ranks
-from snncc.hpo.objectives import DIRECTIONS, TrialOutcome
+from snncc.hpo.outcome import DIRECTIONS, TrialOutcome
 from snncc.training.presets import PRESETS
 
 FRONT_AXES = ("accuracy", "energy", "cores")

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from snncc.errors import SnnccError
 from snncc.hpo.annealing import evenly_spaced_restarts
-from snncc.hpo.objective import TrialObjective
+from snncc.hpo.trial import TrialObjective
 from snncc.hpo.space import search_space, space_as_dict
 from snncc.hpo.storage import default_url, open_storage
 from snncc.hpo.study import StudyPlan, best_params, grid_plan, load_study, run_study, worker_name
@@ -86,7 +86,7 @@ def run_hpo(req: HpoRequest, view: StudyView | None = None) -> list:
 
     ``view``: the progress callbacks (``snncc.hpo.progress.StudyView``), told ``study_start(name)``
     before each step and ``close()`` after it; None: silent."""
-    from snncc.hpo.data import load_source
+    from snncc.hpo.search_events import load_source
 
     check_request(req)
     _anneal_plan(req, None).check()   # bad settings and ranges fail before anything is opened or loaded

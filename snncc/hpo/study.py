@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass, field, fields
 from typing import Callable
 
 from snncc.errors import SnnccError
-from snncc.hpo.objectives import DIRECTIONS, TrialOutcome
+from snncc.hpo.outcome import DIRECTIONS, TrialOutcome
 from snncc.hpo.space import GRID_KEYS, Range, grid_around, preset_in_space, space_from_dict
 
 STEPS = ("anneal", "grid")

@@ -19,7 +19,7 @@ from snncc.models import SpikingClassifier, count_trainable
 from snncc.models.baselines import BASELINE_KINDS
 from snncc.training.baseline_presets import FAMILY
 from snncc.training.device import resolve_device
-from snncc.training.data import EVENT_KINDS, FRAME_DT_S, TrainingData, load_training_data, subset_indices
+from snncc.training.training_set import EVENT_KINDS, FRAME_DT_S, TrainingData, load_training_data, subset_indices
 from snncc.training.presets import OptimiserSettings, paper_preset, with_overrides
 from snncc.training.qat import loihi_quantization, quantized_forward
 from snncc.data.split import Split, stratified_split

@@ -197,7 +197,7 @@ def ttc_of_checkpoints(models: list[str | Path], data: list[str | Path], split: 
     from snncc.errors import SnnccError
     from snncc.frontends.checkpoint import is_checkpoint, module_from_checkpoint
     from snncc.frontends.torchfile import load_torch_file
-    from snncc.training.data import load_training_data
+    from snncc.training.training_set import load_training_data
     from snncc.training.pipeline import assigned
 
     if split not in ("test", "all"):

@@ -20,7 +20,7 @@ def check_model(model: str | Path, *, target: str = "loihi", data: str | Path | 
 
     With ``agreement`` or without ``data``: the target's agreement with the float graph (no labels;
     without data, ``limit or 40`` seeded random samples of ``density``, ceiling from ``noise``)."""
-    from snncc.data.check_data import load_check_data
+    from snncc.data.check_set import load_check_data
     from snncc.frontends import LoadOptions, load_model
     from snncc.targets import capability, get_target, target_options
 

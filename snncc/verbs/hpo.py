@@ -60,7 +60,7 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
     import torch
 
     from snncc.errors import SnnccError
-    from snncc.hpo.objectives import parse_objectives
+    from snncc.hpo.outcome import parse_objectives
     from snncc.hpo.run import HpoRequest, run_hpo
     from snncc.hpo.storage import report_command
 

@@ -32,7 +32,7 @@ def report_energy(bundle: str | Path, *, target: str = "loihi", energy: bool = F
                 raise SnnccError("applies only to random inputs, not with --data or --input", field=flag)
     estimate = capability(get_target(target), "estimate")
     if data is not None:
-        from snncc.data.dataset import load_dataset
+        from snncc.data.dataset_file import load_dataset
 
         data = Path(data)
         x, source, note = load_dataset(data)[0], str(data), f"data set {data.name}"

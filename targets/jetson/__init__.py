@@ -39,7 +39,7 @@ MAX_UNROLLED_STEPS = 5000
 
 def runner_source() -> bytes:
     """run.py: the runner module's own text (standalone: numpy + onnxruntime / tensorrt)."""
-    return (Path(__file__).with_name("runner.py")).read_bytes()
+    return (Path(__file__).with_name("standalone_runner.py")).read_bytes()
 
 
 def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> int:
@@ -176,7 +176,7 @@ class JetsonTarget:
               power_root: Path = Path("/"), rail: str = "VDD_IN", repeats: int = 3, warmup_passes: int = 6,
               timed_passes: int = 6, stream: bool = False, backend: str = "auto", progress=None):
         """One artefact: a ``BenchRecord`` (with power); several: a ``LatencyComparison`` (ratios to the first)."""
-        from snncc.targets.jetson.bench_run import bench_many, bench_one
+        from snncc.targets.jetson.bench_artefacts import bench_many, bench_one
 
         if len(artefacts) > 1:
             if power:

@@ -17,7 +17,7 @@ from snncc.errors import SnnccError
 
 def open_runner(artefact: Path, backend: str):
     """An ``ArtefactRunner`` on the artefact directory, or a one-line error."""
-    from snncc.targets.jetson.runner import ArtefactRunner, RunnerError
+    from snncc.targets.jetson.standalone_runner import ArtefactRunner, RunnerError
 
     try:
         return ArtefactRunner(str(artefact), backend)
@@ -52,7 +52,7 @@ def run_artefact(artefact: Path, inputs, *, source: str | None = None, stream: b
     """Check ``inputs`` (T, C) or (B, T, C) against the artefact's input signal and run the sequence model,
     or with ``stream`` the step model one time step at a time."""
     from snncc.inputs import check_batch
-    from snncc.targets.jetson.runner import RunnerError
+    from snncc.targets.jetson.standalone_runner import RunnerError
 
     runner = open_runner(artefact, backend)
     x = check_batch(inputs, spikes=runner.manifest["input"]["signal"] == "spikes", source=source)

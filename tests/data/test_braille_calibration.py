@@ -72,7 +72,7 @@ def test_generator_version_is_recorded(tmp_path, capsys):
     assert code == 0 and json.loads(out)["generator_version"] == 2
     assert json.loads((d / "SYNTHETIC.json").read_text())["generator_version"] == 2
     code, out, _ = cli(["data", "encode", d, "-t", "1", "-b", "5", "-o", tmp_path / "e.npz"], capsys)
-    from snncc.data.dataset import load_dataset
+    from snncc.data.dataset_file import load_dataset
 
     assert code == 0 and load_dataset(tmp_path / "e.npz")[2]["generator_version"] == 2
     code, out, _ = cli(["data", "synth", "-o", tmp_path / "v1", "-n", "1", "--thresholds", "1",

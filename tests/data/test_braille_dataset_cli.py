@@ -9,7 +9,7 @@ import pytest
 
 from snncc.data import formats
 from snncc.data.binning import bin_events
-from snncc.data.dataset import load_dataset, save_dataset
+from snncc.data.dataset_file import load_dataset, save_dataset
 from snncc.data.letters import CLASSES
 from snncc.data.sigma_delta import encode
 from snncc.data.synth import generate

@@ -12,7 +12,7 @@ def braille_dir(tmp_path_factory):
     """27 letters x 7 repetitions (SYNTHETIC, seed 5), threshold-1 events and raw frames, with the marker."""
     from snncc.data import formats
     from snncc.data.sigma_delta import encode
-    from snncc.data.sources import MARKER
+    from snncc.data.braille_files import MARKER
     from snncc.data.synth import generate
 
     d = tmp_path_factory.mktemp("hpo_braille")

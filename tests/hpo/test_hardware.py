@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from snncc.hpo.data import load_source
+from snncc.hpo.search_events import load_source
 from snncc.hpo.hardware import fit_inputs, hardware_figures
 from snncc.training.pipeline import TrainRequest, assigned, train
 from snncc.training.trainer import accuracy

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import optuna
 
-from snncc.hpo.objectives import TrialOutcome
+from snncc.hpo.outcome import TrialOutcome
 from snncc.hpo.report import study_report
 from snncc.hpo.space import SEARCH_SPACE, space_as_dict
 from snncc.hpo.study import PLAN_ATTR, StudyPlan

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from snncc.errors import SnnccError
-from snncc.hpo.objectives import parse_objectives
+from snncc.hpo.outcome import parse_objectives
 from snncc.hpo.space import SEARCH_SPACE, grid_around, preset_in_space, search_space
 from snncc.training.presets import PRESETS
 

@@ -12,7 +12,7 @@ import pytest
 
 from snncc.ir.simulate import simulate
 from snncc.targets.jetson import target
-from snncc.targets.jetson.runner import ArtefactRunner
+from snncc.targets.jetson.standalone_runner import ArtefactRunner
 from tests.jetson.helpers import STEPS, seeded_inputs
 
 ALL = ["rsnn", "ffsnn", "lstm", "elstm"]
@@ -145,7 +145,7 @@ def test_jetpack_6_exports_opset_20(graphs):
 
 
 def test_runner_rejects_wrong_channels_and_length(artefacts):
-    from snncc.targets.jetson.runner import RunnerError
+    from snncc.targets.jetson.standalone_runner import RunnerError
 
     graph, _, path = artefacts["rsnn"]
     runner = ArtefactRunner(str(path), backend="onnxruntime")

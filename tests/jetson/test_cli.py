@@ -173,7 +173,7 @@ def test_run_with_bad_input_is_one_line(compiled, capsys, tmp_path):
 
 def test_bench_through_the_cli_with_fake_power(compiled, capsys, tmp_path):
     out = _artefact(compiled, capsys)
-    from snncc.data.dataset import save_dataset
+    from snncc.data.dataset_file import save_dataset
 
     x = seeded_events(5, STEPS, 6, seed=8).astype(np.uint8)
     meta = {"kind": "events", "threshold": 1, "time_bin_size_ms": 5, "dt_s": 0.005, "n_steps": STEPS,

@@ -11,7 +11,7 @@ from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
 from snncc.ir.simulate import simulate
 from snncc.ir.validate import validate
 from snncc.targets.jetson import target
-from snncc.targets.jetson.runner import ArtefactRunner
+from snncc.targets.jetson.standalone_runner import ArtefactRunner
 
 T = 25
 

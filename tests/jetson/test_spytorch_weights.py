@@ -9,7 +9,7 @@ import math
 import numpy as np
 import torch
 
-from snncc.targets.jetson.runner import ArtefactRunner
+from snncc.targets.jetson.standalone_runner import ArtefactRunner
 from snncc_test_helpers import TH1_PARAMS, run_cli
 
 STEPS = 40

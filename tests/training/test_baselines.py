@@ -50,7 +50,7 @@ def _frames(n_per_class=5, n_classes=27, steps=54, seed=0):
 
 
 def _write_frames(path):
-    from snncc.data.dataset import save_dataset
+    from snncc.data.dataset_file import save_dataset
 
     x, y = _frames()
     save_dataset(path, x, y, {"kind": "frames", "threshold": None, "time_bin_size_ms": 25, "dt_s": 0.025,
@@ -78,7 +78,7 @@ def test_train_compile_and_onnx_agree(kind, frames_set, tmp_path, capsys):
     v = summary["validation"]
     assert v["prediction_agreement"] == 1.0 and v["max_abs_delta_score"] < 1e-3
     # the artefact runs in the runner and reproduces PyTorch on the training data
-    from snncc.targets.jetson.runner import ArtefactRunner
+    from snncc.targets.jetson.standalone_runner import ArtefactRunner
 
     x, _ = _frames()
     module = module_from_checkpoint(torch.load(ckpt, weights_only=True)).eval()
@@ -89,7 +89,7 @@ def test_train_compile_and_onnx_agree(kind, frames_set, tmp_path, capsys):
 
 
 def test_family_schedule_and_seeding(frames_set, tmp_path):
-    from snncc.training.data import load_training_data
+    from snncc.training.training_set import load_training_data
     from snncc.training.pipeline import optimiser_record
 
     rec = optimiser_record(TrainRequest(kind="inception", data="", output=""), 300)

@@ -10,7 +10,7 @@ from snncc.cli.main import run
 from snncc.frontends.checkpoint import module_from_checkpoint
 from snncc.ir.serialize import load_graph
 from snncc.ir.simulate import simulate
-from snncc.training.data import TrainingData
+from snncc.training.training_set import TrainingData
 from snncc.training.pipeline import TrainRequest, finetune, train
 
 from .conftest import toy_events
@@ -99,7 +99,7 @@ def test_lstm_cannot_be_fine_tuned_for_loihi(tmp_path, capsys):
 
 
 def _write_set(path, kind="events", time_bin=5, threshold=1):
-    from snncc.data.dataset import save_dataset
+    from snncc.data.dataset_file import save_dataset
 
     x, y = toy_events(n_per_class=6, n_classes=27, steps=12)
     if kind == "frames":

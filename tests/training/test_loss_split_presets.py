@@ -99,7 +99,7 @@ def test_overrides_are_validated():
 
 
 def test_subset_is_seeded_and_keeps_the_class_proportions():
-    from snncc.training.data import subset_indices
+    from snncc.training.training_set import subset_indices
 
     labels = np.repeat(np.arange(27), 6)
     a = subset_indices(labels, 150, seed=0)

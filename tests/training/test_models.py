@@ -106,7 +106,7 @@ def _late_silent_events(n_per_class=24, n_classes=3, steps=80, seed=0):
 
 
 def test_elstm_event_initialisation_keeps_the_architecture_and_learns(tmp_path):
-    from snncc.training.data import TrainingData
+    from snncc.training.training_set import TrainingData
     from snncc.training.pipeline import TrainRequest, train
 
     model = build_model("elstm", n_inputs=24)

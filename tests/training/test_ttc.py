@@ -59,7 +59,7 @@ def test_buffered_prefixes_are_zero_padded():
 
 
 def test_cli_several_models_json_and_figure(tmp_path, capsys):
-    from snncc.data.dataset import save_dataset
+    from snncc.data.dataset_file import save_dataset
     from snncc.training.pipeline import TrainRequest, train
 
     x, y = toy_events(n_per_class=5, n_classes=27, steps=12)

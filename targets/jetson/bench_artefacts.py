@@ -1,4 +1,4 @@
-"""``snncc bench``'s work: the paper's protocol (``benchmark.py``) on one artefact (with INA3221 power),
+"""``snncc bench``'s work: the paper's protocol (``bench_protocol.py``) on one artefact (with INA3221 power),
 or on several side by side; inputs from a data set or seeded synthetic inputs of the artefact's shape."""
 
 from __future__ import annotations
@@ -29,15 +29,15 @@ def bench_one(artefact: Path, *, data: Path | None = None, samples: int = 64, po
               timed_passes: int = 6, stream: bool = False, backend: str = "auto",
               progress: Callable[[int, int, str], None] | None = None):
     """``BenchRecord`` of one artefact; ``progress(samples_done, total, phase)`` as the protocol goes."""
-    from snncc.targets.jetson.benchmark import run_protocol
+    from snncc.targets.jetson.bench_protocol import run_protocol
     from snncc.targets.jetson.power import PowerSampler
     from snncc.targets.jetson.run_artefact import open_runner
-    from snncc.targets.jetson.runner import RunnerError
+    from snncc.targets.jetson.standalone_runner import RunnerError
 
     runner = open_runner(artefact, backend)
     labels = None
     if data is not None:
-        from snncc.data.dataset import load_dataset
+        from snncc.data.dataset_file import load_dataset
 
         inputs, labels, meta = load_dataset(data)
         label = _data_label(data, meta, len(labels))
@@ -69,13 +69,13 @@ def bench_many(artefacts: list[Path], *, data: Path | None = None, samples: int 
                warmup_passes: int = 6, timed_passes: int = 6, stream: bool = False, backend: str = "auto"):
     """``LatencyComparison`` of several artefacts with the same protocol; each takes ``data`` when its
     channels (and, for a fixed time axis, its steps) fit, else seeded synthetic inputs."""
-    from snncc.targets.jetson.benchmark import compare_protocol
+    from snncc.targets.jetson.bench_protocol import compare_protocol
     from snncc.targets.jetson.run_artefact import open_runner
-    from snncc.targets.jetson.runner import RunnerError
+    from snncc.targets.jetson.standalone_runner import RunnerError
 
     loaded = None
     if data is not None:
-        from snncc.data.dataset import load_dataset
+        from snncc.data.dataset_file import load_dataset
 
         loaded = load_dataset(data)
     entries = []

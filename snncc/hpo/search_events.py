@@ -41,10 +41,10 @@ class EventSource:
         return float(self.fixed.meta.get("time_bin_size_ms") or 0) or None
 
     def binned(self, bin_ms: float):
-        """The data binned at ``bin_ms`` (cached), as ``snncc.training.data.TrainingData``."""
+        """The data binned at ``bin_ms`` (cached), as ``snncc.training.training_set.TrainingData``."""
         from snncc.data.binning import bin_events, n_bins_for
         from snncc.data.letters import CLASSES
-        from snncc.training.data import TrainingData
+        from snncc.training.training_set import TrainingData
 
         bin_ms = float(bin_ms)
         if self.fixed is not None:
@@ -76,7 +76,7 @@ class EventSource:
 
 def load_source(path: str | Path, threshold: int) -> EventSource:
     """Events of ``threshold`` from a directory of published files, or an encoded ``.npz``."""
-    from snncc.data import formats, sources
+    from snncc.data import braille_files, formats
     from snncc.data.binning import record_ms
     from snncc.data.sigma_delta import encode
 
@@ -84,8 +84,8 @@ def load_source(path: str | Path, threshold: int) -> EventSource:
     if not path.exists():
         raise SnnccError("no such file or directory", file=str(path), field="--data")
     if path.is_file():
-        from snncc.data.dataset import load_dataset
-        from snncc.training.data import load_training_data
+        from snncc.data.dataset_file import load_dataset
+        from snncc.training.training_set import load_training_data
 
         _, _, meta = load_dataset(path)
         bin_ms = meta.get("time_bin_size_ms")
@@ -95,10 +95,10 @@ def load_source(path: str | Path, threshold: int) -> EventSource:
         data = load_training_data(path, "rsnn", threshold, float(bin_ms))
         return EventSource(str(path), threshold, data.labels.numpy(), synthetic=bool(meta.get("synthetic")),
                            fixed=data)
-    sources.require_exists(path)
-    synthetic = sources.synthetic_info(path) is not None
-    ev_path = sources.events_file(path, threshold)
-    raw_path = sources.raw_file(path)
+    braille_files.require_exists(path)
+    synthetic = braille_files.synthetic_info(path) is not None
+    ev_path = braille_files.events_file(path, threshold)
+    raw_path = braille_files.raw_file(path)
     rs = formats.load_raw(raw_path) if raw_path is not None else None
     rec = float(record_ms(rs.raw.shape[1])) if rs is not None else 1350.0   # the paper's 54 frames at 40 Hz
     if ev_path is not None:

@@ -49,7 +49,7 @@ class TrainingData:
 
 
 def _load_npz(path: Path) -> tuple[np.ndarray, np.ndarray, dict]:
-    from snncc.data.dataset import load_dataset
+    from snncc.data.dataset_file import load_dataset
 
     return load_dataset(path)
 

@@ -19,7 +19,7 @@ def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = 
     (``labels=False``: inputs only, labels returned as None); the first ``limit`` samples."""
     path = Path(path)
     meta: dict = {}
-    from snncc.data.dataset import load_dataset
+    from snncc.data.dataset_file import load_dataset
 
     if not path.is_file():
         raise SnnccError("file does not exist", file=str(path), field="--data")

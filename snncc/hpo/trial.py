@@ -3,7 +3,7 @@
 The trial's nine values come from the sampler (``space.suggest``); the model is trained by
 ``snncc.training.pipeline.train`` on the data binned at its time_bin_size, its checkpoint kept
 in the work directory (``trial_<number>.pt``), and ``hardware.hardware_figures`` compiles it.
-The value(s) returned are the plan's objectives, in order (``objectives.TrialOutcome.value``).
+The value(s) returned are the plan's objectives, in order (``outcome.TrialOutcome.value``).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.hpo.objectives import TrialOutcome
+from snncc.hpo.outcome import TrialOutcome
 from snncc.hpo.space import as_params, suggest
 
 
