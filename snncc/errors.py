@@ -26,3 +26,21 @@ class SnnccError(Exception):
             self.file = str(file)
             self.args = (self.line(),)
         return self
+
+
+class InternalError(Exception):
+    """A broken internal invariant: a bug in snncc, never a fault of the user's input.
+
+    Raised where snncc checks its own work (an artefact against the IR reference, a map against the
+    chip's limits it was built to respect). The CLI prints one line ``snncc: internal error: <field>:
+    <what>`` and exits 1. Deliberately not a ``SnnccError``: no handler meant for bad input (a scale
+    rule left out, a candidate refused) can catch it and pass it off as the input's fault.
+    """
+
+    def __init__(self, what: str, *, field: str | None = None):
+        self.what = what
+        self.field = field
+        super().__init__(self.line())
+
+    def line(self) -> str:
+        return ": ".join([p for p in (self.field,) if p] + [self.what])

@@ -95,7 +95,7 @@ def _dispatch(args: list[str], debug: bool) -> int:
     import typer
 
     from snncc.atomic import protecting
-    from snncc.errors import SnnccError
+    from snncc.errors import InternalError, SnnccError
 
     # typer >= 0.29 bundles its own click, older typer re-exports the real one; either way usage
     # errors derive from the ClickException behind typer.BadParameter (no direct click import).
@@ -133,6 +133,11 @@ def _dispatch(args: list[str], debug: bool) -> int:
             raise
         _say(f"snncc: error: {_os_error_line(ex)}")
         return 2
+    except InternalError as ex:   # a check of snncc's own work failed: a bug, not the input's fault
+        if debug:
+            raise
+        _say(f"snncc: internal error: {ex.line()} (a bug in snncc; rerun with --debug for the traceback)")
+        return 1
     except MemoryError:
         if debug:
             raise

@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-from snncc.errors import SnnccError
+from snncc.errors import InternalError, SnnccError
 from snncc.frontends.params import KEYS, PaperParams
 from snncc.training.presets import PRESETS
 
@@ -71,7 +71,8 @@ SEARCH_SPACE: dict[str, Range] = {r.name: r for r in (
     Range("reg_spikes", 1e-4, 1e-2, log=True),
     Range("reg_neurons", 0.0, 1e-5),
 )}
-assert tuple(SEARCH_SPACE) == KEYS
+if tuple(SEARCH_SPACE) != KEYS:   # the search space names every parameter, in the parameters file's order
+    raise InternalError(f"the search space's keys {tuple(SEARCH_SPACE)} are not the parameters' {KEYS}", field="hpo")
 
 GRID_KEYS = ("time_bin_size", "nb_input_copies")   # the two that set the operations per inference
 COPIES_LADDER = (1, 2, 3, 4, 6, 8, 12, 16)

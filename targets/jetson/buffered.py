@@ -22,7 +22,7 @@ import torch
 
 import snncc
 from snncc.atomic import file_sha256
-from snncc.errors import SnnccError
+from snncc.errors import InternalError, SnnccError
 from snncc.frontends.checkpoint import is_checkpoint, model_metadata, module_from_checkpoint
 from snncc.frontends.torchfile import load_torch_file
 from snncc.models.baselines import BASELINE_KINDS, BufferedClassifier
@@ -67,12 +67,12 @@ def validate_buffered(module: BufferedClassifier, data: bytes, seed: int = 0) ->
             ref = module.eval()(torch.from_numpy(x)).numpy()
         got = sess.run(None, {"frames": x})[0]
         if got.shape != ref.shape:
-            raise SnnccError(f"model.onnx gives scores of shape {got.shape} at batch {batch}, PyTorch {ref.shape}",
+            raise InternalError(f"model.onnx gives scores of shape {got.shape} at batch {batch}, PyTorch {ref.shape}",
                              field="model.onnx")
         delta = float(np.max(np.abs(got - ref)))
         scale = max(1.0, float(np.max(np.abs(ref))))
         if not delta <= VALUE_TOLERANCE * scale:
-            raise SnnccError(f"model.onnx disagrees with PyTorch: max |delta score| {delta:.3g} at batch {batch} "
+            raise InternalError(f"model.onnx disagrees with PyTorch: max |delta score| {delta:.3g} at batch {batch} "
                              f"(tolerance {VALUE_TOLERANCE * scale:.3g})", field="model.onnx")
         worst = max(worst, delta)
         agree += int(np.sum(np.argmax(got, 1) == np.argmax(ref, 1)))
@@ -80,7 +80,7 @@ def validate_buffered(module: BufferedClassifier, data: bytes, seed: int = 0) ->
     record.update({"samples": total, "batch_sizes_checked": [MAIN_BATCH, SECOND_BATCH],
                    "max_abs_delta_score": worst, "prediction_agreement": agree / total})
     if agree != total:
-        raise SnnccError(f"model.onnx changes {total - agree} of {total} predictions against PyTorch",
+        raise InternalError(f"model.onnx changes {total - agree} of {total} predictions against PyTorch",
                          field="model.onnx")
     return record
 

@@ -20,7 +20,7 @@ import onnx
 import onnxruntime as ort
 import torch
 
-from snncc.errors import SnnccError
+from snncc.errors import InternalError, SnnccError
 from snncc.threads import one_thread
 from snncc.ir.simulate import simulate
 from snncc.targets.jetson.export import ExportedModel
@@ -128,7 +128,8 @@ def run_step_model(sess: ort.InferenceSession, x: np.ndarray) -> np.ndarray:
         res = sess.run(None, {ins[0].name: np.ascontiguousarray(x[:, t]), **states})
         ys.append(res[0])
         states = {i.name: r for i, r in zip(ins[1:], res[1:])}
-    assert out_names[0] == "y_t"
+    if out_names[0] != "y_t":
+        raise InternalError(f"step.onnx's first output is {out_names[0]!r}, not 'y_t'", field="step.onnx")
     return np.stack(ys, axis=1)
 
 
@@ -138,20 +139,20 @@ def _compare(plan: GraphPlan, got_seq: np.ndarray | None, got_score: np.ndarray,
     rec: dict = {}
     if got_seq is not None:
         if got_seq.shape != ref_seq.shape:
-            raise SnnccError(f"output has shape {got_seq.shape}, the reference {ref_seq.shape}", field=label)
+            raise InternalError(f"output has shape {got_seq.shape}, the reference {ref_seq.shape}", field=label)
         if plan.spiking_output:
             agree = float(np.mean(got_seq == ref_seq))
             rec["spike_agreement"] = agree
             rec["spikes_differing"] = int(np.sum(got_seq != ref_seq))
             if agree < MIN_SPIKE_AGREEMENT:
-                raise SnnccError(f"output spike agreement with the IR reference is {agree:.4%}, "
+                raise InternalError(f"output spike agreement with the IR reference is {agree:.4%}, "
                                  f"below {MIN_SPIKE_AGREEMENT:.1%}", field=label)
         rec["max_abs_delta_outputs"] = float(np.max(np.abs(got_seq - ref_seq))) if got_seq.size else 0.0
     delta = float(np.max(np.abs(got_score - ref_score))) if got_score.size else 0.0
     rec["max_abs_delta_score"] = delta
     scale = max(1.0, float(np.max(np.abs(ref_score))) if ref_score.size else 1.0)
     if not plan.spiking_output and delta > VALUE_TOLERANCE * scale:
-        raise SnnccError(f"scores differ from the IR reference by {delta:.3g} (allowed {VALUE_TOLERANCE * scale:.3g})",
+        raise InternalError(f"scores differ from the IR reference by {delta:.3g} (allowed {VALUE_TOLERANCE * scale:.3g})",
                          field=label)
     pred, ref_pred = np.argmax(got_score, axis=1), np.argmax(ref_score, axis=1)
     rec["prediction_agreement"] = float(np.mean(pred == ref_pred))
@@ -159,7 +160,7 @@ def _compare(plan: GraphPlan, got_seq: np.ndarray | None, got_score: np.ndarray,
         top2 = np.sort(ref_score, axis=1)[:, -2:] if ref_score.shape[1] > 1 else None
         clear = (top2[:, 1] - top2[:, 0] > 2 * delta) if top2 is not None else np.ones(len(pred), bool)
         if np.any((pred != ref_pred) & clear):
-            raise SnnccError("a prediction differs from the IR reference where the reference margin is clear",
+            raise InternalError("a prediction differs from the IR reference where the reference margin is clear",
                              field=label)
     return rec
 
@@ -173,7 +174,8 @@ def _run_sequence(plan: GraphPlan, sess: ort.InferenceSession, x: np.ndarray):
 
 def validate_export(plan: GraphPlan, steps: int, sequence: ExportedModel, step: ExportedModel,
                     seed: int = 0) -> ValidationRecord:
-    """Run every check; raise SnnccError on the first failure; return the measured figures."""
+    """Run every check; return the measured figures. An artefact that disagrees with the IR reference is
+    a bug in the export (``InternalError``); an operator TensorRT lacks is the model's (``SnnccError``)."""
     with one_thread():
         return _validate(plan, steps, sequence, step, seed)
 
@@ -200,7 +202,7 @@ def _validate(plan: GraphPlan, steps: int, sequence: ExportedModel, step: Export
     try:
         got2_seq, got2_score = _run_sequence(plan, seq_sess, x2)
     except Exception as ex:  # onnxruntime raises its own error types
-        raise SnnccError(f"a declared dynamic axis is not dynamic: shape {x2.shape} fails "
+        raise InternalError(f"a declared dynamic axis is not dynamic: shape {x2.shape} fails "
                          f"({type(ex).__name__})", field="model.onnx") from None
     second = _compare(plan, got2_seq, got2_score, ref2_seq, ref2_score, f"model.onnx (shape {x2.shape})")
     record.dynamic_axes_checked.append({"model": "model.onnx", "shapes": [list(x.shape), list(x2.shape)],
@@ -213,7 +215,7 @@ def _validate(plan: GraphPlan, steps: int, sequence: ExportedModel, step: Export
             agree = float(np.mean(step_seq == got_seq))
             record.step["agreement_with_sequence_model"] = agree
             if agree < MIN_SPIKE_AGREEMENT:
-                raise SnnccError(f"the step model driven for {steps} steps agrees with the sequence model on "
+                raise InternalError(f"the step model driven for {steps} steps agrees with the sequence model on "
                                  f"only {agree:.4%} of output spikes", field="step.onnx")
         record.step["max_abs_delta_vs_sequence_model"] = float(np.max(np.abs(step_seq - got_seq)))
     else:
@@ -221,10 +223,10 @@ def _validate(plan: GraphPlan, steps: int, sequence: ExportedModel, step: Export
     try:
         step2 = run_step_model(step_sess, x2[:, : min(second_steps, 4)])
     except Exception as ex:
-        raise SnnccError(f"the batch axis is not dynamic: batch {SECOND_BATCH} fails ({type(ex).__name__})",
+        raise InternalError(f"the batch axis is not dynamic: batch {SECOND_BATCH} fails ({type(ex).__name__})",
                          field="step.onnx") from None
     if not np.allclose(step2, ref2_seq[:, : step2.shape[1]], atol=VALUE_TOLERANCE * max(1.0, float(np.abs(ref2_seq).max()))):
-        raise SnnccError(f"batch {SECOND_BATCH} gives results that differ from the IR reference", field="step.onnx")
+        raise InternalError(f"batch {SECOND_BATCH} gives results that differ from the IR reference", field="step.onnx")
     record.dynamic_axes_checked.append({"model": "step.onnx", "shapes": [[MAIN_BATCH, plan.base_inputs],
                                                                          [SECOND_BATCH, plan.base_inputs]]})
     record.fp16 = fp16_emulation(plan, x, got_seq if got_seq is not None else step_seq, got_score)

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from snncc.errors import SnnccError
+from snncc.errors import InternalError, SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense, Input, Output, Readout
 from snncc.passes.current_bias import current_biases
@@ -99,7 +99,7 @@ def test_the_compile_check_catches_a_bias_source_one_step_off(layer, first_sourc
     d = np.array(np.broadcast_to(np.asarray(target_layer.delay), target_layer.weight.shape))
     d[:, first_source:] = np.maximum(d[:, first_source:] + off_by, 0)
     target_layer.delay = d
-    with pytest.raises(SnnccError, match="internal check failed"):
+    with pytest.raises(InternalError, match="check failed"):
         validate_lowering(low.trained, low.order, low.quantized, low.network, low.layers,
                           low.timing_record.shifts, low.timing_record.output_shift, batch=3)
 

@@ -1,6 +1,6 @@
 """Checks a lowered Loihi network against the IR reference, on seeded random input spikes.
 
-Exact checks (a mismatch is an error, never a warning):
+Exact checks (a mismatch is an ``InternalError``, a bug in snncc, never a warning):
   1. timing: the lowered network run with the IR's float parameters in the registers' place
      (``reference_run(arithmetic="float")``) equals the IR reference of the graph in the order Loihi
      runs, spike for spike in every layer (population shifts applied);
@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.errors import InternalError
 from snncc.threads import one_thread
 from snncc.ir.graph import Graph
 from snncc.ir.simulate import simulate
@@ -84,7 +84,7 @@ def _check_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer], x
         twin = reference_run(twin_net, xp, arithmetic="float", record="all")
     problem = _same(loihi_spikes(twin, twin_net, layers, shifts, steps), expected)
     if problem:
-        raise SnnccError(f"internal check failed: {what} ({problem})", field=field)
+        raise InternalError(f"check failed: {what} ({problem})", field=field)
 
 
 def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: LoihiNetwork, layers: list[ChainLayer],
@@ -115,7 +115,7 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
         if i:
             same = same and np.array_equal(fast.voltage[i], slow.voltage[i]) and np.array_equal(fast.current[i], slow.current[i])
         if not same or fast.overflow != slow.overflow:
-            raise SnnccError(f"internal check failed: the emulator kernel differs from the chip's rules in layer {i}",
+            raise InternalError(f"check failed: the emulator kernel differs from the chip's rules in layer {i}",
                              field="emulator")
     record.kernel_exact = True
     emu = loihi_spikes(fast, network, layers, shifts, steps)

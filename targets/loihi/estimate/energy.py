@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from snncc.errors import InternalError
 from snncc.targets.loihi.mapping.coremap import CoreMap
 from snncc.targets.loihi.network import LoihiNetwork
 
@@ -214,7 +215,9 @@ def estimate_energy(network: LoihiNetwork, core_map: CoreMap, spikes: dict[int, 
     energy_uj = {k: v * 1e-6 for k, v in energy_pj.items()}
     energy_uj["total"] = sum(energy_uj.values())
     delay_ms = float(step_time.sum(axis=1).mean()) * 1e-6
-    assert n_on_chip == sum(lay.n for lay in network.layers[1:])
+    if n_on_chip != sum(lay.n for lay in network.layers[1:]):
+        raise InternalError(f"the core map places {n_on_chip} neurons, the network has "
+                            f"{sum(lay.n for lay in network.layers[1:])}", field="core map")
     return EnergyEstimate(
         label="ESTIMATE (not a measurement): Loihi 1 energy and delay from Davies 2018 Table 2",
         samples=int(batch), steps=int(steps), n_cores=n_cores, tiles_used=tiles_used,

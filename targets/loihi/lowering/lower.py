@@ -58,9 +58,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     graph, fold = fold_linear(graph)     # Conv -> connection matrix; linear chains -> one projection
     layers = chain(graph)
     deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
-    order, trec = lower_timing(deployed, timing_mode)
-    if timing_mode == "exact":
-        order = deployed   # exact timing leaves the graph as it is: share it (saves a reference run)
+    order, trec = lower_timing(deployed, timing_mode)   # exact timing returns ``deployed`` itself where it can
     trec.changes = reset_changes + trec.changes
     steps = options.get("t_sample")
     if steps is not None:

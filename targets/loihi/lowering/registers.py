@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.errors import InternalError, SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
 from snncc.passes.current_bias import current_biases
@@ -212,7 +212,7 @@ def _twin_weight(graph: Graph, c: ChainLayer, lay: LoihiLayer) -> np.ndarray:
     sources = lay.weight.shape[1] - w.shape[1]
     repeats = sources // len(terms) if terms else 0
     if sources != repeats * len(terms) or (terms and not repeats):
-        raise SnnccError(f"internal check failed: {sources} bias-source columns for {len(terms)} current-bias terms",
+        raise InternalError(f"check failed: {sources} bias-source columns for {len(terms)} current-bias terms",
                          field=f"layer '{lay.name}'")
     out = np.zeros(lay.weight.shape)
     out[:n, :w.shape[1]] = w

@@ -12,6 +12,12 @@ therefore lowers to an extra delay d - 1; the IR refractory period r lowers to r
         tSample grows by the output's shift, so spike counts over the sample are unchanged.
         A population whose current has a bias from IR step k on needs s_post + k >= 1 too: the
         always-on source that carries the bias on Loihi delivers one step after it fires.
+        A voltage bias (NIR v_leak) sits in the compartment and acts from the chip's first step, so
+        on a population delayed by s >= 1 it would charge V for s steps before the population's
+        IR step 0. Where the population has no synaptic memory (alpha = 0 for every biased neuron;
+        NIR's LIF), I[t] = in[t] + b gives V[t] = beta*V[t-1] + in[t] + b, the same V and spikes, so
+        the bias moves onto the current and an always-on source delivers it from IR step 0 on.
+        With alpha != 0 no constant current term reproduces it, and the graph is refused.
     timing="paper": the authors' export: every projection delay 1 (no synaptic delay), refDelay 1.
         This changes the update order the model was trained in; ``snncc check`` measures the cost.
 """
@@ -20,6 +26,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 from typing import Any
+
+import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
@@ -124,17 +132,45 @@ def _solve_shifts(graph: Graph, paths: list[tuple[str, str, str]]) -> dict[str, 
                      "projection there takes at least one step)", field="delays")
 
 
+def _late_voltage_biases(graph: Graph, shift: dict[str, int]) -> list[str]:
+    """Populations delayed by the timing pass that carry a non-zero voltage bias (see the module docstring)."""
+    late = []
+    for name, op in graph.items():
+        if isinstance(op, LIF) and shift.get(name, 0) > 0 and op.bias is not None and op.bias_placement == "voltage" \
+                and np.any(op.bias != 0):
+            alpha, _ = op.decays(graph.dt)
+            if np.any(alpha[op.bias != 0] != 0):
+                raise SnnccError(
+                    f"a voltage bias (NIR v_leak) cannot start on time on Loihi 1 here: the population runs "
+                    f"{shift[name]} step(s) late (every edge there delivers one step later), a compartment bias acts "
+                    "from the chip's first step, and with a synaptic current (tau_syn > dt) it has no exact form on "
+                    "the current", field=f"node '{name}'.bias")
+            late.append(name)
+    return late
+
+
 def lower_timing(graph: Graph, mode: str = "exact") -> tuple[Graph, TimingRecord]:
-    """Return (graph in the order Loihi will run, record of delays, refDelay and shifts)."""
+    """Return (graph in the order Loihi will run, record of delays, refDelay and shifts).
+
+    In exact mode the graph is returned itself unless a voltage bias had to move onto the current."""
     if mode not in TIMINGS:
         raise SnnccError(f"timing must be one of {TIMINGS}", field="--timing")
     record = TimingRecord(mode=mode)
     if mode == "paper":
         g, record.changes = paper_order(graph)
     else:
-        g = graph.copy()
+        g = graph
     paths = projection_paths(g)
     shift = _solve_shifts(g, paths)
+    late = _late_voltage_biases(g, shift)
+    if late:
+        g = g.copy() if g is graph else g
+        for name in late:
+            g.node(name).bias_placement = "current"
+            record.changes.append(
+                f"{name}: its voltage bias is carried on the current by an always-on source (the population runs "
+                f"{shift[name]} step(s) late on Loihi and a compartment bias would act before its first step; exact: "
+                "it has no synaptic memory, alpha = 0)")
     record.shifts = {p: s for p, s in shift.items() if s}
     for pre, dense, post in paths:
         d = total_delay(g, pre, dense, post)

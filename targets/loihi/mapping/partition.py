@@ -17,7 +17,7 @@ Method (one module per step):
 
 from __future__ import annotations
 
-from snncc.errors import SnnccError
+from snncc.errors import InternalError, SnnccError
 from snncc.targets.loihi.mapping.coremap import CoreMap, CoreRecord, CoreUsage, LayerSlice
 from snncc.targets.loihi.mapping.fanin import split_wide_fan_in
 from snncc.targets.loihi.network import LoihiNetwork
@@ -55,9 +55,9 @@ def map_network(network: LoihiNetwork, chip: ChipSpec = LOIHI1) -> CoreMap:
         v = check_core({**rec.usage.as_dict(), "core": rec.core, "layers": [{"layer": s.layer} for s in rec.layers]},
                        chip)
         if v:
-            raise SnnccError(v[0].message() + " (internal: the partitioner produced an invalid map)", field="core map")
+            raise InternalError(v[0].message() + " (the partitioner produced an invalid map)", field="core map")
     if lb > len(records):
-        raise SnnccError(f"internal: lower bound {lb} above the map's {len(records)} cores", field="core map")
+        raise InternalError(f"lower bound {lb} above the map's {len(records)} cores", field="core map")
     idx = range(1, len(model.layers))
     return CoreMap(
         chip=chip, cores=records, lower_bound=lb, lower_bound_method=lb_method,

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from snncc.errors import InternalError
 from snncc.targets.loihi.emulation.emulator import EmulationResult, _prediction, emulate
 from snncc.targets.loihi.mapping.fanin import row_fan_in
 from snncc.targets.loihi.network import LoihiNetwork
@@ -80,7 +81,7 @@ def relay_network(network: LoihiNetwork, chip: ChipSpec = LOIHI1) -> tuple[Loihi
         shift.append(late)
         j += 1
     if j != len(mapped.layers):
-        raise RuntimeError("internal: relayed network layers do not line up with the plan")
+        raise InternalError("relayed network layers do not line up with the plan", field="relays")
     meta = dict(mapped.metadata)
     meta["output_shift"] = int(meta.get("output_shift", 0) or 0) + late
     names = meta.get("layer_names") or [lay.name for lay in network.layers]

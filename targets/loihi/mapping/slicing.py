@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.errors import InternalError, SnnccError
 from snncc.targets.loihi.mapping.kernels import distinct_per_source
 from snncc.targets.loihi.mapping.projections import NetworkModel
 from snncc.targets.loihi.mapping.resources import LIMIT_TITLES, list_bits, min_bits_per_synapse
@@ -183,7 +183,7 @@ def layer_slices(model: NetworkModel, i: int, at_least: int = 1,
         k = min(n, max(k + 1, math.ceil(k * r)))
         at_least = k
     else:
-        raise SnnccError("internal: slicing did not converge", field=f"layer '{lay.name}'")
+        raise InternalError("slicing did not converge", field=f"layer '{lay.name}'")
     why = "fits one core" if k == 1 else LIMIT_TITLES[worst_which].split(" per ")[0]
     return equal_bounds(n, k), why
 
