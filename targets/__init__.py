@@ -28,6 +28,25 @@ def available_targets() -> list[str]:
     return sorted({ep.name for ep in entry_points(group=GROUP)})
 
 
+def output_suffixes() -> dict[str, str]:
+    """Target name -> the file suffix that names its artefact (``output_suffix``), for the installed targets
+    that declare one. A target that fails to load is passed over: it cannot be chosen without being named."""
+    found = {}
+    for ep in entry_points(group=GROUP):
+        try:
+            declared = getattr(ep.load(), "output_suffix", None)
+        except Exception:  # a broken third-party plug-in: named with --target, it reports itself
+            continue
+        if isinstance(declared, str) and declared:
+            found[ep.name] = declared
+    return dict(sorted(found.items()))
+
+
+def targets_for_suffix(suffix: str) -> list[str]:
+    """The installed targets whose artefact's suffix is ``suffix`` (case-blind)."""
+    return [name for name, declared in output_suffixes().items() if declared.lower() == suffix.lower()]
+
+
 def get_target(name: str) -> Target:
     for ep in entry_points(group=GROUP):
         if ep.name == name:
@@ -36,4 +55,4 @@ def get_target(name: str) -> Target:
 
 
 __all__ = ["Target", "Artefact", "Record", "TargetOptions", "IROptions", "LoihiOptions", "JetsonOptions",
-           "get_target", "available_targets", "capability", "target_options", "OPTION_FLAGS"]
+           "get_target", "available_targets", "output_suffixes", "targets_for_suffix", "capability", "target_options", "OPTION_FLAGS"]

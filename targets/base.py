@@ -1,8 +1,9 @@
 """The target interface: what a target may offer, as typed capabilities, and its typed options.
 
 A target is one object registered under the entry-point group ``snncc.targets``. It states
-``name``, ``description``, ``output_kind`` ("file" | "directory") and ``options_type`` (a frozen
-dataclass derived from ``TargetOptions``), and offers any of these capabilities, each a method:
+``name``, ``description``, ``output_kind`` ("file" | "directory"), optionally ``output_suffix`` (the
+file suffix that names its artefact, so ``compile -o x.net`` needs no ``--target``) and ``options_type``
+(a frozen dataclass derived from ``TargetOptions``), and offers any of these capabilities, each a method:
 
     lower(graph, options, *, progress)                       -> Artefact     (snncc compile)
     check(graph, inputs, labels, options, *, data, synthetic, progress) -> Record (snncc check)
@@ -198,6 +199,8 @@ class Target(Protocol):
     description: str
     output_kind: str  # "file" or "directory"
     options_type: type[TargetOptions]
+    # optional ``output_suffix``: the file suffix that names this target's artefact (".net"), so that
+    # ``compile -o x.net`` needs no --target; a target without one (a directory) is always named
 
 
 def capability(target: Any, name: str, rule: str | None = None) -> Callable[..., Any]:

@@ -15,7 +15,7 @@ from snncc.targets import available_targets
 @app.command("compile")
 def compile_command(
     model: Path = typer.Argument(..., help="Model file: snncc checkpoint (.pt), SpyTorch weight list (.pt, needs --params), NIR graph (.nir) or snncc IR (.snnir)."),
-    target: str = typer.Option("ir", "--target", "-t", help=f"Target to compile for ({', '.join(available_targets())})."),
+    target: Optional[str] = typer.Option(None, "--target", "-t", help=f"Target to compile for ({', '.join(available_targets())}). Default: the one -o's suffix names (.net -> loihi, .snnir -> ir); a Jetson directory or any other name needs --target, and a suffix that names another target is refused."),
     output: Path = typer.Option(..., "--output", "-o", help="Artefact to write (a file for ir/loihi, a directory for jetson). Written atomically."),
     params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file (key value per line) for a SpyTorch weight list."),
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
@@ -29,10 +29,12 @@ def compile_command(
 ) -> None:
     """Compile a trained model for a target. Every artefact is checked against the IR reference."""
     from snncc.api import compile as compile_model
-    from snncc.cli.render import print_import_notes
+    from snncc.cli.render import print_import_notes, print_notes
 
     record = compile_model(model, target=target, output=output, params=params, dt=dt, reset=reset, timing=timing,
                            scale=scale, allow_reset_change=allow_reset_change, jetpack=jetpack, time_steps=time_steps)
     if record.graph is not None:
         print_import_notes(record.graph)
+    if record.target_rule != "--target":
+        print_notes([f"target '{record.target}' from {record.target_rule}"])
     print_record(record, json_out)

@@ -36,6 +36,7 @@ class IRTarget:
     name = "ir"
     description = "snncc's IR as a .snnir file (validated graph, explicit dt, delays, reset)"
     output_kind = "file"
+    output_suffix = ".snnir"
     options_type = IROptions
 
     def lower(self, graph: Graph, options: TargetOptions | dict[str, Any] | None = None, *, progress=None) -> IRArtefact:

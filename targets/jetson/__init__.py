@@ -8,7 +8,8 @@ creates the directory atomically:
     model.onnx  step.onnx  manifest.json  build_engine.sh  run.py
 
 Options (``JetsonOptions``): ``jetpack`` ("4.6" -> opset 13, default), ``time_steps`` (T of the
-unrolled sequence model; default recording_length_s / dt from the graph's metadata), ``source``
+unrolled sequence model; default recording_length_s / dt from the graph's metadata, else 100:
+``snncc.ir.timebase``), ``source``
 (model path), ``seed`` (of the validation inputs).
 """
 
@@ -22,9 +23,8 @@ from typing import Any
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.frontends.params import RECORDING_LENGTH_S
 from snncc.ir.graph import Graph
-from snncc.ir.timebase import recording_steps
+from snncc.ir.timebase import sample_steps
 from snncc.targets.base import JetsonOptions, Progress, TargetOptions, target_options
 from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
 from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
@@ -42,27 +42,14 @@ def runner_source() -> bytes:
     return (Path(__file__).with_name("standalone_runner.py")).read_bytes()
 
 
-def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> int:
-    """T for the export: --time-steps, else recording_length_s / dt (LSTMs: the Braille 1.35 s)."""
-    g = plan.graph
-    given = options.get("time_steps")
-    if given is not None:
-        steps = int(given)
-        if steps < 1 or steps != given:
-            raise SnnccError(f"time steps must be a whole number >= 1, got {given}", field="--time-steps")
-    else:
-        length = g.metadata.get("recording_length_s")
-        if length is None and plan.has_lif:
-            raise SnnccError("the unrolled SNN needs a number of time steps: pass --time-steps "
-                             "(the graph's metadata has no recording_length_s)", field="--time-steps")
-        steps = recording_steps(length if length is not None else RECORDING_LENGTH_S, g.dt)
-        if steps < 1:
-            raise SnnccError(f"recording_length_s / dt gives {steps} time steps; pass --time-steps",
-                             field="--time-steps")
+def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> tuple[int, str]:
+    """(T for the export, the rule that gave it): --time-steps, else recording_length_s / dt, else the
+    default every target uses for a model that states no recording length (``snncc.ir.timebase``)."""
+    steps, rule = sample_steps(plan.graph, options.get("time_steps"))
     if plan.has_lif and steps > MAX_UNROLLED_STEPS:
         raise SnnccError(f"{steps} steps is too long to unroll (max {MAX_UNROLLED_STEPS}); the step model "
                          "runs any length", field="--time-steps")
-    return steps
+    return steps, rule
 
 
 class JetsonArtefact(ArtefactFiles):
@@ -132,7 +119,7 @@ class JetsonTarget:
               progress: Progress | None = None) -> JetsonArtefact:
         opts = target_options(self, options)
         plan = plan_graph(graph.copy())
-        steps = resolve_steps(plan, opts.as_dict())
+        steps, steps_rule = resolve_steps(plan, opts.as_dict())
         jetpack = str(opts.jetpack or "4.6")
         opset = opset_for_jetpack(jetpack)
         with one_thread():
@@ -149,7 +136,9 @@ class JetsonTarget:
         }
         notes = ["validated in ONNX Runtime on this machine; TensorRT engines are built and run on the board"]
         if plan.has_lif:
-            notes.append(f"model.onnx is unrolled for T = {steps}; step.onnx runs any length")
+            notes.append(f"model.onnx is unrolled for T = {steps} ({steps_rule}); step.onnx runs any length")
+        else:
+            notes.append(f"validated on T = {steps} ({steps_rule}); both models run any length")
         return JetsonArtefact(files, manifest, notes)
 
     def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray | None,

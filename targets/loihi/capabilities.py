@@ -28,6 +28,7 @@ class LoihiTarget:
     name = "loihi"
     description = "Intel Loihi 1: HDF5 bundle (netx layout) checked by a bit-exact emulator"
     output_kind = "file"
+    output_suffix = ".net"
     options_type = LoihiOptions
 
     def lower(self, graph, options: TargetOptions | Mapping[str, Any] | None = None, *,

@@ -71,7 +71,7 @@ def _bad_files(tmp_path):
 @pytest.mark.parametrize("target", ["loihi", "jetson", "ir"])
 def test_bad_model_files_give_one_line_and_no_output(tmp_path, capsys, kind, target):
     path = _bad_files(tmp_path)[kind]
-    out = tmp_path / ("x.net" if target != "jetson" else "x_dir")
+    out = tmp_path / {"loihi": "x.net", "jetson": "x_dir", "ir": "x.snnir"}[target]
     code, stdout, err = run_cli(["compile", path, "--target", target, "-o", out], capsys)
     assert code == 2
     lines = err.strip().splitlines()
@@ -143,7 +143,7 @@ def test_bad_parameters_file(tmp_path, capsys, authors_weights, text, needle):
 
 
 def test_missing_file_and_unknown_target(tmp_path, capsys, small_rsnn_checkpoint):
-    code, _, err = run_cli(["compile", tmp_path / "nope.pt", "-o", tmp_path / "x"], capsys)
+    code, _, err = run_cli(["compile", tmp_path / "nope.pt", "-o", tmp_path / "x.snnir"], capsys)
     assert code == 2 and "does not exist" in err
     code, _, err = run_cli(["compile", small_rsnn_checkpoint, "--target", "tpu", "-o", tmp_path / "x"], capsys)
     assert code == 2 and "unknown target" in err and not (tmp_path / "x").exists()

@@ -248,7 +248,7 @@ def test_all_zero_weights_accepted_with_a_note_everywhere(files, tmp_path, capsy
 def test_load_options_refused_on_a_checkpoint(files, tmp_path, capsys, extra, needle, verb):
     extra = [files / "p.txt" if a == "P" else a for a in extra]
     out = tmp_path / "o.x"
-    args = {"compile": ["-o", out], "inspect": [], "export": ["--to", "nir", "-o", out],
+    args = {"compile": ["-t", "ir", "-o", out], "inspect": [], "export": ["--to", "nir", "-o", out],
             "check": ["--data", files / "x.npy"]}[verb]
     refused(capsys, [verb, files / "m.pt", *extra, *args], needle=needle, out=out, inputs=[files / "m.pt"])
 

@@ -66,13 +66,24 @@ def test_graph_the_target_cannot_express_is_one_line(tmp_path, capsys, graphs):
     assert leftovers(tmp_path) == []
 
 
-def test_snn_without_length_needs_time_steps(tmp_path, capsys, graphs):
+def test_snn_without_length_runs_the_default_steps_on_both_targets(tmp_path, capsys, graphs):
+    """A model that states no recording length: 100 steps on Jetson and on Loihi, said in one line."""
     g = graphs["ffsnn"].copy()
     del g.metadata["recording_length_s"]
     save_graph(g, tmp_path / "m.snnir")
-    code, _, err = run_cli(["compile", tmp_path / "m.snnir", "--target", "jetson", "-o", tmp_path / "out"], capsys)
-    assert_one_line_error(code, err, "--time-steps")
-    assert leftovers(tmp_path) == []
+    rule = "100 steps, snncc's default for a model that states no recording length (pass --time-steps to set it)"
+    code, out, err = run_cli(["compile", tmp_path / "m.snnir", "--target", "jetson", "-o", tmp_path / "out",
+                              "--json"], capsys)
+    assert code == 0, err
+    assert any(f"model.onnx is unrolled for T = 100 ({rule})" in n for n in json.loads(out)["notes"]), out
+    code, out, err = run_cli(["compile", tmp_path / "m.snnir", "-o", tmp_path / "out.net", "--json"], capsys)
+    assert code == 0, err
+    rec = json.loads(out)
+    assert rec["target"] == "loihi" and rec["target_rule"] == "the suffix '.net' of -o"
+    assert any(n.startswith("tSample ") and n.endswith(f": {rule}") for n in rec["notes"]), rec["notes"]
+    code, _, err = run_cli(["compile", tmp_path / "m.snnir", "--target", "jetson", "-o", tmp_path / "out2",
+                            "--time-steps", "0"], capsys)
+    assert_one_line_error(code, err, "--time-steps", "whole number >= 1")
 
 
 def test_bad_jetpack_is_one_line(tmp_path, capsys):

@@ -17,7 +17,7 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.passes.fold_linear import fold_linear
-from snncc.targets.loihi.lowering.quantize import samples_steps
+from snncc.ir.timebase import sample_steps
 from snncc.targets.loihi.lowering.timing import lower_timing
 from snncc.targets.loihi.lowering.artefact import LoihiArtefact
 from snncc.targets.loihi.capabilities import LoihiTarget, target  # noqa: F401  (the registered target, re-exported)
@@ -27,7 +27,6 @@ from snncc.targets.loihi.network import LoihiNetwork
 from snncc.targets.loihi.mapping.partition import map_network
 from snncc.targets.loihi.mapping.resources import LOIHI1
 
-DEFAULT_STEPS = 100        # tSample when the model states no recording length
 VALIDATION_BATCH = 4
 CALIBRATION_BATCH = 8
 CALIBRATION_RATE = 0.05
@@ -63,16 +62,8 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     steps = options.get("t_sample")
     if steps is not None:
         t_rule = "the input length"
-    elif options.get("time_steps") is not None:
-        steps, t_rule = options["time_steps"], "--time-steps"
-        if int(steps) != steps or steps < 1:
-            raise SnnccError(f"time steps must be a whole number >= 1, got {steps}", field="--time-steps")
-    else:
-        try:
-            steps, t_rule = samples_steps(graph)
-        except SnnccError:
-            steps, t_rule = DEFAULT_STEPS, (f"{DEFAULT_STEPS} steps: the model states no recording length "
-                                            "(graph.metadata['recording_length_s'])")
+    else:   # --time-steps, else the recording length, else the default every target uses (snncc.ir.timebase)
+        steps, t_rule = sample_steps(graph, options.get("time_steps"))
     steps = int(steps)
 
     names = [c.lif for c in layers]
