@@ -29,7 +29,7 @@ def compile_command(
 ) -> None:
     """Compile a trained model for a target. Every artefact is checked against the IR reference."""
     from snncc.api import compile as compile_model
-    from snncc.cli.render import print_import_notes, print_notes
+    from snncc.cli.render import print_import_notes, print_notes, print_warnings
 
     record = compile_model(model, target=target, output=output, params=params, dt=dt, reset=reset, timing=timing,
                            scale=scale, allow_reset_change=allow_reset_change, jetpack=jetpack, time_steps=time_steps)
@@ -37,4 +37,5 @@ def compile_command(
         print_import_notes(record.graph)
     if record.target_rule != "--target":
         print_notes([f"target '{record.target}' from {record.target_rule}"])
+    print_warnings(record.warnings)
     print_record(record, json_out)

@@ -16,6 +16,12 @@ def print_notes(notes: list[str]) -> None:
         err_console.print(f"snncc: note: {note}", markup=False, soft_wrap=True)
 
 
+def print_warnings(warnings: list[str]) -> None:
+    """One ``snncc: warning: <line>`` per warning, on stderr."""
+    for warning in warnings:
+        err_console.print(f"snncc: warning: {warning}", markup=False, soft_wrap=True)
+
+
 def print_import_notes(graph: Graph) -> None:
     """What a frontend assumed (dt inferred, reset chosen, ...): one ``snncc: note:`` line each, on stderr."""
     from snncc.frontends import import_notes

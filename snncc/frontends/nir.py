@@ -599,11 +599,13 @@ def load(path: Path, options: Any) -> Graph:
     try:
         nir_graph = nir.read(str(path), type_check=False)
     except Exception as ex:  # the nir/h5py readers raise assorted types on damaged files
-        from snncc.frontends.nir_legacy import read_legacy
+        from snncc.frontends.nir_legacy import LegacyFileLacks, read_legacy
 
         detail = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
         try:
             nir_graph, legacy_notes = read_legacy(path)   # an older NIR file whose meaning is unambiguous
+        except LegacyFileLacks:
+            raise
         except SnnccError:
             raise SnnccError(f"not a readable NIR graph ({detail})", file=str(path), field="format") from None
     try:

@@ -10,6 +10,14 @@ size is read with shape n, and a note says so. If its successors disagree, or a 
 told from their parameters, the file is refused with one line. Edges naming a sub-graph instead of
 its Input/Output node are left as they are: the NIR frontend resolves them (a sub-graph with one
 Input and one Output).
+
+What such a file cannot hold is refused, not guessed: NIR's writer stored a CubaLIF's ``w_in`` only
+from 19 October 2023 on (NIR commit 658d18d; release 0.2 did not, 1.0 does), so an older file's CubaLIF
+record without ``w_in`` has lost
+its input weight, and with it the gain from input to voltage (``(w_in dt/tau_syn)(r dt/tau_mem)``
+under NIR's equations); a CubaLIF record without ``w_in`` is refused in one line naming the node
+(``LegacyFileLacks``). The NIR paper's 2023 Braille sub-graph is such a file: docs/nir.md says what
+else it lacks.
 """
 
 from __future__ import annotations
@@ -22,6 +30,11 @@ import numpy as np
 from snncc.errors import SnnccError
 
 NEURONS = ("LIF", "CubaLIF", "LI", "CubaLI", "IF", "I", "Threshold", "Scale", "Delay")
+LOST_FIELDS = {"CubaLIF": "w_in"}   # node type -> the field NIR's writer up to release 0.2 did not store
+
+
+class LegacyFileLacks(SnnccError):
+    """An older NIR file that was read but lacks what its meaning needs: refused as it is, never retried."""
 
 
 def _text(value: Any) -> str:
@@ -78,6 +91,24 @@ def normalise(graph: dict, path: str, notes: list[str], source: str) -> None:
                          f"{size} values; read as [{size}] (the size of what it feeds)")
 
 
+def refuse_lost_fields(graph: dict, path: str, source: str) -> None:
+    """Refuse ``graph`` (a raw NIR record) if a node lacks a field the older writers did not store."""
+    for name, node in graph["nodes"].items():
+        kind = _text(node.get("type", ""))
+        if kind == "NIRGraph":
+            refuse_lost_fields(node, f"{path}{name}.", source)
+            continue
+        lost = LOST_FIELDS.get(kind)
+        if lost is None or lost in node:
+            continue
+        r = np.asarray(node.get("r", np.nan), np.float64)
+        unit_r = bool(r.size) and bool(np.all(r == 1.0))
+        raise LegacyFileLacks(
+            f"older NIR file: this {kind} stores no {lost} (NIR's writer up to release 0.2 did not write it)"
+            + (" and has r = 1" if unit_r else "") + ", so the gain from its input to its voltage is not in the "
+            "file; re-export the model with a current NIR writer", file=source, field=f"node '{path}{name}'.{lost}")
+
+
 def read_legacy(path: str | Path) -> tuple[Any, list[str]]:
     """(nir.NIRGraph, notes) for an older NIR file, or a one-line SnnccError."""
     import h5py
@@ -93,6 +124,7 @@ def read_legacy(path: str | Path) -> tuple[Any, list[str]]:
         raise SnnccError("not a NIR graph (no top-level NIRGraph)", file=str(path), field="format")
     notes: list[str] = []
     normalise(raw, "", notes, str(path))
+    refuse_lost_fields(raw, "", str(path))
     raw["type_check"] = False
     try:
         return nir.dict2NIRNode(raw), notes

@@ -7,7 +7,7 @@ output whose suffix names no target (a Jetson directory, any other name) needs `
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -22,10 +22,11 @@ class CompileRecord:
     artefact: Any
     graph: Any = None
     target_rule: str = "--target"      # how the target was chosen: "--target" or "the suffix '.net' of -o"
+    warnings: list[str] = field(default_factory=list)   # e.g. a model silent in float (snncc.ir.liveness)
 
     def as_dict(self) -> dict[str, Any]:
         return {"target": self.target, "target_rule": self.target_rule, "output": self.output,
-                **self.artefact.summary()}
+                "warnings": list(self.warnings), **self.artefact.summary()}
 
     def render_text(self, console) -> None:
         from snncc.targets.base import RendersText
@@ -75,10 +76,17 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
     given = {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change or None,
              "jetpack": jetpack, "source": str(model), "time_steps": time_steps}
     given = {k: v for k, v in given.items() if v is not None}   # only what the user gave (targets refuse the rest)
-    artefact, graph = compile_buffered(model, target, given), None
+    artefact, graph, warnings = compile_buffered(model, target, given), None, []
     if artefact is None:
+        from snncc.ir.liveness import calibration_warning
+        from snncc.ir.timebase import sample_steps
+
         graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
         tgt = get_target(target)
-        artefact = capability(tgt, "lower")(graph, target_options(tgt, given))
+        options = target_options(tgt, given)
+        if target != "ir":   # a lowered artefact claims exactness; the IR file is the model itself
+            silent = calibration_warning(graph, sample_steps(graph, time_steps)[0])   # float, calibration inputs
+            warnings += [silent] if silent else []
+        artefact = capability(tgt, "lower")(graph, options)
     artefact.write(output)
-    return CompileRecord(target, str(output), artefact, graph, target_rule)
+    return CompileRecord(target, str(output), artefact, graph, target_rule, warnings)

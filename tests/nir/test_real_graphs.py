@@ -41,15 +41,12 @@ def test_real_graph_compiles_for_loihi_and_jetson(name, tmp_path, capsys):
             assert code == 2 and not out.exists(), (target, err)
             lines = [ln for ln in err.splitlines() if ln.startswith("snncc: error:")]
             assert len(lines) == 1 and "Traceback" not in err, err
-    # every one of these graphs is expected to compile for both targets today
-    assert code == 0, err
-
-
-def test_older_nir_file_loads_with_a_note():
-    g = load_model(DATA / "braille_subgraph_2023.nir", LoadOptions(dt=1e-4))
-    notes = g.metadata["import_notes"]
-    assert any("older NIR file" in n and "read as [38]" in n for n in notes), notes
-    assert g.node("fc1").weight.shape == (38, 12) and g.node("hidden.lin").weight.shape == (38, 38)
+    # every one of these graphs compiles for both targets today, except the legacy sub-graph (refused: it
+    # lacks its input gains, see test_legacy_subgraph.py)
+    if name == "braille_subgraph_2023.nir":
+        assert code == 2 and "node 'hidden.lif'.w_in" in err, err
+    else:
+        assert code == 0, err
 
 
 def test_older_nir_input_feeding_disagreeing_sizes_is_one_line():

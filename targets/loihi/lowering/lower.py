@@ -28,8 +28,6 @@ from snncc.targets.loihi.mapping.partition import map_network
 from snncc.targets.loihi.mapping.resources import LOIHI1
 
 VALIDATION_BATCH = 4
-CALIBRATION_BATCH = 8
-CALIBRATION_RATE = 0.05
 
 
 @dataclass
@@ -49,8 +47,9 @@ class LoweredModel:
 
 def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     """Timing, quantization and register values (no validation)."""
+    from snncc.ir.liveness import calibration_spikes, calibration_text
     from snncc.targets.loihi.lowering import scaling
-    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad, random_spikes
+    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
 
     timing_mode = options.get("timing") or "exact"
     rule = options.get("scale") or "auto"
@@ -67,7 +66,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
     steps = int(steps)
 
     names = [c.lif for c in layers]
-    calib = random_spikes(CALIBRATION_BATCH, steps, graph.node(layers[0].pre).width, CALIBRATION_RATE, seed=1)
+    calib = calibration_spikes(graph.node(layers[0].pre).width, steps)   # the inputs compile's liveness warning uses
     reference: dict[str, Any] = {}
 
     def measure(gq: Graph, rq) -> float:
@@ -81,8 +80,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
         emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
         return float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
 
-    quantized, qrec = scaling.choose(order, rule, measure, f"{CALIBRATION_BATCH} seeded random spike trains "
-                                     f"(p={CALIBRATION_RATE}, seed 1), {steps} steps")
+    quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps))
     quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
     meta = {
         "source_sha256": graph.metadata.get("source_sha256", ""),
