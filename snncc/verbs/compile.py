@@ -83,10 +83,9 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
 
         graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
         tgt = get_target(target)
-        options = target_options(tgt, given)
+        artefact = capability(tgt, "lower")(graph, target_options(tgt, given))
         if target != "ir":   # a lowered artefact claims exactness; the IR file is the model itself
             silent = calibration_warning(graph, sample_steps(graph, time_steps)[0])   # float, calibration inputs
             warnings += [silent] if silent else []
-        artefact = capability(tgt, "lower")(graph, options)
     artefact.write(output)
     return CompileRecord(target, str(output), artefact, graph, target_rule, warnings)

@@ -22,7 +22,7 @@ def test_internal_error_is_not_a_user_error():
 def test_a_failing_lowering_check_ends_with_one_internal_error_line_and_status_1(tmp_path, capsys, monkeypatch):
     """Put the old timing bug back (a voltage bias left in the compartment of a late population): the
     compile's own float check catches it, and the CLI reports a bug, not bad input."""
-    import snncc.targets.loihi.timing as timing
+    import snncc.targets.loihi.lowering.timing as timing
 
     monkeypatch.setattr(timing, "_late_voltage_biases", lambda graph, shift: [])
     out = tmp_path / "x.net"
@@ -36,7 +36,7 @@ def test_a_failing_lowering_check_ends_with_one_internal_error_line_and_status_1
 
 
 def test_debug_shows_the_traceback_of_an_internal_error(tmp_path, capsys, monkeypatch):
-    import snncc.targets.loihi.timing as timing
+    import snncc.targets.loihi.lowering.timing as timing
 
     monkeypatch.setattr(timing, "_late_voltage_biases", lambda graph, shift: [])
     with pytest.raises(InternalError, match="first differs at step 16"):
@@ -47,7 +47,7 @@ def test_debug_shows_the_traceback_of_an_internal_error(tmp_path, capsys, monkey
 def test_the_auto_scale_rule_does_not_swallow_an_internal_error():
     """``scaling.choose`` leaves out candidates that raise SnnccError (cannot be lowered); a bug must pass."""
     from snncc.frontends import LoadOptions, load_model
-    from snncc.targets.loihi import scaling
+    from snncc.targets.loihi.lowering import scaling
 
     g = load_model(DATA / "braille_zero_2023.nir", LoadOptions(dt=1e-4))   # outliers: auto measures candidates
 

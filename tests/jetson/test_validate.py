@@ -8,7 +8,7 @@ import onnx.helper as oh
 import pytest
 from onnx import TensorProto
 
-from snncc.errors import SnnccError
+from snncc.errors import InternalError, SnnccError
 from snncc.targets.jetson import target
 from snncc.targets.jetson.export import ExportedModel, export_sequence, export_step
 from snncc.targets.jetson.plan import plan_graph
@@ -50,7 +50,7 @@ def test_a_wrong_weight_in_the_export_is_caught(graphs):
             w[:, :10] *= -1.0
             init.CopyFrom(onnx.numpy_helper.from_array(w, init.name))
     broken = ExportedModel(proto.SerializeToString(), seq.inputs, seq.outputs, seq.dynamic_axes)
-    with pytest.raises(SnnccError, match="model.onnx.*spike agreement"):
+    with pytest.raises(InternalError, match="model.onnx.*spike agreement"):   # a bug in the export, not bad input
         validate_export(plan, steps, broken, step)
 
 
@@ -63,7 +63,7 @@ def test_lstm_score_mismatch_is_caught(graphs):
             b = onnx.numpy_helper.to_array(init) + 0.5
             init.CopyFrom(onnx.numpy_helper.from_array(b.astype(np.float32), init.name))
     broken = ExportedModel(proto.SerializeToString(), step.inputs, step.outputs, step.dynamic_axes)
-    with pytest.raises(SnnccError, match="step.onnx.*scores differ"):
+    with pytest.raises(InternalError, match="step.onnx.*scores differ"):
         validate_export(plan, STEPS, seq, broken)
 
 

@@ -18,9 +18,9 @@ from snncc.frontends import LoadOptions, load_model
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense, Input, Output, Readout
 from snncc.targets.loihi import lower_model
-from snncc.targets.loihi.timing import lower_timing
-from snncc.targets.loihi.emulator import emulate, lead_steps, pad
-from snncc.targets.loihi.validation import loihi_spikes, validate_lowering
+from snncc.targets.loihi.lowering.timing import lower_timing
+from snncc.targets.loihi.emulation.emulator import emulate, lead_steps, pad
+from snncc.targets.loihi.checks.exactness import loihi_spikes, validate_lowering
 from snncc_test_helpers import run_cli
 
 TWO_LIF = Path(__file__).resolve().parents[1] / "data" / "nir" / "two_lif_neurons.nir"

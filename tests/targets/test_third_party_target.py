@@ -62,7 +62,8 @@ def test_compile_and_check_with_a_third_party_target(toy, toy_data, small_rsnn_c
     assert code == 0, err
     written = json.loads(out.read_text())
     assert written["time_steps"] == 30 and written["nodes"] >= 3
-    assert json.loads(stdout) == {"target": "toy", "target_rule": "--target", "output": str(out), **written}
+    assert json.loads(stdout) == {"target": "toy", "target_rule": "--target", "output": str(out), "warnings": [],
+                                  **written}
 
     code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data, "--json"],
                                 capsys)
