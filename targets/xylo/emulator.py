@@ -44,6 +44,16 @@ from snncc.targets.xylo.chip import CORE
 from snncc.targets.xylo.spec import XyloSpec
 
 STATE_NAMES = ("vmem", "isyn", "isyn2", "spikes", "vmem_out", "isyn_out")
+COUNTERS = {
+    "input_clipped": "input counts above the cap of 15 (per channel and step)",
+    "wrapped_weight_deliveries": "deliveries through a weight whose w << shift wrapped in int16",
+    "current_saturations": "synaptic-current additions that saturated at -32768 or 32767",
+    "vmem_saturations": "membrane updates (dv or V) that saturated",
+    "decay_wraps": "dv = -decay(V) that wrapped (V = -32768 with dash_mem 0)",
+    "threshold_wraps": "V - threshold that wrapped (thresholds <= 0)",
+    "hidden_capped": "hidden neuron-steps that stopped at 31 events with V still >= threshold",
+    "output_capped": "output neuron-steps that stopped at 1 event with V still >= threshold",
+}
 
 
 @dataclass
@@ -57,6 +67,7 @@ class XyloResult:
     spikes: np.ndarray | None = None        # (B, T, N) uint8 hidden event counts (0 .. 31)
     vmem_out: np.ndarray | None = None      # (B, T, Nout) int16
     isyn_out: np.ndarray | None = None      # (B, T, Nout) int16
+    events: dict[str, int] | None = None    # reference_run(count=True): how often each rule bit (COUNTERS)
 
     @property
     def recorded(self) -> bool:
@@ -91,25 +102,33 @@ def decay(x: np.ndarray, dash: np.ndarray) -> np.ndarray:
     return np.where(d == 0, np.sign(x), d)
 
 
+def _shifted(spec: XyloSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """w << shift (int64, before narrowing) for the three matrices, shaped (Nin, N_ien, 2), (N, N, 2)
+    and (N_oen, Nout); an absent synapse axis means synapse 1 only (zeros on synapse 2)."""
+    def both_synapses(w):
+        w = w if w.ndim == 3 else w[:, :, None]
+        pad = np.zeros(w.shape[:2] + (CORE.hidden_synapse_states - w.shape[2],), np.int64)
+        return np.concatenate([w.astype(np.int64), pad], axis=2)
+
+    return (both_synapses(spec.weights_in) << spec.weight_shift_in,
+            both_synapses(spec.weights_rec) << spec.weight_shift_rec,
+            spec.weights_out.astype(np.int64) << spec.weight_shift_out)
+
+
 def effective_weights(spec: XyloSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """int16(w << shift) for the three matrices, as int64 arrays of shapes (Nin, N_ien, 2),
-    (N, N, 2) and (N_oen, Nout) (an absent synapse axis means synapse 1 only: zeros on synapse 2)."""
-    def shifted(w, shift, syn_axis):
-        w = np.asarray(w, np.int64)
-        if syn_axis:
-            if w.ndim == 2:
-                w = w[:, :, None]
-            w = np.concatenate([w, np.zeros(w.shape[:2] + (CORE.hidden_synapse_states - w.shape[2],), np.int64)],
-                               axis=2)
-        return wrap16(w << shift)
-
-    return (shifted(spec.weights_in, spec.weight_shift_in, True), shifted(spec.weights_rec, spec.weight_shift_rec, True),
-            shifted(spec.weights_out, spec.weight_shift_out, False))
+    """The weights a delivery adds: int16(w << shift) (wraps, never saturates), shapes as ``_shifted``."""
+    return tuple(wrap16(w) for w in _shifted(spec))
 
 
-def check_inputs(inputs, n_in: int, source: str | None = None) -> np.ndarray:
+def wrapped_weights(spec: XyloSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """True where w << shift does not fit int16 and wraps (shapes as ``effective_weights``)."""
+    return tuple(w != wrap16(w) for w in _shifted(spec))
+
+
+def check_inputs(inputs, n_in: int, source: str | None = None, *, clip: bool = True) -> np.ndarray:
     """(T, Nin) or (B, T, Nin) event counts (whole numbers >= 0; bool, integer or float) ->
-    (B, T, Nin) uint8, clipped to ``CORE.max_input_spikes`` per channel and step as the chip does."""
+    (B, T, Nin), clipped to ``CORE.max_input_spikes`` per channel and step as the chip does (uint8);
+    ``clip=False``: unclipped, int64."""
     from snncc.inputs import check_batch
 
     x = check_batch(inputs, n_in, spikes=False, source=source)
@@ -118,36 +137,74 @@ def check_inputs(inputs, n_in: int, source: str | None = None) -> np.ndarray:
         raise SnnccError(f"input must hold whole event counts, found {bad!r}", file=source, field="input")
     if x.dtype.kind in "if" and x.size and x.min() < 0:
         raise SnnccError(f"input event counts must be >= 0, found {x.min().item()!r}", file=source, field="input")
+    if not clip:
+        return x.astype(np.int64)
     return np.minimum(x, CORE.max_input_spikes).astype(np.uint8)
 
 
-def _fire(v: np.ndarray, threshold: int, n: np.ndarray, cap: int) -> tuple[np.ndarray, np.ndarray]:
+class _Counter(dict):
+    """Counts of the rules that bit (COUNTERS); ``add`` is a no-op when counting is off."""
+
+    def __init__(self, on: bool):
+        super().__init__({k: 0 for k in COUNTERS} if on else {})
+        self.on = on
+
+    def add(self, name: str, mask) -> None:
+        if self.on:
+            self[name] += int(np.count_nonzero(mask))
+
+
+def _saturate(x: np.ndarray, counter: _Counter, name: str) -> np.ndarray:
+    counter.add(name, (x < CORE.state_min) | (x > CORE.state_max))
+    return sat16(x)
+
+
+def _fire(v: np.ndarray, threshold: int, n: np.ndarray, cap: int, counter: _Counter,
+          capped: str) -> tuple[np.ndarray, np.ndarray]:
     """while v >= threshold and n < cap: n += 1; v = wrap(v - threshold)  (vector over the batch)."""
     n = n.copy()
     while True:
         more = (v >= threshold) & (n < cap)
         if not more.any():
+            counter.add(capped, (v >= threshold) & (n >= cap))
             return n, v
         n = n + more
+        counter.add("threshold_wraps", more & (wrap16(v - threshold) != v - threshold))
         v = np.where(more, wrap16(v - threshold), v)
 
 
 def _evolve_states(isyn: np.ndarray, v: np.ndarray, dash_syn: np.ndarray, dash_mem: np.ndarray,
-                   bias: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                   bias: np.ndarray, counter: _Counter) -> tuple[np.ndarray, np.ndarray]:
     """Step 3 up to the events: decay the currents, integrate them and the bias into V."""
     isyn = isyn - decay(isyn, dash_syn)
-    dv = wrap16(-decay(v, dash_mem))
-    dv = sat16(dv + isyn.sum(axis=-1))
-    dv = sat16(dv + bias)
-    return isyn, sat16(v + dv)
+    leak = -decay(v, dash_mem)
+    dv = wrap16(leak)
+    counter.add("decay_wraps", dv != leak)
+    dv = _saturate(dv + isyn.sum(axis=-1), counter, "vmem_saturations")
+    dv = _saturate(dv + bias, counter, "vmem_saturations")
+    return isyn, _saturate(v + dv, counter, "vmem_saturations")
 
 
-def reference_run(spec: XyloSpec, inputs, *, record: bool = False) -> XyloResult:
-    """The rules of this module's docstring, literally, in numpy (slow; the definition)."""
-    x = check_inputs(inputs, spec.n_in).astype(np.int64)
+def _deliver(isyn: np.ndarray, counts: np.ndarray, w: np.ndarray, wrapped: np.ndarray,
+             counter: _Counter) -> np.ndarray:
+    """isyn = sat(isyn + counts * w): ``counts`` (B, 1...) events of one pre-synaptic neuron."""
+    if counter.on:
+        counter.add("wrapped_weight_deliveries", (counts > 0) & wrapped)
+    return _saturate(isyn + counts * w, counter, "current_saturations")
+
+
+def reference_run(spec: XyloSpec, inputs, *, record: bool = False, count: bool = False) -> XyloResult:
+    """The rules of this module's docstring, literally, in numpy (slow; the definition).
+
+    ``count``: also count how often each rule that loses information bit (``COUNTERS``)."""
+    x_raw = check_inputs(inputs, spec.n_in, clip=False)
+    counter = _Counter(count)
+    counter.add("input_clipped", x_raw > CORE.max_input_spikes)
+    x = np.minimum(x_raw, CORE.max_input_spikes).astype(np.int64)
     b, t_steps, n_in = x.shape
     n, n_out, n_ien, n_oen = spec.n_hidden, spec.n_out, spec.n_ien, spec.n_oen
     w_in, w_rec, w_out = effective_weights(spec)
+    wrap_in, wrap_rec, wrap_out = (m != 0 for m in wrapped_weights(spec))
     dash_syn = np.stack([spec.dash_syn, spec.dash_syn_2], axis=1).astype(np.int64)       # (N, 2)
     dash_mem, dash_mem_out = spec.dash_mem.astype(np.int64), spec.dash_mem_out.astype(np.int64)
     dash_syn_out = spec.dash_syn_out.astype(np.int64)[:, None]                             # (Nout, 1)
@@ -165,26 +222,29 @@ def reference_run(spec: XyloSpec, inputs, *, record: bool = False) -> XyloResult
 
     for t in range(t_steps):
         for j in range(n_in):                                        # 1. input events, no delay
-            isyn[:, :n_ien] = sat16(isyn[:, :n_ien] + x[:, t, j, None, None] * w_in[j])
+            isyn[:, :n_ien] = _deliver(isyn[:, :n_ien], x[:, t, j, None, None], w_in[j], wrap_in[j], counter)
         for j in range(n):                                           # 2. last step's hidden events
-            isyn = sat16(isyn + events[:, j, None, None] * w_rec[j])
+            isyn = _deliver(isyn, events[:, j, None, None], w_rec[j], wrap_rec[j], counter)
         for i in range(n_oen):
-            isyn_o[:, :, 0] = sat16(isyn_o[:, :, 0] + events[:, n - n_oen + i, None] * w_out[i])
-        isyn, v = _evolve_states(isyn, v, dash_syn, dash_mem, bias)  # 3. hidden neurons
+            isyn_o[:, :, 0] = _deliver(isyn_o[:, :, 0], events[:, n - n_oen + i, None], w_out[i], wrap_out[i],
+                                       counter)
+        isyn, v = _evolve_states(isyn, v, dash_syn, dash_mem, bias, counter)   # 3. hidden neurons
         events = np.zeros((b, n), np.int64)
         for k in range(n):
-            events[:, k], v[:, k] = _fire(v[:, k], int(spec.threshold[k]), events[:, k], cap_h)
+            events[:, k], v[:, k] = _fire(v[:, k], int(spec.threshold[k]), events[:, k], cap_h, counter,
+                                          "hidden_capped")
             for a in spec.aliases[k]:
                 events[:, a] = np.minimum(events[:, a] + events[:, k], cap_h)
-        isyn_o, v_o = _evolve_states(isyn_o, v_o, dash_syn_out, dash_mem_out, bias_out)   # output neurons
+        isyn_o, v_o = _evolve_states(isyn_o, v_o, dash_syn_out, dash_mem_out, bias_out, counter)   # outputs
         for m in range(n_out):
-            fired, v_o[:, m] = _fire(v_o[:, m], int(spec.threshold_out[m]), np.zeros(b, np.int64), cap_o)
+            fired, v_o[:, m] = _fire(v_o[:, m], int(spec.threshold_out[m]), np.zeros(b, np.int64), cap_o, counter,
+                                     "output_capped")
             out[:, t, m] = fired
         if record:
             rec["vmem"][:, t], rec["isyn"][:, t], rec["isyn2"][:, t] = v, isyn[:, :, 0], isyn[:, :, 1]
             rec["spikes"][:, t] = events
             rec["vmem_out"][:, t], rec["isyn_out"][:, t] = v_o, isyn_o[:, :, 0]
-    return XyloResult(out, **(rec or {}))
+    return XyloResult(out, **(rec or {}), events=dict(counter) if count else None)
 
 
 def emulate(spec: XyloSpec, inputs, *, record: bool = False, threads: int | None = None,
