@@ -3,5 +3,25 @@
 ``chip`` states each chip's limits and the v2 core's arithmetic as data, ``spec`` the network
 record (``XyloSpec``: the keyword arguments of Rockpool's ``XyloSim.from_specification``) with its
 checks and its .npz file, ``emulator`` a bit-exact emulation of the core (``emulate``, and the
-literal numpy statement ``reference_run``). See docs/xylo.md.
+literal numpy statement ``reference_run``). See docs/xylo.md. The names below resolve on first
+use, so importing the package imports nothing heavy.
 """
+
+from __future__ import annotations
+
+import importlib
+
+_HOMES = {
+    "CHIPS": "chip", "CORE": "chip", "XyloChip": "chip", "get_chip": "chip",
+    "XyloSpec": "spec", "load_npz": "spec",
+    "emulate": "emulator", "reference_run": "emulator", "XyloResult": "emulator",
+}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str):
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'snncc.targets.xylo' has no attribute {name!r}")
+    return getattr(importlib.import_module(f"snncc.targets.xylo.{home}"), name)

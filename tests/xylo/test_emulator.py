@@ -133,3 +133,17 @@ def test_recording_more_than_the_memory_cap_is_refused_before_running(monkeypatc
     spec = spec_for_tests()
     with pytest.raises(SnnccError, match="recorded states would need"):
         emulate(spec, np.zeros((20, 100, spec.n_in), np.uint8), record=True)
+
+
+def test_the_package_exports_its_record_and_emulator_lazily():
+    import subprocess
+    import sys
+
+    import snncc.targets.xylo as xylo
+
+    assert xylo.emulate is emulate and xylo.XyloSpec.__name__ == "XyloSpec" and xylo.get_chip().key == "syns61201"
+    with pytest.raises(AttributeError):
+        xylo.lower   # noqa: B018
+    code = "import sys, snncc.targets.xylo; print('snncc.targets.xylo.emulator' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"
