@@ -1,27 +1,38 @@
 """Targets, found through the ``snncc.targets`` entry-point group (third parties plug in there).
 
-The interface is ``snncc.targets.base``: a target names its typed option record
-(``options_type``) and offers any of the capabilities there (``lower``, ``check``, ``agree``,
-``emulate``, ``run``, ``map``, ``estimate``, ``bench``). The verbs (``snncc.api``) ask
-``capability(get_target(name), verb)`` and refuse in one line when the target lacks it.
+The interface is ``snncc.targets.base`` (and ``docs/targets.md``): a target names its typed option
+record (``options_type``, fields declared with ``option(...)``) and offers any of the capabilities
+there. The verbs (``snncc.api``) ask ``capability(get_target(name), verb)`` and refuse in one line
+when the target lacks it; they pass the user's options through ``verb_options``, and the CLI builds
+each command's flags from ``offered_options``: both read the registered targets' declarations, so
+a target's option needs no edit in snncc.
 
 A third-party package registers its target object in its own metadata::
 
     [project.entry-points."snncc.targets"]
     xylo = "snncc_xylo:target"
+
+The module named there must be light (no torch, onnx, onnxruntime or numba at import): listing or
+choosing a target loads it.
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from importlib.metadata import entry_points
+from typing import TypeVar
 
 from snncc.errors import SnnccError
 from snncc.targets.base import (
-    OPTION_FLAGS, Artefact, IROptions, JetsonOptions, LoihiOptions, Record, Target, TargetOptions, capability,
-    target_options,
+    CAPABILITY_OPTIONS, VERB_OF, AgreementOptions, Artefact, Given, Option, OptionRecord, Record, Target,
+    TargetOptions, capability, capability_options, declared_options, model_kinds,
 )
+from snncc.targets.base import target_options as _target_options
 
 GROUP = "snncc.targets"
+R = TypeVar("R", bound=OptionRecord)
 
 
 def available_targets() -> list[str]:
@@ -32,13 +43,10 @@ def output_suffixes() -> dict[str, str]:
     """Target name -> the file suffix that names its artefact (``output_suffix``), for the installed targets
     that declare one. A target that fails to load is passed over: it cannot be chosen without being named."""
     found = {}
-    for ep in entry_points(group=GROUP):
-        try:
-            declared = getattr(ep.load(), "output_suffix", None)
-        except Exception:  # a broken third-party plug-in: named with --target, it reports itself
-            continue
+    for target in loaded_targets():   # a broken third-party plug-in: named with --target, it reports itself
+        declared = getattr(target, "output_suffix", None)
         if isinstance(declared, str) and declared:
-            found[ep.name] = declared
+            found[target.name] = declared
     return dict(sorted(found.items()))
 
 
@@ -50,9 +58,147 @@ def targets_for_suffix(suffix: str) -> list[str]:
 def get_target(name: str) -> Target:
     for ep in entry_points(group=GROUP):
         if ep.name == name:
-            return ep.load()
+            found: Target = ep.load()
+            return found
     raise SnnccError(f"unknown target {name!r} (installed: {', '.join(available_targets()) or 'none'})", field="--target")
 
 
-__all__ = ["Target", "Artefact", "Record", "TargetOptions", "IROptions", "LoihiOptions", "JetsonOptions",
-           "get_target", "available_targets", "output_suffixes", "targets_for_suffix", "capability", "target_options", "OPTION_FLAGS"]
+def loaded_targets() -> list[Target]:
+    """Every registered target that loads, by name (one whose entry point fails is left out here: it
+    is refused, with its reason, when a user chooses it)."""
+    out = []
+    for name in available_targets():
+        try:
+            out.append(get_target(name))
+        except Exception:  # a broken plug-in must not take every command's flags down with it
+            continue
+    return out
+
+
+# -- the options the registered targets declare ---------------------------------------------------
+@dataclass(frozen=True)
+class Offer:
+    """One flag a command offers: ``name`` (keyword), ``flag``, ``kind`` (bool: a switch; int, float,
+    str: a value; str where targets declare different value types: each target converts), the
+    merged ``help`` naming the ``targets`` that take it, and the ``default`` of a capability's option."""
+
+    name: str
+    flag: str
+    kind: type
+    help: str
+    targets: tuple[str, ...]
+    default: bool | int | float | str | None = None
+
+
+def _declarations(capabilities: Sequence[str]) -> dict[str, list[tuple[str, Option]]]:
+    """name -> [(target, declaration)] over the registered targets, for options of ``capabilities``:
+    each target's own, and the option records of the capabilities it has (declared once, in base)."""
+    found: dict[str, list[tuple[str, Option]]] = {}
+    for target in loaded_targets():
+        for spec in declared_options(target.options_type).values():
+            if set(spec.capabilities) & set(capabilities):
+                found.setdefault(spec.name, []).append((target.name, spec))
+        for cap in capabilities:
+            record = CAPABILITY_OPTIONS.get(cap)
+            if record is not None and callable(getattr(target, cap, None)):
+                for spec in declared_options(record).values():
+                    found.setdefault(spec.name, []).append((target.name, spec))
+    return found
+
+
+def offered_options(capabilities: Sequence[str]) -> list[Offer]:
+    """The flags of a command whose verb calls ``capabilities``: one per option name over all registered
+    targets (a flag that one target declares as a switch and another as a value is refused)."""
+    offers = []
+    for name, declared in _declarations(capabilities).items():
+        targets = tuple(dict.fromkeys(t for t, _ in declared))
+        specs = [s for _, s in declared]
+        switches = {s.switch for s in specs}
+        if len(switches) > 1:
+            both = ", ".join(f"{t} ({'switch' if s.switch else 'value'})" for t, s in declared)
+            raise SnnccError(f"targets declare it both as a switch and as a value: {both}", field=specs[0].flag)
+        kinds = {s.kind for s in specs}
+        kind = kinds.pop() if len(kinds) == 1 else str
+        helps = {s.help for s in specs}
+        default = specs[0].default if len({s.default for s in specs}) == 1 else None
+        shown = f" [default: {default}]" if default not in (None, False) else ""
+        if len(helps) == 1:
+            text = f"{specs[0].help}{shown} (--target {', '.join(targets)})"
+        else:
+            text = "; ".join(f"--target {t}: {s.help.rstrip('.')}" for t, s in declared) + shown
+        offers.append(Offer(name, specs[0].flag, kind, text, targets, default))
+    return offers
+
+
+def _check_known(given: Mapping[str, object], capabilities: Sequence[str]) -> None:
+    known = {o.name for o in offered_options(capabilities)} | {f.name for f in dataclasses.fields(TargetOptions)}
+    for key in given:
+        if key not in known:
+            raise TypeError(f"no installed target takes an option {key!r} for "
+                            f"{', '.join(dict.fromkeys(VERB_OF.get(c, c) for c in capabilities))}")
+
+
+def target_options(target: Target, given: Given = None, capability: str | None = None) -> TargetOptions:
+    """``target``'s option record from the user-given values: ``snncc.targets.base.target_options``
+    after checking that every key is an option some installed target declares for some verb (else
+    TypeError: a bug)."""
+    if isinstance(given, OptionRecord):
+        return _target_options(target, given, capability)
+    _check_known(given or {}, list(VERB_OF))
+    return _target_options(target, given, capability)
+
+
+@dataclass(frozen=True)
+class VerbOptions:
+    """What a verb hands its capability: the target's record, and the capability's own (or None)."""
+
+    target: TargetOptions
+    capability: OptionRecord | None = None
+
+    def of(self, kind: type[R]) -> R:
+        """The capability's record as ``kind`` (its defaults when none was built)."""
+        return self.capability if isinstance(self.capability, kind) else capability_options(kind)
+
+
+def verb_options(target: Target, given: Mapping[str, object], use: str,
+                 offers: Iterable[str] | None = None) -> VerbOptions:
+    """Split the options a verb was given (keyword -> value; None: not given) for the capability ``use``.
+
+    ``offers``: the capabilities whose options the verb's command offers (default ``use``); a key no
+    installed target declares for them is a bug (TypeError). A capability's option goes to its record
+    when ``use`` is that capability, else it is refused in one line; the rest build ``target``'s
+    record (``target_options``: validated by the target, refused when it does not take them)."""
+    offered = list(offers or (use,))
+    _check_known(given, offered)
+    own = {f.name for f in dataclasses.fields(CAPABILITY_OPTIONS[use])} if use in CAPABILITY_OPTIONS else set()
+    rest: dict[str, object] = {}
+    mine: dict[str, object] = {}
+    for key, value in given.items():
+        if key in own:
+            mine[key] = value
+            continue
+        other = next((c for c in offered if c != use and c in CAPABILITY_OPTIONS
+                      and key in {f.name for f in dataclasses.fields(CAPABILITY_OPTIONS[c])}), None)
+        if other is not None:
+            if value is not None and value is not False:
+                raise SnnccError(f"applies only to {VERB_OF.get(other, other)}, not to {VERB_OF.get(use, use)}",
+                                 field="--" + key.replace("_", "-"))
+            continue
+        rest[key] = value
+    record = capability_options(CAPABILITY_OPTIONS[use], mine) if use in CAPABILITY_OPTIONS else None
+    return VerbOptions(_target_options(target, rest, use), record)
+
+
+def offering(name: str) -> list[str]:
+    """The registered targets that offer capability ``name``."""
+    return [t.name for t in loaded_targets() if callable(getattr(t, name, None))]
+
+
+def takers(kind: str) -> list[str]:
+    """The registered targets whose ``lower`` takes model records of ``kind`` ("buffered")."""
+    return [t.name for t in loaded_targets() if kind in model_kinds(t)]
+
+
+__all__ = ["Target", "Artefact", "Record", "TargetOptions", "AgreementOptions", "Offer", "VerbOptions",
+           "get_target", "available_targets", "loaded_targets", "capability", "target_options", "verb_options",
+           "offered_options", "model_kinds", "offering", "takers", "output_suffixes", "targets_for_suffix"]

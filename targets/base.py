@@ -1,125 +1,309 @@
-"""The target interface: what a target may offer, as typed capabilities, and its typed options.
+"""The target interface: a target's typed options and the capabilities it may offer (``docs/targets.md``).
 
-A target is one object registered under the entry-point group ``snncc.targets``. It states
-``name``, ``description``, ``output_kind`` ("file" | "directory"), optionally ``output_suffix`` (the
-file suffix that names its artefact, so ``compile -o x.net`` needs no ``--target``) and ``options_type``
-(a frozen dataclass derived from ``TargetOptions``), and offers any of these capabilities, each a method:
+A target is one object registered under the entry-point group ``snncc.targets``; the module the
+entry point names must import nothing heavy (no torch, onnx, onnxruntime or numba: each capability
+imports its work when called), so listing or choosing a target is instant. The object states
+``name``, ``description``, ``output_kind`` ("file" | "directory") and ``options_type`` (a frozen
+dataclass derived from ``TargetOptions``); optionally ``output_suffix`` (the file suffix that names
+its artefact, so ``compile -o x.net`` needs no ``--target``) and ``model_kinds`` (default
+``("graph",)``: which model records its ``lower`` takes; "buffered": a buffered classifier without
+an IR graph).
 
-    lower(graph, options, *, progress)                       -> Artefact     (snncc compile)
-    check(graph, inputs, labels, options, *, data, synthetic, progress) -> Record (snncc check)
-    agree(graph, inputs, options, *, data, samples, density, noise)     -> Record (check --agreement)
-    emulate(bundle, inputs, *, record, stream, gap, progress)  -> emulation  (snncc emulate, Loihi)
-    run(artefact, inputs, *, source, stream, backend)          -> Record     (snncc run, Jetson)
-    map(source, options)                                       -> core map   (snncc map)
-    estimate(source, inputs, *, note, progress)                -> Record     (snncc report --energy)
-    bench(artefacts, *, data, samples, ..., progress)          -> Record     (snncc bench)
+**Options.** A target declares its options as fields of its record made with ``option(help, ...)``:
+the field's name is the keyword (``time_steps``), its flag the name with dashes (``--time-steps``),
+its type (bool: a switch; int, float or str: a value; ``None`` default: not given) and the
+declaration's choices, bounds and ``capabilities`` (the capabilities whose verbs offer it: "lower"
+is ``snncc compile``, "check" and "agree" ``snncc check``, "map" ``snncc map``) are all the CLI and
+the verbs need: ``snncc.cli`` builds each command's flags from the registered targets'
+declarations and the verbs pass options through without naming them. The rules:
 
-``progress`` is ``progress(n)`` (n more samples done), except for ``bench``: ``progress(done,
-total, phase)``, as the verbs report (the protocol has phases: warm-up, timing).
+* the chosen target validates: ``target_options(target, given, capability)`` builds its record,
+  refusing a value outside the declaration (``--scale: scale must be one of ...``) and an option it
+  does not take, in one line: ``--flag: does not apply to --target NAME (it takes --a, --b)``;
+* two targets may declare the same flag: the command offers it once, its help naming the targets
+  that take it (``--target jetson, loihi``); each target validates its own declaration (a flag that
+  is a switch for one target and a value for another is refused when the flags are built);
+* options that belong to a capability rather than a target are declared once, here, in that
+  capability's record (``CAPABILITY_OPTIONS``: ``AgreementOptions`` of ``agree``) and offered by
+  every target that has the capability; the capability receives the record.
 
-A third party implements only the capabilities it has; ``capability(target, "check")`` returns
-the bound method or refuses in one line. Options are settings only (what the user chose); runtime
-state such as a ``progress(n)`` callback is a separate keyword argument, never an option.
+Options are settings only (what the user chose); runtime state such as a progress callback is a
+separate keyword argument, never an option.
+
+**Capabilities**, each a method (``capability(target, name)`` returns it or refuses in one line):
+
+    lower(model, options, *, progress)                       -> Artefact        snncc compile
+    check(graph, inputs, labels, options, *, data, synthetic, progress) -> Record snncc check --data
+    agree(graph, inputs, options, agreement, *, data)        -> Record          snncc check (no labels)
+    emulate(bundle, inputs, *, record, stream, gap, source, progress) -> Emulation  snncc emulate
+    run(artefact, inputs, *, source, stream, backend)        -> RunResult       snncc run
+    map(source, options)                                     -> CoreMap         snncc map
+    estimate(source, inputs, *, data, note, limit, progress) -> Record          snncc report --energy
+    bench(artefacts, *, data, samples, ..., progress)        -> Record          snncc bench
+    hardware()                                               -> HardwareCosts   snncc hpo (per trial)
+    arithmetic(options)                                      -> Arithmetic      snncc train --qat-from
+
+``progress`` is ``progress(n)`` (n more samples done) for the sample loops of check, emulate and
+estimate; ``progress(done, total, phase)`` (``snncc.progress.Progress``) for lower and bench, whose
+work has phases (lower: measuring scale candidates, validating; bench: warm-up, timing).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+import math
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, ClassVar, Literal, Protocol, TypeVar, Union, get_args, overload, runtime_checkable
 
 from snncc.errors import SnnccError
+from snncc.progress import Progress as PhaseProgress
 
 if TYPE_CHECKING:
     import numpy as np
+    import torch
+    from rich.console import Console
 
+    from snncc.frontends.buffered import BufferedModel
     from snncc.ir.graph import Graph
 
-Progress = Callable[[int], None]
+    Model = Union[Graph, BufferedModel]   # what ``lower`` receives (a record of ``model_kinds``)
 
-# user-facing target options (option field -> command-line flag); a flagged field that a target's
-# option record lacks is refused when given (not None, not False)
-OPTION_FLAGS = {
-    "timing": "--timing",
-    "scale": "--scale",
-    "allow_reset_change": "--allow-reset-change",
-    "stream": "--stream",
-    "jetpack": "--jetpack",
-    "time_steps": "--time-steps",
-}
+Progress = Callable[[int], None]
+OptionValue = Union[bool, int, float, str, None]
+OPTION_KEY = "snncc.option"
+VERB_OF = {"lower": "compile", "check": "check with labelled data", "agree": "check without labels (agreement)",
+           "map": "map"}
+
+
+# -- option declarations ----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Option:
+    """One declared option: ``help`` (what it does, for ``--help``), its ``kind`` (bool | int | float |
+    str, read from the field's type), ``choices`` (str values allowed), bounds (``minimum``,
+    ``maximum`` inclusive; ``above``: strictly greater), ``rule`` (the refusal's text when a value
+    breaks them) and ``capabilities`` (whose verbs offer it). ``name``/``default`` come from the field."""
+
+    help: str
+    choices: tuple[str, ...] = ()
+    minimum: float | None = None
+    maximum: float | None = None
+    above: float | None = None
+    rule: str = ""
+    capabilities: tuple[str, ...] = ("lower", "check", "agree")
+    name: str = ""
+    kind: type = str
+    default: OptionValue = None
+
+    @property
+    def flag(self) -> str:
+        return "--" + self.name.replace("_", "-")
+
+    @property
+    def switch(self) -> bool:
+        return self.kind is bool
+
+    def _refuse(self, value: object) -> SnnccError:
+        if self.rule:
+            text = self.rule if self.choices else f"{self.rule}, got {value}"
+        elif self.choices:
+            text = f"must be one of {', '.join(self.choices)}, got {value!r}"
+        else:
+            bounds = [f">= {self.minimum:g}"] if self.minimum is not None else []
+            bounds += [f"> {self.above:g}"] if self.above is not None else []
+            bounds += [f"<= {self.maximum:g}"] if self.maximum is not None else []
+            what = {bool: "true or false", int: "a whole number", float: "a number"}.get(self.kind, "text")
+            text = f"must be {what}{' ' + ' and '.join(bounds) if bounds else ''}, got {value!r}"
+        return SnnccError(text, field=self.flag)
+
+    def parse(self, value: object) -> OptionValue:
+        """``value`` (a Python value, or the CLI's text where targets disagree on the type) as this
+        option's kind, within its choices and bounds; else a one-line refusal."""
+        if self.kind is bool:
+            if not isinstance(value, bool):
+                raise self._refuse(value)
+            return value
+        if self.kind in (int, float):
+            number = _number(value)
+            if number is None or not math.isfinite(number) or (self.kind is int and number != int(number)):
+                raise self._refuse(value)
+            if ((self.minimum is not None and number < self.minimum) or (self.above is not None and number <= self.above)
+                    or (self.maximum is not None and number > self.maximum)):
+                raise self._refuse(value)
+            return int(number) if self.kind is int else number
+        if not isinstance(value, str) or (self.choices and value not in self.choices):
+            raise self._refuse(value)
+        return value
+
+
+def _number(value: object) -> float | None:
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, (int, float)):
+        return float(value)
+    if isinstance(value, str):
+        try:
+            return float(int(value)) if value.strip().lstrip("+-").isdigit() else float(value)
+        except ValueError:
+            return None
+    return None
+
+
+T = TypeVar("T", bool, int, float, str)
+
+
+@overload
+def option(help: str, *, default: None = None, choices: Sequence[str] = (), minimum: float | None = None,
+           maximum: float | None = None, above: float | None = None, rule: str = "",
+           capabilities: Sequence[str] = ("lower", "check", "agree")) -> None: ...
+@overload
+def option(help: str, *, default: T, choices: Sequence[str] = (), minimum: float | None = None,
+           maximum: float | None = None, above: float | None = None, rule: str = "",
+           capabilities: Sequence[str] = ("lower", "check", "agree")) -> T: ...
+
+
+def option(help: str, *, default: OptionValue = None, choices: Sequence[str] = (), minimum: float | None = None,
+           maximum: float | None = None, above: float | None = None, rule: str = "",
+           capabilities: Sequence[str] = ("lower", "check", "agree")) -> OptionValue:
+    """A dataclass field declaring a user-facing option (see the module doc); use as a field's default:
+
+        time_steps: int | None = option("T of the unrolled model.", minimum=1, capabilities=("lower",))
+    """
+    declared = Option(help=help, choices=tuple(choices), minimum=minimum, maximum=maximum, above=above, rule=rule,
+                      capabilities=tuple(capabilities))
+    field: OptionValue = dataclasses.field(default=default, metadata={OPTION_KEY: declared})
+    return field
+
+
+_KINDS = {"bool": bool, "int": int, "float": float, "str": str}
+
+
+def _kind(annotation: object) -> type:
+    """bool, int, float or str from a field's annotation (``int | None``, ``Optional[str]``, ``bool``;
+    a string under ``from __future__ import annotations``)."""
+    if isinstance(annotation, str):
+        text = annotation.replace("typing.", "").replace("Optional[", "").replace("]", "")
+        parts = {p.strip() for p in text.split("|")}
+    else:
+        parts = {getattr(a, "__name__", str(a)) for a in (get_args(annotation) or (annotation,))}
+    parts -= {"None", "NoneType"}
+    if len(parts) != 1 or next(iter(parts)) not in _KINDS:
+        raise TypeError(f"an option's type must be bool, int, float or str (or one of them | None), not {annotation!r}")
+    return _KINDS[next(iter(parts))]
+
+
+def declared_options(record: type[OptionRecord]) -> dict[str, Option]:
+    """Field name -> its declaration, for every ``option(...)`` field of ``record``, in field order."""
+    out: dict[str, Option] = {}
+    for f in dataclasses.fields(record):
+        spec = f.metadata.get(OPTION_KEY)
+        if isinstance(spec, Option):
+            default = f.default if isinstance(f.default, (bool, int, float, str)) else None
+            out[f.name] = dataclasses.replace(spec, name=f.name, kind=_kind(f.type), default=default)
+    return out
 
 
 # -- option records ---------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class TargetOptions:
-    """Settings every target receives: ``source``, the model file's path (recorded in the artefact)."""
+class OptionRecord:
+    """A frozen record of settings (a target's options, or a capability's)."""
 
-    source: str | None = None
-
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> dict[str, object]:
         return dataclasses.asdict(self)
 
 
 @dataclass(frozen=True)
-class IROptions(TargetOptions):
-    """The ``ir`` target takes no options."""
+class TargetOptions(OptionRecord):
+    """Settings every target receives: ``source``, the model file's path (recorded in the artefact)."""
+
+    source: str | None = None
 
 
 @dataclass(frozen=True)
-class LoihiOptions(TargetOptions):
-    """timing: "exact" (default) | "paper"; scale: "auto" (default) | "global" | "per-layer" | "split" |
-    "fine"; allow_reset_change: deploy a subtract reset as reset to zero; stream: the paper's one-stream
-    protocol (check); time_steps: tSample when the model states no recording length."""
+class AgreementOptions(OptionRecord):
+    """The label-free agreement's settings (capability ``agree``): seeded random inputs and the ceiling."""
 
-    timing: str | None = None
-    scale: str | None = None
-    allow_reset_change: bool = False
-    stream: bool = False
-    time_steps: int | None = None
-
-
-@dataclass(frozen=True)
-class JetsonOptions(TargetOptions):
-    """jetpack: the board's JetPack ("4.6" default -> ONNX opset 13); time_steps: T of the unrolled
-    sequence model (default recording_length_s / dt); seed: of the validation inputs."""
-
-    jetpack: str | None = None
-    time_steps: int | None = None
-    seed: int = 0
+    samples: int = option("Without data: seeded random input samples of the agreement (256 steps each).",
+                          default=40, minimum=1, rule="must be a whole number >= 1", capabilities=("agree",))
+    density: float = option("Without data: spike density of the seeded random inputs.", default=0.08, above=0,
+                            maximum=1, rule="spike density must be in (0, 1]", capabilities=("agree",))
+    noise: float = option("Multiplicative weight noise for the float graph's own sensitivity (the ceiling).",
+                          default=0.01, minimum=0, rule="weight noise must be >= 0", capabilities=("agree",))
 
 
-def target_options(target: Any, given: Mapping[str, Any] | TargetOptions | None = None) -> TargetOptions:
-    """``target.options_type`` built from the user-given values (None entries dropped).
+CAPABILITY_OPTIONS: dict[str, type[OptionRecord]] = {"agree": AgreementOptions}
 
-    A flagged option (``OPTION_FLAGS``) given for a target whose record lacks it is refused with
-    ``--flag: does not apply to --target NAME (it takes --a, --b)``; any other unknown key is a bug."""
+R = TypeVar("R", bound=OptionRecord)
+Given = Union[Mapping[str, object], OptionRecord, None]
+
+
+def _takes(target: Target, capability: str | None) -> str:
+    flags = [o.flag for o in declared_options(target.options_type).values()
+             if capability is None or capability in o.capabilities]
+    return ", ".join(flags) or "no target options"
+
+
+def _values(kind: type[OptionRecord], given: Given) -> dict[str, object]:
+    if isinstance(given, OptionRecord):
+        return given.as_dict()
+    return {k: v for k, v in (given or {}).items()}
+
+
+def target_options(target: Target, given: Given = None, capability: str | None = None) -> TargetOptions:
+    """``target.options_type`` built from the user-given values (None entries dropped), each value
+    validated by the target's declaration. A given option (not None, not False) that the record lacks
+    is refused: ``--flag: does not apply to --target NAME (it takes --a, --b)``; one the target takes
+    for other verbs than ``capability``'s: ``--flag: does not apply to <verb> (--target NAME takes it
+    for <verbs>)``."""
     kind = getattr(target, "options_type", TargetOptions)
     if isinstance(given, kind):
         return given
-    if isinstance(given, TargetOptions):
-        given = given.as_dict()
-    fields = [f.name for f in dataclasses.fields(kind)]
-    values = {}
-    for key, value in (given or {}).items():
-        if key in fields:
-            if value is not None:
-                values[key] = value
-        elif key in OPTION_FLAGS:
-            if value is not None and value is not False:
-                takes = ", ".join(OPTION_FLAGS[k] for k in fields if k in OPTION_FLAGS) or "no target options"
-                raise SnnccError(f"does not apply to --target {target.name} (it takes {takes})",
-                                 field=OPTION_FLAGS[key])
-        else:
+    declared = declared_options(kind)
+    fields = {f.name for f in dataclasses.fields(kind)}
+    values: dict[str, object] = {}
+    for key, value in _values(kind, given).items():
+        if value is None:
+            continue
+        if key not in fields:
+            if value is not False:
+                raise SnnccError(f"does not apply to --target {target.name} (it takes {_takes(target, capability)})",
+                                 field="--" + key.replace("_", "-"))
+            continue
+        spec = declared.get(key)
+        if spec is None:
+            values[key] = value
+            continue
+        if capability is not None and capability not in spec.capabilities:
+            if value is False:
+                continue
+            verbs = ", ".join(dict.fromkeys(VERB_OF.get(c, c) for c in spec.capabilities))
+            raise SnnccError(f"does not apply to {VERB_OF.get(capability, capability)} (--target {target.name} takes it "
+                             f"for {verbs})", field=spec.flag)
+        values[key] = spec.parse(value)
+    built: TargetOptions = kind(**values)
+    return built
+
+
+def capability_options(kind: type[R], given: Given = None) -> R:
+    """A capability's option record (``AgreementOptions``) from the given values (None dropped), each
+    validated by its declaration; a key the record lacks is a bug (TypeError)."""
+    if isinstance(given, kind):
+        return given
+    declared = declared_options(kind)
+    values: dict[str, object] = {}
+    for key, value in _values(kind, given).items():
+        if key not in declared:
             raise TypeError(f"{kind.__name__} has no option {key!r}")
+        if value is not None:
+            values[key] = declared[key].parse(value)
     return kind(**values)
 
 
 # -- records and artefacts --------------------------------------------------------------------------
 @runtime_checkable
 class RendersText(Protocol):
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         """Print the record for people (rich console)."""
 
 
@@ -127,7 +311,7 @@ class RendersText(Protocol):
 class Record(RendersText, Protocol):
     """What a verb returns: ``as_dict()`` is what ``--json`` prints, ``render_text`` what the CLI prints."""
 
-    def as_dict(self) -> dict[str, Any]: ...
+    def as_dict(self) -> Mapping[str, object]: ...
 
 
 class Artefact(Protocol):
@@ -136,61 +320,174 @@ class Artefact(Protocol):
     def write(self, path: str | Path) -> None:
         """Write atomically (no partial output on failure), byte-identical for identical input."""
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> Mapping[str, object]:
         """Plain-data record of what was built (printed as text or JSON)."""
 
 
-# -- capabilities -----------------------------------------------------------------------------------
-class Lowers(Protocol):
-    def lower(self, graph: Graph, options: TargetOptions | Mapping[str, Any] | None = None, *,
-              progress: Progress | None = None) -> Artefact:
-        """Lower a validated IR graph; raise SnnccError if the target cannot express it."""
+class HasArrays(Protocol):
+    def arrays(self) -> Mapping[str, np.ndarray]:
+        """The output arrays to save (.npz)."""
 
 
-class Checks(Protocol):
-    def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray,
-              options: TargetOptions | Mapping[str, Any] | None = None, *, data: str | None = None,
-              synthetic: bool = False, progress: Progress | None = None) -> Record:
-        """What deploying costs on a labelled data set (N, T, C); ``progress(n)`` after n samples."""
+class Emulation(HasArrays, Protocol):
+    """What ``emulate`` returns: the run's size and result, and what the lowering shifted."""
+
+    samples: int
+    steps: int
+    padded_steps: int
+    output_shift: int
+    t_sample: int
+
+    @property
+    def prediction(self) -> np.ndarray: ...
+
+    @property
+    def overflow(self) -> Mapping[str, int]: ...
 
 
-class Agrees(Protocol):
-    def agree(self, graph: Graph, inputs: np.ndarray | None, options: TargetOptions | Mapping[str, Any] | None = None,
-              *, data: str | None = None, samples: int = 40, density: float = 0.08, noise: float = 0.01) -> Record:
-        """Agreement with the float graph without labels (None inputs: seeded random spikes)."""
+class RunResult(HasArrays, Protocol):
+    def as_dict(self) -> Mapping[str, object]: ...
 
 
-class Emulates(Protocol):
-    def emulate(self, bundle: Path, inputs: np.ndarray, *, record: str = "outputs", stream: bool = False,
-                gap: int | None = None, source: str | None = None, progress: Progress | None = None) -> Any:
-        """Run a written artefact in the target's emulator; the result offers ``arrays()`` to save."""
+class CoreMap(RendersText, Protocol):
+    def to_dict(self) -> Mapping[str, object]: ...
+
+    def plot(self, path: str | Path) -> object: ...
 
 
-class Runs(Protocol):
-    def run(self, artefact: Path, inputs: np.ndarray, *, source: str | None = None, stream: bool = False,
-            backend: str = "auto") -> Any:
+# -- capabilities: each the signature of the target's method of that name -------------------------
+class Lower(Protocol):
+    def __call__(self, model: Model, options: Given = None, *, progress: PhaseProgress | None = None) -> Artefact:
+        """Lower a validated IR graph (or a record of ``model_kinds``); raise SnnccError if the target cannot
+        express it. ``progress(done, total, phase)`` as the work goes."""
+
+
+class Check(Protocol):
+    def __call__(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
+                 data: str | None = None, synthetic: bool = False, progress: Progress | None = None) -> Record:
+        """What deploying costs on a labelled data set (N, T, C) read from ``data`` (errors name it;
+        ``synthetic``: say so); ``progress(n)`` after n samples."""
+
+
+class Agree(Protocol):
+    def __call__(self, graph: Graph, inputs: np.ndarray | None, options: Given = None,
+                 agreement: AgreementOptions | None = None, *, data: str | None = None) -> Record:
+        """Agreement with the float graph without labels (None inputs: ``agreement.samples`` seeded random
+        spike trains of ``agreement.density``; the float graph's own ceiling under ``agreement.noise``)."""
+
+
+class Emulate(Protocol):
+    def __call__(self, bundle: Path, inputs: np.ndarray, *, record: str = "outputs", stream: bool = False,
+                 gap: int | None = None, source: str | None = None, progress: Progress | None = None) -> Emulation:
+        """Run a written artefact in the target's emulator."""
+
+
+class Run(Protocol):
+    def __call__(self, artefact: Path, inputs: np.ndarray, *, source: str | None = None, stream: bool = False,
+                 backend: str = "auto") -> RunResult:
         """Run a written artefact on inputs; the result holds the output arrays."""
 
 
-class Maps(Protocol):
-    def map(self, source: Path, options: TargetOptions | Mapping[str, Any] | None = None) -> Any:
-        """Place an artefact (or a model, lowered first) on the hardware; the map renders itself."""
+class Map(Protocol):
+    def __call__(self, source: Path, options: Given = None) -> CoreMap:
+        """Place an artefact (or a model, lowered first with ``options``) on the hardware."""
 
 
-class Estimates(Protocol):
-    def estimate(self, source: Path, inputs: Any, *, data: str | None = None, note: str = "", limit: int | None = None,
-                 progress: Progress | None = None) -> Record:
-        """ESTIMATE of energy and delay per sample of an artefact on inputs."""
+class Estimate(Protocol):
+    def __call__(self, source: Path, inputs: object, *, data: str | None = None, note: str = "",
+                 limit: int | None = None, progress: Progress | None = None) -> Record:
+        """ESTIMATE of energy and delay per sample of an artefact on inputs (an array, or
+        ``snncc.inputs.RandomSpikes``)."""
 
 
-class Benches(Protocol):
-    def bench(self, artefacts: list[Path], **protocol: Any) -> Record:
-        """Measured latency (and power) of written artefacts."""
+class Bench(Protocol):
+    def __call__(self, artefacts: list[Path], *, data: Path | None = None, samples: int = 64, power: bool = False,
+                 power_root: Path = Path("/"), rail: str = "VDD_IN", repeats: int = 3, warmup_passes: int = 6,
+                 timed_passes: int = 6, stream: bool = False, backend: str = "auto",
+                 progress: PhaseProgress | None = None) -> Record:
+        """Measured latency (and power) of written artefacts, the paper's protocol."""
+
+
+@dataclass(frozen=True)
+class Objective:
+    """A figure a hardware-aware search may optimise: ``key`` in the figures' ``as_dict()``, its
+    ``direction`` ("minimize" | "maximize") and ``unit`` (with ESTIMATE where it is one)."""
+
+    key: str
+    direction: str
+    unit: str
+
+
+class HardwareFigures(Protocol):
+    def as_dict(self) -> Mapping[str, object]:
+        """Plain data, stored with each trial; the keys of ``HardwareCosts.objectives`` among them."""
+
+
+class HardwareCosts(Protocol):
+    """What a model costs on the target, per search trial (capability ``hardware``).
+
+    ``objectives``: name -> ``Objective`` (Loihi: energy, delay, synops, cores, emulated_accuracy; a
+    target with another budget declares its own, e.g. neurons used or real-time margin);
+    ``published``: a published measurement shown beside the trials (figure keys and ``accuracy`` in
+    %, ``label``), or empty; ``label``: what the figures are (ESTIMATE wording)."""
+
+    objectives: Mapping[str, Objective]
+    published: Mapping[str, float | str]
+    label: str
+
+    def figures(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
+                estimate_samples: int = 16, emulate_samples: int = 0) -> HardwareFigures:
+        """Lower ``graph`` and measure or ESTIMATE its cost on the first ``estimate_samples`` of
+        ``inputs`` (B, T, C); ``emulate_samples`` > 0: also the deployed accuracy on that many."""
+
+
+class Hardware(Protocol):
+    def __call__(self) -> HardwareCosts: ...
+
+
+@dataclass(frozen=True)
+class NeuronConstants:
+    """A LIF population's float constants, as trained: threshold, time step and time constants (s)."""
+
+    threshold: float
+    dt: float
+    tau_syn: float
+    tau_mem: float
+
+
+class QuantizedParameters(Protocol):
+    """The parameters the chip would run, in the float model's units: ``weights`` (name -> tensor,
+    straight-through: forward = the chip's value, gradient = identity), ``threshold``, per-step decay
+    factors ``alpha`` (current) and ``beta`` (voltage), and ``record`` (the integers chosen, plain data)."""
+
+    weights: Mapping[str, torch.Tensor]
+    threshold: float
+    alpha: float
+    beta: float
+
+    @property
+    def record(self) -> Mapping[str, int | float]: ...
+
+
+class Arithmetic(Protocol):
+    """The target's arithmetic as differentiable operations, to train through it (capability
+    ``arithmetic``). Today: its quantization of weights, threshold and decays (straight-through
+    rounding); a full model of its integer dynamics (state rounding, saturation, reset, spike rule)
+    belongs here too, as methods beside ``quantize``."""
+
+    label: str                       # the chip's name in records ("Loihi")
+
+    def quantize(self, weights: Mapping[str, torch.Tensor], neurons: NeuronConstants) -> QuantizedParameters:
+        """The chip's parameters for a network with ``weights`` (all its projections) and ``neurons``."""
+
+
+class TrainArithmetic(Protocol):
+    def __call__(self, options: Given = None) -> Arithmetic: ...
 
 
 CAPABILITIES: dict[str, type] = {
-    "lower": Lowers, "check": Checks, "agree": Agrees, "emulate": Emulates, "run": Runs, "map": Maps,
-    "estimate": Estimates, "bench": Benches,
+    "lower": Lower, "check": Check, "agree": Agree, "emulate": Emulate, "run": Run, "map": Map,
+    "estimate": Estimate, "bench": Bench, "hardware": Hardware, "arithmetic": TrainArithmetic,
 }
 
 
@@ -198,18 +495,49 @@ class Target(Protocol):
     name: str
     description: str
     output_kind: str  # "file" or "directory"
-    options_type: type[TargetOptions]
+    options_type: ClassVar[type[TargetOptions]]
     # optional ``output_suffix``: the file suffix that names this target's artefact (".net"), so that
     # ``compile -o x.net`` needs no --target; a target without one (a directory) is always named
 
 
-def capability(target: Any, name: str, rule: str | None = None) -> Callable[..., Any]:
-    """``target``'s bound capability ``name`` (one of ``CAPABILITIES``), or a one-line refusal.
+def model_kinds(target: Target) -> tuple[str, ...]:
+    """The model records ``target.lower`` takes: ("graph",) unless the target states more."""
+    kinds = getattr(target, "model_kinds", ("graph",))
+    return tuple(kinds) if isinstance(kinds, (tuple, list)) else ("graph",)
 
-    ``rule`` replaces the default refusal text (``target 'X' has no NAME in this snncc``)."""
+
+@overload
+def capability(target: Target, name: Literal["lower"], rule: str | None = None) -> Lower: ...
+@overload
+def capability(target: Target, name: Literal["check"], rule: str | None = None) -> Check: ...
+@overload
+def capability(target: Target, name: Literal["agree"], rule: str | None = None) -> Agree: ...
+@overload
+def capability(target: Target, name: Literal["emulate"], rule: str | None = None) -> Emulate: ...
+@overload
+def capability(target: Target, name: Literal["run"], rule: str | None = None) -> Run: ...
+@overload
+def capability(target: Target, name: Literal["map"], rule: str | None = None) -> Map: ...
+@overload
+def capability(target: Target, name: Literal["estimate"], rule: str | None = None) -> Estimate: ...
+@overload
+def capability(target: Target, name: Literal["bench"], rule: str | None = None) -> Bench: ...
+@overload
+def capability(target: Target, name: Literal["hardware"], rule: str | None = None) -> Hardware: ...
+@overload
+def capability(target: Target, name: Literal["arithmetic"], rule: str | None = None) -> TrainArithmetic: ...
+@overload
+def capability(target: Target, name: str, rule: str | None = None) -> Callable[..., object]: ...
+
+
+def capability(target: Target, name: str, rule: str | None = None) -> Callable[..., object]:
+    """``target``'s bound capability ``name`` (one of ``CAPABILITIES``, its signature that protocol's
+    ``__call__``), or a one-line refusal. ``rule`` replaces the default refusal text (``target 'X' has
+    no NAME in this snncc``)."""
     if name not in CAPABILITIES:
         raise ValueError(f"unknown capability {name!r} (known: {', '.join(CAPABILITIES)})")
     method = getattr(target, name, None)
     if not callable(method):
         raise SnnccError(rule or f"target {target.name!r} has no {name} in this snncc", field="--target")
-    return method
+    found: Callable[..., object] = method
+    return found

@@ -260,7 +260,8 @@ def test_every_verb_taking_progress_reports_through_a_plain_callable(synth_dir, 
     import inspect
 
     taking = {name for name in api.__all__ if "progress" in inspect.signature(getattr(api, name)).parameters}
-    assert taking == {"data_synth", "data_encode", "data_analyse", "train", "check", "emulate", "report", "bench"}
+    assert taking == {"data_synth", "data_encode", "data_analyse", "train", "check", "emulate", "report", "bench",
+                      "compile"}
     seen: dict[str, list] = {}
 
     p = Calls()
@@ -290,7 +291,10 @@ def test_every_verb_taking_progress_reports_through_a_plain_callable(synth_dir, 
     p = Calls()
     api.check(small_rsnn_checkpoint, target="loihi", data=tmp_path / "d.npz", progress=p)
     seen["check"] = p.check()
-    api.compile(small_rsnn_checkpoint, target="loihi", output=tmp_path / "m.net")
+    p = Calls()
+    api.compile(small_rsnn_checkpoint, target="loihi", output=tmp_path / "m.net", progress=p)
+    assert p.check()[-1] == (1, 1, "validating the bundle against the IR reference")
+    seen["compile"] = p.calls
     np.save(tmp_path / "x.npy", np.tile(x, (1, 1, 2)))
     p = Calls()
     api.emulate(tmp_path / "m.net", input=tmp_path / "x.npy", output=tmp_path / "o.npz", progress=p)
@@ -298,7 +302,10 @@ def test_every_verb_taking_progress_reports_through_a_plain_callable(synth_dir, 
     p = Calls()
     api.report(tmp_path / "m.net", energy=True, samples=2, progress=p)
     seen["report"] = p.check()
-    api.compile(small_rsnn_checkpoint, target="jetson", output=tmp_path / "j", time_steps=20)
+    p = Calls()
+    api.compile(small_rsnn_checkpoint, target="jetson", output=tmp_path / "j", time_steps=20, progress=p)
+    assert [c[2] for c in p.check()] == ["exporting the ONNX models"] * 3 + [
+        "validating in ONNX Runtime against the IR reference"] * 2
     p = Calls()
     api.bench(tmp_path / "j", samples=2, repeats=1, warmup_passes=1, timed_passes=1, progress=p)
     seen["bench"] = p.check()

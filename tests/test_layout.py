@@ -1,15 +1,21 @@
-"""The layout issue 13 asks for, checked on the source: no import cycle between snncc's modules, the
-library never imports the CLI, and the CLI holds no numerical code (it parses, calls, prints)."""
+"""The layout issues 13 and 24 ask for, checked on the source, function-level imports included: no
+import cycle between snncc's modules, the library never imports the CLI or the verbs, snncc/ reaches a
+target only through the registry, ``snncc.targets.base`` and the target's registered entry module,
+and the CLI holds no numerical code (it parses, calls, prints).
+
+Imports under ``if TYPE_CHECKING:`` are left out: they never run."""
 
 from __future__ import annotations
 
 import ast
 from collections import defaultdict
+from importlib.metadata import entry_points
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ((REPO / "snncc", "snncc"), (REPO / "targets", "snncc.targets"))
 TARGET_PACKAGES = {p.name for p in (REPO / "targets").iterdir() if (p / "__init__.py").is_file()}
+HEAVY = {"numpy", "torch", "scipy", "sklearn", "numba", "h5py", "pandas"}
 
 
 def modules() -> dict[str, Path]:
@@ -24,8 +30,31 @@ def modules() -> dict[str, Path]:
     return out
 
 
+def _type_checking(node: ast.AST) -> bool:
+    test = getattr(node, "test", None)
+    return isinstance(node, ast.If) and (
+        (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING")
+        or (isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"))
+
+
+def import_nodes(tree: ast.AST):
+    """Every import statement of ``tree`` at any depth (functions, methods, branches), except those
+    under ``if TYPE_CHECKING:``."""
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            yield node
+        for child in ast.iter_child_nodes(node):
+            if _type_checking(child):
+                stack.extend(child.orelse)
+            else:
+                stack.append(child)
+
+
 def imported(name: str, path: Path, nodes) -> set[str]:
-    """Absolute names imported by the import statements among ``nodes`` (relative ones resolved)."""
+    """Absolute names imported by the import statements among ``nodes`` (relative ones resolved);
+    ``from a import b`` gives ``a`` and ``a.b`` (the latter counts only where ``a.b`` is a module)."""
     names = set()
     for node in nodes:
         if isinstance(node, ast.Import):
@@ -40,44 +69,116 @@ def imported(name: str, path: Path, nodes) -> set[str]:
     return names
 
 
-def test_no_module_level_import_cycle():
-    mods = modules()
-    edges = defaultdict(set)
-    for name, path in mods.items():
-        body = ast.parse(path.read_text(encoding="utf-8")).body   # module level (not TYPE_CHECKING blocks)
-        edges[name] = {t for t in imported(name, path, body) if t in mods and t != name}
+def every_import(mods: dict[str, Path]) -> dict[str, set[str]]:
+    """Module -> the names it imports anywhere (function level included, TYPE_CHECKING excluded)."""
+    return {name: imported(name, path, import_nodes(ast.parse(path.read_text(encoding="utf-8"))))
+            for name, path in mods.items()}
+
+
+def find_cycle(edges: dict[str, set[str]]) -> list[str] | None:
+    """One import cycle as a list of modules (first == last), or None."""
     state: dict[str, int] = {}
     trail: list[str] = []
 
-    def visit(u: str) -> None:
+    def visit(u: str) -> list[str] | None:
         state[u] = 1
         trail.append(u)
-        for v in sorted(edges[u]):
-            assert state.get(v) != 1, "import cycle: " + " -> ".join(trail[trail.index(v):] + [v])
+        for v in sorted(edges.get(u, ())):
+            if state.get(v) == 1:
+                return trail[trail.index(v):] + [v]
             if v not in state:
-                visit(v)
+                found = visit(v)
+                if found:
+                    return found
         trail.pop()
         state[u] = 2
+        return None
 
-    for m in sorted(mods):
+    for m in sorted(edges):
         if m not in state:
-            visit(m)
+            found = visit(m)
+            if found:
+                return found
+    return None
 
 
-def test_the_library_never_imports_the_cli():
-    for name, path in modules().items():
-        if name.startswith("snncc.cli"):
+def module_edges(mods: dict[str, Path]) -> dict[str, set[str]]:
+    imports = every_import(mods)
+    return defaultdict(set, {n: {t for t in ts if t in mods and t != n} for n, ts in imports.items()})
+
+
+def test_no_import_cycle_function_level_included():
+    cycle = find_cycle(module_edges(modules()))
+    assert cycle is None, "import cycle: " + " -> ".join(cycle or [])
+
+
+def test_the_cycle_finder_finds_a_cycle_through_a_function_level_import(tmp_path):
+    """The check can fail: a planted function-level import back into a module's importer is a cycle."""
+    mods = modules()
+    planted = tmp_path / "synth_v2.py"
+    planted.write_text(mods["snncc.data.synth_v2"].read_text(encoding="utf-8")
+                       + "\n\ndef _planted():\n    from snncc.data.synth import generate\n", encoding="utf-8")
+    cycle = find_cycle(module_edges({**mods, "snncc.data.synth_v2": planted}))
+    assert cycle is not None and {"snncc.data.synth", "snncc.data.synth_v2"} <= set(cycle)
+    typed = tmp_path / "typed.py"
+    typed.write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from snncc.data.synth import generate\n",
+                     encoding="utf-8")
+    assert find_cycle(module_edges({**mods, "snncc.data.synth_v2": typed})) is None
+
+
+def entry_modules() -> set[str]:
+    """The modules snncc's own targets register under the ``snncc.targets`` entry-point group."""
+    return {ep.value.partition(":")[0] for ep in entry_points(group="snncc.targets")
+            if ep.value.startswith("snncc.targets.")}
+
+
+def target_internals(imports: dict[str, set[str]], mods: dict[str, Path], allowed: set[str]) -> list[str]:
+    """``module -> target module`` for every import from snncc/ (not targets/) of a target's module
+    other than the registry, ``snncc.targets.base`` and the registered entry modules."""
+    bad = []
+    for name, targets in imports.items():
+        if name.startswith("snncc.targets"):
             continue
-        every = imported(name, path, ast.walk(ast.parse(path.read_text(encoding="utf-8"))))
-        assert not any(t == "snncc.cli" or t.startswith("snncc.cli.") for t in every), f"{path} imports snncc.cli"
+        for t in targets:
+            if t.startswith("snncc.targets.") and t in mods and t not in allowed:
+                bad.append(f"{name} -> {t}")
+    return sorted(bad)
+
+
+def test_snncc_imports_no_target_internals():
+    mods = modules()
+    entries = entry_modules()
+    assert {"snncc.targets.ir", "snncc.targets.loihi.capabilities", "snncc.targets.jetson.capabilities"} <= entries
+    allowed = {"snncc.targets", "snncc.targets.base", *entries}
+    bad = target_internals(every_import(mods), mods, allowed)
+    assert not bad, "snncc/ imports a target's internals (ask the target for a capability): " + ", ".join(bad)
+
+
+def test_the_internals_check_can_fail(tmp_path):
+    mods = modules()
+    planted = tmp_path / "qat.py"
+    planted.write_text("def f():\n    from snncc.targets.loihi.lowering.quantize import weight_scale\n", encoding="utf-8")
+    mods = {**mods, "snncc.training.planted": planted}
+    bad = target_internals(every_import(mods), mods, {"snncc.targets", "snncc.targets.base", *entry_modules()})
+    assert bad == ["snncc.training.planted -> snncc.targets.loihi.lowering.quantize"]
+
+
+def test_the_library_never_imports_the_cli_or_the_verbs():
+    """Layers: the CLI over ``snncc.api`` over ``snncc.verbs`` over the rest."""
+    for name, every in every_import(modules()).items():
+        if not name.startswith("snncc.cli"):
+            assert not any(t == "snncc.cli" or t.startswith("snncc.cli.") for t in every), f"{name} imports snncc.cli"
+        if not name.startswith(("snncc.cli", "snncc.api", "snncc.verbs")):
+            up = sorted(t for t in every if t in ("snncc.api", "snncc.verbs") or t.startswith("snncc.verbs."))
+            assert not up, f"{name} imports {up}: the verbs sit above the library"
 
 
 def test_cli_modules_hold_no_numerical_code():
-    for name, path in modules().items():
+    mods = modules()
+    for name, every in every_import(mods).items():
         if not name.startswith("snncc.cli."):
             continue
-        every = imported(name, path, ast.walk(ast.parse(path.read_text(encoding="utf-8"))))
-        heavy = {t.split(".")[0] for t in every} & {"numpy", "torch", "scipy", "sklearn", "numba", "h5py", "pandas"}
-        assert not heavy, f"{path} imports {sorted(heavy)}: numerical work belongs in the library"
+        heavy = {t.split(".")[0] for t in every} & HEAVY
+        assert not heavy, f"{mods[name]} imports {sorted(heavy)}: numerical work belongs in the library"
         internals = [t for t in every if t.startswith("snncc.targets.") and t.split(".")[2] in TARGET_PACKAGES]
-        assert not internals, f"{path} imports a target's internals {internals}: ask the target for a capability"
+        assert not internals, f"{mods[name]} imports a target's internals {internals}: ask the target for a capability"

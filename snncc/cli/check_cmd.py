@@ -14,9 +14,11 @@ from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsed
 
 from snncc.cli.app import app
 from snncc.cli.output import print_record, progress_bar
+from snncc.cli.target_flags import with_target_flags
 
 
 @app.command("check")
+@with_target_flags("check", "agree")
 def check_command(
     model: Path = typer.Argument(..., help="Model file (as for snncc compile)."),
     target: str = typer.Option("loihi", "--target", "-t", help="Target whose losses to measure."),
@@ -24,22 +26,18 @@ def check_command(
     params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file for a SpyTorch weight list."),
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
     reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR)."),
-    timing: Optional[str] = typer.Option(None, "--timing", help="Loihi: 'exact' (default) or 'paper' (the authors' export order)."),
-    scale: Optional[str] = typer.Option(None, "--scale", help="Loihi weight scale rule: global, per-layer, split or auto (default)."),
-    allow_reset_change: bool = typer.Option(False, "--allow-reset-change", help="Loihi: deploy a subtract-reset model with reset to zero."),
-    stream: bool = typer.Option(False, "--stream", help="Loihi: the paper's protocol, one stream with 100 blank steps between samples."),
-    limit: Optional[int] = typer.Option(None, "--limit", help="Use only the first N samples."),
+    limit: Optional[int] = typer.Option(None, "--limit", help="Use only the first N samples (without --data: N random samples)."),
     agreement: bool = typer.Option(False, "--agreement", help="Measure agreement with the float graph instead of accuracy (no labels needed; implied without --data)."),
-    density: float = typer.Option(0.08, "--density", help="Without labels: spike density of the seeded random inputs (40 samples x 256 steps; --limit sets the samples)."),
-    noise: float = typer.Option(0.01, "--noise", help="Without labels: multiplicative weight noise for the float graph's own sensitivity (the ceiling)."),
     json_out: bool = typer.Option(False, "--json", help="Print the record as JSON."),
+    target_options: dict = {},
 ) -> None:
-    """Compare the float model as trained with the target, on data: accuracy, spike agreement, loss causes."""
+    """Compare the float model as trained with the target, on data: accuracy, spike agreement, loss causes.
+
+    The target options below are declared by the targets that take them (each names its targets)."""
     from snncc.api import check
 
     with progress_bar(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                       disable=json_out) as progress:
-        record = check(model, target=target, data=data, params=params, dt=dt, reset=reset, timing=timing, scale=scale,
-                       allow_reset_change=allow_reset_change, stream=stream, limit=limit, agreement=agreement,
-                       density=density, noise=noise, progress=progress)
+        record = check(model, target=target, data=data, params=params, dt=dt, reset=reset, limit=limit,
+                       agreement=agreement, progress=progress, **target_options)
     print_record(record, json_out)

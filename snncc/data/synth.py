@@ -1,7 +1,8 @@
 """A calibrated physical model of the tactile Braille recording (SYNTHETIC data, not the real set).
 
-This module holds the shared geometry, generator version 1 and the version switch
-(:func:`generate`, default :data:`GENERATOR_VERSION` = 2, see ``snncc.data.synth_v2``). Version 1:
+This module holds generator version 1 and the version switch (:func:`generate`, default
+:data:`GENERATOR_VERSION` = 2, see ``snncc.data.synth_v2``); the geometry both versions share is
+``snncc.data.fingertip``. Version 1:
 
 The real Zenodo recordings cannot be fetched on these machines, so ``snncc data synth`` builds a
 stand-in from the recording's physics (spec: braille.md, "Synthetic generator"):
@@ -45,21 +46,10 @@ from typing import Callable
 
 import numpy as np
 
-from snncc.data.letters import CLASSES, DOTS, FRAME_RATE_HZ, N_CLASSES, dot_cell
+from snncc.data.fingertip import SLIDE_MM, SPEED_MM_S, TAXELS, dot_positions  # noqa: F401  (re-exported)
+from snncc.data.letters import CLASSES, FRAME_RATE_HZ, N_CLASSES
 from snncc.errors import SnnccError
 
-# Taxel centres of the iCub fingertip (mm): x along the finger (tip towards -x), y pad normal, z.
-TAXELS = np.array(
-    [
-        [-10.3, 2.2, -3.8], [-10.3, 4.4, 0.0], [-10.3, 2.2, 3.8], [-12.5, -1.4, 4.4],
-        [-12.5, -1.4, -4.4], [-14.1, 2.2, 3.8], [-14.1, 4.4, 0.0], [-14.1, 2.2, -3.8],
-        [-18.7, 1.6, -2.5], [-18.7, 3.15, 0.0], [-18.7, 1.6, 2.5], [-20.9, 0.0, 0.0],
-    ],
-    dtype=np.float64,
-)
-
-SLIDE_MM = 15.5
-SPEED_MM_S = 20.0
 
 
 @dataclass(frozen=True)
@@ -92,15 +82,6 @@ class SynthParams:
 
 
 DEFAULT_PARAMS = SynthParams()
-
-
-def dot_positions(letter: str, p: SynthParams) -> np.ndarray:
-    """(n_dots, 2) positions (x, z) in mm of a letter's dots at slide start, no jitter."""
-    out = []
-    for d in DOTS[letter]:
-        row, col = dot_cell(d)
-        out.append((p.x_first_row + row * p.row_pitch, p.z_centre + (col - 0.5) * p.col_pitch))
-    return np.array(out, dtype=np.float64).reshape(-1, 2)
 
 
 def slide_offset(t: np.ndarray, t_start: float | np.ndarray) -> np.ndarray:

@@ -47,7 +47,7 @@ from typing import Callable
 import numpy as np
 
 from snncc.data.letters import CLASSES, FRAME_RATE_HZ, N_CLASSES
-from snncc.data.synth import SLIDE_MM, SPEED_MM_S, TAXELS, dot_positions
+from snncc.data.fingertip import SLIDE_MM, SPEED_MM_S, TAXELS, dot_positions
 from snncc.errors import SnnccError
 
 

@@ -8,43 +8,16 @@ lazily and more can be registered (``register_frontend``) without touching this 
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
 from snncc.atomic import file_sha256
 from snncc.errors import SnnccError
+from snncc.frontends.load_options import OPTION_USE, LoadOptions, refuse_options  # noqa: F401  (re-exported)
 from snncc.ir.graph import Graph
 from snncc.ir.validate import validate
 
-
-@dataclass
-class LoadOptions:
-    """What a user can tell a frontend that a file cannot: parameters file, dt, reset mode."""
-
-    params: Path | None = None
-    dt: float | None = None
-    reset: str | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
-
-
 Loader = Callable[[Path, LoadOptions], Graph]
-
-# which input formats each load option applies to (a given option the file cannot use is refused)
-OPTION_USE = {
-    "params": ("--params", "a SpyTorch weight list (the authors' [W_in, W_out(, V_rec)])"),
-    "dt": ("--dt", "NIR graphs (NIR stores no time step)"),
-    "reset": ("--reset", "NIR graphs (NIR does not say whether a reset subtracts)"),
-}
-
-
-def refuse_options(options: LoadOptions | None, accepted: tuple[str, ...], what: str, path: str | Path) -> None:
-    """Refuse every load option given by the user that a file of kind ``what`` cannot use."""
-    if options is None:
-        return
-    for key, (flag, applies_to) in OPTION_USE.items():
-        if key not in accepted and getattr(options, key) is not None:
-            raise SnnccError(f"does not apply to {what}; it applies only to {applies_to}", file=str(path), field=flag)
 
 # suffix -> "module:function" (imported on first use) or a callable
 _LOADERS: dict[str, str | Loader] = {

@@ -1,34 +1,70 @@
 """Checkpoints of the buffered classifiers (FCN, ResNet, Encoder, TCNN, Inception) at compile time.
 
-They have no IR graph (the IR has no convolutions): ``--target jetson`` exports the PyTorch module
-directly (``snncc.targets.jetson.buffered``), checked in ONNX Runtime against PyTorch; any other
-target is refused in one line.
+They have no IR graph (their convolutions see the whole buffered sample at once), so the frontend
+returns a model record (``BufferedModel``: the checkpoint's PyTorch module, its metadata and source)
+that ``compile`` hands to the target's ``lower`` when the target states it takes such records
+(``model_kinds`` holds "buffered": Jetson, which exports the module and checks it against PyTorch in
+ONNX Runtime); any other target is refused in one line.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from snncc.errors import SnnccError
 
+if TYPE_CHECKING:
+    from snncc.frontends.load_options import LoadOptions
+    from snncc.ir.graph import Graph
+    from snncc.models.baselines import BufferedClassifier
 
-def compile_buffered(path: str | Path, target: str, options: dict):
-    """The Jetson artefact of a buffered-classifier checkpoint, or None when ``path`` holds another model."""
-    from snncc.targets.jetson.buffered import buffered_checkpoint, lower_checkpoint
+SUFFIXES = (".pt", ".pth", ".ckpt")
 
-    if Path(path).suffix.lower() not in (".pt", ".pth", ".ckpt"):
+
+@dataclass
+class BufferedModel:
+    """A buffered classifier to compile: its module, the checkpoint's metadata, the file's name and hash."""
+
+    module: BufferedClassifier
+    metadata: dict[str, Any] = field(default_factory=dict)
+    source_file: str = ""
+    source_sha256: str = ""
+    model_kind = "buffered"      # what a target's ``model_kinds`` must hold to lower it
+
+    @property
+    def kind(self) -> str:
+        return self.module.config.kind
+
+
+def read_buffered(path: str | Path, options: LoadOptions | None = None) -> BufferedModel | None:
+    """The buffered classifier in ``path``, or None when ``path`` holds another model (or is not a
+    readable torch file: the regular loader then says why). Load options are refused as for any
+    snncc checkpoint (its architecture record states dt and reset)."""
+    p = Path(path)
+    if p.suffix.lower() not in SUFFIXES or not p.is_file():
         return None
+    from snncc.atomic import file_sha256
+    from snncc.frontends.checkpoint import is_checkpoint, model_metadata, module_from_checkpoint
+    from snncc.frontends.load_options import refuse_options
+    from snncc.frontends.torchfile import load_torch_file
+    from snncc.models.baselines import BASELINE_KINDS
+
     try:
-        obj = buffered_checkpoint(path)
+        obj = load_torch_file(p)
     except SnnccError:
-        return None          # not a readable torch file: the regular loader says why
-    if obj is None:
         return None
-    kind = obj["architecture"]["kind"]
-    if target != "jetson":
-        raise SnnccError(f"a {kind} (convolutional, buffered) has no IR graph and compiles only with --target jetson",
-                         file=str(path), field="--target")
-    from snncc.targets import get_target, target_options
+    if not (is_checkpoint(obj) and isinstance(obj.get("architecture"), dict)
+            and obj["architecture"].get("kind") in BASELINE_KINDS):
+        return None
+    refuse_options(options, (), "an snncc checkpoint, whose architecture record states dt and reset", p)
+    module = module_from_checkpoint(obj, source=str(p))
+    return BufferedModel(module, model_metadata(obj), p.name, file_sha256(p))
 
-    typed = target_options(get_target("jetson"), options)   # refuses an option Jetson does not take
-    return lower_checkpoint(path, obj, typed.as_dict())
+
+def load_compilable(path: str | Path, options: LoadOptions | None = None) -> Graph | BufferedModel:
+    """What ``compile`` lowers: a buffered classifier's record, else the validated IR graph (``load_model``)."""
+    from snncc.frontends import load_model
+
+    return read_buffered(path, options) or load_model(path, options)

@@ -9,7 +9,7 @@ from snncc.ir.serialize import load_graph
 
 
 def load(path: Path, options) -> Graph:
-    from snncc.frontends import refuse_options
+    from snncc.frontends.load_options import refuse_options
 
     refuse_options(options, (), "an snncc IR file, which states dt and every reset", path)
     return load_graph(path)

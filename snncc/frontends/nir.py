@@ -591,7 +591,7 @@ def load(path: Path, options: Any) -> Graph:
     """Frontend entry for ``.nir`` files (``load_model`` validates the result)."""
     import nir
 
-    from snncc.frontends import refuse_options
+    from snncc.frontends.load_options import refuse_options
 
     refuse_options(options, ("dt", "reset"), "a NIR graph", path)
     check_declared_sizes(path)

@@ -17,7 +17,7 @@ from snncc.models.baselines import BufferedClassifier
 
 
 def from_object(obj: Any, path: Path, options) -> Graph:
-    from snncc.frontends import refuse_options
+    from snncc.frontends.load_options import refuse_options
 
     if isinstance(obj, torch.nn.Module):
         refuse_options(options, (), "an snncc model, whose architecture states dt and reset", path)

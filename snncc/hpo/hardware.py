@@ -1,95 +1,40 @@
-"""What a trial's model costs on Loihi 1: compile it with snncc and ESTIMATE its energy and delay.
+"""What a trial's model costs on the search's target, through the target's ``hardware`` capability.
 
-Per trial: ``snncc compile --target loihi`` (timing, quantization, register values, core map --
-checked against the IR reference), then ``snncc report --energy`` on held-out samples: mean
-synaptic ops, energy (uJ) and delay (ms) per sample from Davies et al. 2018 Table 2 costs -- an
-ESTIMATE, not a measurement -- and, optionally, ``snncc check``'s bit-exact emulated accuracy on
-a subset.
+The target lowers the trial's checkpoint and measures or ESTIMATEs its cost on held-out samples
+(Loihi 1: cores, synaptic ops, energy and delay per sample from Davies et al. 2018 Table 2 costs --
+an ESTIMATE, not a measurement -- and, optionally, the bit-exact emulated accuracy on a subset);
+``objectives`` says which of its figures a search may optimise and in which direction.
 """
 
 from __future__ import annotations
 
-import time
-from dataclasses import asdict, dataclass, field
+from functools import lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-ESTIMATE_LABEL = "ESTIMATE (not a measurement): Loihi 1 dynamic energy and delay, Davies 2018 Table 2 costs"
+if TYPE_CHECKING:
+    from snncc.targets.base import HardwareCosts, HardwareFigures
+
+SEARCH_TARGET = "loihi"     # the target every study is costed on (its figures are the report's columns)
 
 
-@dataclass
-class HardwareFigures:
-    cores: int
-    chips: int
-    synaptic_ops_per_sample: float
-    spikes_per_sample: float
-    energy_uj_per_sample: float          # ESTIMATE
-    delay_ms_per_sample: float           # ESTIMATE
-    t_sample: int
-    estimated_on: int                    # samples emulated for the estimate
-    emulated_accuracy: float | None = None        # bit-exact emulator, on ``emulated_on`` samples
-    float_accuracy_same_samples: float | None = None
-    emulated_on: int = 0
-    seconds: float = 0.0
-    label: str = ESTIMATE_LABEL
-    notes: list = field(default_factory=list)
+@lru_cache(maxsize=None)
+def hardware_costs(target: str = SEARCH_TARGET) -> HardwareCosts:
+    """The ``hardware`` capability of the registered target ``target`` (refused in one line without it;
+    asked once per process: a report reads it for every trial)."""
+    from snncc.targets import capability, get_target
 
-    def as_dict(self) -> dict:
-        return asdict(self)
-
-
-def fit_inputs(x: np.ndarray, network) -> np.ndarray:
-    """(B, T, C) events -> the network's input width (input copies tiled) and tSample steps (pad / cut)."""
-    x = np.asarray(x, dtype=np.uint8)
-    width = network.input_width
-    if x.shape[2] != width:
-        x = np.tile(x, (1, 1, width // x.shape[2]))
-    t = network.t_sample
-    if x.shape[1] < t:
-        x = np.concatenate([x, np.zeros((x.shape[0], t - x.shape[1], x.shape[2]), x.dtype)], axis=1)
-    return x[:, :t]
+    return capability(get_target(target), "hardware")()
 
 
 def hardware_figures(checkpoint: str | Path, inputs: np.ndarray, labels: np.ndarray, energy_samples: int = 16,
-                     emulate_samples: int = 0, timing: str = "exact", scale: str = "auto") -> HardwareFigures:
-    """Compile ``checkpoint`` for Loihi; estimate on the first ``energy_samples`` of ``inputs`` (B, T, 24).
-
-    The caller orders ``inputs`` (the trial objective shuffles its held-out samples with the plan's seed).
-
-    ``emulate_samples`` > 0: also the bit-exact emulated accuracy (and the float model's) on the first
-    that many samples, through ``snncc check``'s runs.
-    """
+                     emulate_samples: int = 0, target: str = SEARCH_TARGET) -> HardwareFigures:
+    """Lower ``checkpoint`` for ``target``; its figures on the first ``energy_samples`` of ``inputs``
+    (B, T, C), ordered by the caller; ``emulate_samples`` > 0: also the deployed accuracy on that many."""
     from snncc.frontends import load_model
-    from snncc.targets import get_target
-    from snncc.targets.loihi.mapping.coremap import CoreMap
-    from snncc.targets.loihi.estimate.energy import emulate_and_estimate
 
-    started = time.perf_counter()
     graph = load_model(Path(checkpoint))
-    target = get_target("loihi")
-    artefact = target.lower(graph, {"source": str(checkpoint), "timing": timing, "scale": scale})
-    network = artefact.network
-    core_map = CoreMap.from_dict(network.core_map)
-    n = max(1, min(int(energy_samples), int(inputs.shape[0])))
-    x = fit_inputs(inputs[:n], network)
-    est = emulate_and_estimate(network, core_map, x, f"{n} held-out samples")
-    figures = HardwareFigures(
-        cores=int(core_map.n_cores), chips=int(core_map.n_chips),
-        synaptic_ops_per_sample=float(est.counts["synaptic_ops"]), spikes_per_sample=float(est.counts["spikes"]),
-        energy_uj_per_sample=float(est.energy_uj["total"]), delay_ms_per_sample=float(est.delay_ms),
-        t_sample=int(network.t_sample), estimated_on=n,
-        notes=[f"scale rule {artefact.quantization.get('rule')}", *artefact.notes])
-    if emulate_samples > 0:
-        m = min(int(emulate_samples), int(inputs.shape[0]))
-        xe = inputs[:m]
-        k = int(graph.metadata.get("input_copies", 1) or 1)
-        if k > 1 and xe.shape[2] * k == network.input_width:
-            xe = np.tile(xe, (1, 1, k))
-        record = target.check(graph, np.asarray(xe, np.uint8), np.asarray(labels[:m]),
-                              {"source": str(checkpoint), "timing": timing, "scale": scale})
-        figures.emulated_accuracy = float(record.accuracy["emulator"])
-        figures.float_accuracy_same_samples = float(record.accuracy["float_trained"])
-        figures.emulated_on = m
-    figures.seconds = time.perf_counter() - started
-    return figures
+    return hardware_costs(target).figures(graph, inputs, labels, {"source": str(checkpoint)},
+                                          estimate_samples=energy_samples, emulate_samples=emulate_samples)

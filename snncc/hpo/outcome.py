@@ -2,9 +2,10 @@
 
 ``accuracy`` is the selection accuracy: the best VALIDATION epoch's by default; with
 ``select="test"`` the best TEST epoch's, as the paper did (optimistic: the test set picks the
-epoch *and* the hyper-parameters). ``energy``, ``delay`` and ``synops`` are per sample, from
-the compiled Loihi model (ESTIMATES); ``cores`` from its core map; ``emulated_accuracy`` from the
-bit-exact emulator on a subset (needs ``emulate_samples > 0``).
+epoch *and* the hyper-parameters). The hardware objectives are the search target's (its
+``hardware`` capability): on Loihi ``energy``, ``delay`` and ``synops`` per sample, from the compiled
+model (ESTIMATES); ``cores`` from its core map; ``emulated_accuracy`` from the bit-exact emulator on
+a subset (needs ``emulate_samples > 0``).
 """
 
 from __future__ import annotations
@@ -13,26 +14,25 @@ from dataclasses import asdict, dataclass, field
 
 from snncc.errors import SnnccError
 
-DIRECTIONS = {
-    "accuracy": "maximize",
-    "emulated_accuracy": "maximize",
-    "energy": "minimize",
-    "cores": "minimize",
-    "synops": "minimize",
-    "delay": "minimize",
-}
-UNITS = {"accuracy": "%", "emulated_accuracy": "%", "energy": "uJ/sample (ESTIMATE)", "cores": "cores",
-         "synops": "synaptic ops/sample", "delay": "ms/sample (ESTIMATE)"}
 ALIASES = {"pareto": ("accuracy", "energy", "cores")}
+
+
+def directions() -> dict[str, str]:
+    """Objective -> "maximize" | "minimize": accuracy, and the search target's hardware objectives
+    (``hardware.hardware_costs().objectives``: Loihi's emulated_accuracy, energy, cores, synops, delay)."""
+    from snncc.hpo.hardware import hardware_costs
+
+    return {"accuracy": "maximize", **{name: o.direction for name, o in hardware_costs().objectives.items()}}
 
 
 def parse_objectives(text: str) -> tuple[str, ...]:
     """``"accuracy,energy,cores"`` (or ``"pareto"``) -> the objective names, first one primary."""
     names: list[str] = []
+    known = directions()
     for part in (p.strip() for p in text.split(",")):
         for name in ALIASES.get(part, (part,)):
-            if name not in DIRECTIONS:
-                raise SnnccError(f"unknown objective {name!r} (known: {', '.join(DIRECTIONS)}, or pareto)",
+            if name not in known:
+                raise SnnccError(f"unknown objective {name!r} (known: {', '.join(known)}, or pareto)",
                                  field="--objectives")
             if name in names:
                 raise SnnccError(f"objective {name!r} given twice", field="--objectives")
@@ -64,12 +64,12 @@ class TrialOutcome:
         return asdict(self)
 
     def value(self, name: str) -> float:
+        from snncc.hpo.hardware import hardware_costs
+
         hw = self.hardware or {}
         if name == "accuracy":
             return float(self.accuracy)
-        key = {"emulated_accuracy": "emulated_accuracy", "energy": "energy_uj_per_sample", "cores": "cores",
-               "synops": "synaptic_ops_per_sample", "delay": "delay_ms_per_sample"}[name]
-        v = hw.get(key)
+        v = hw.get(hardware_costs().objectives[name].key)
         if v is None:
             raise SnnccError(f"objective {name!r} needs the hardware figures"
                              + (" with --emulate > 0" if name == "emulated_accuracy" else ""), field="--objectives")

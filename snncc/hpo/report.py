@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from snncc.hpo.annealing import pareto_ranks
-from snncc.hpo.outcome import DIRECTIONS, TrialOutcome
+from snncc.hpo.outcome import TrialOutcome, directions
 from snncc.training.presets import PRESETS
 
 FRONT_AXES = ("accuracy", "energy", "cores")
@@ -115,7 +115,9 @@ class HpoReport:
         import matplotlib.pyplot as plt
 
         from snncc.atomic import atomic_path
-        from snncc.targets.loihi.estimate.energy import PAPER_RSNN
+        from snncc.hpo.hardware import hardware_costs
+
+        published = hardware_costs().published     # a measurement to show beside the trials, if any
 
         done = [r for r in self.rows if r.accuracy is not None and r.energy_uj is not None]
         front = [r for r in done if r.number in set(self.front)]
@@ -131,9 +133,10 @@ class HpoReport:
             if pre:
                 ax.scatter([getattr(r, attr) for r in pre], [100 * r.accuracy for r in pre], marker="*", s=160,
                            c="tab:blue", label="paper's preset, trained here")
-            paper_x = PAPER_RSNN["energy_uj_per_sample"] if attr == "energy_uj" else PAPER_RSNN["cores"]
-            ax.scatter([paper_x], [PAPER_RSNN["accuracy_loihi_percent"]], marker="D", s=40, c="k",
-                       label="paper: measured on Loihi (real data, th 1)")
+            axis = "energy" if attr == "energy_uj" else "cores"
+            if axis in published and "accuracy" in published:
+                ax.scatter([published[axis]], [published["accuracy"]], marker="D", s=40, c="k",
+                           label=str(published.get("label", "published measurement")))
             if attr == "energy_uj":
                 ax.set_xscale("log")
             ax.set_xlabel(label)
@@ -195,7 +198,7 @@ def front_of(rows: list[TrialRow]) -> list[int]:
 
 def best_of(rows: list[TrialRow]) -> dict[str, int]:
     out = {}
-    for name, direction in DIRECTIONS.items():
+    for name, direction in directions().items():
         cand = [r for r in rows if r.value(name) is not None]
         if cand:
             sign = -1.0 if direction == "maximize" else 1.0

@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass, field, fields
 from typing import Callable
 
 from snncc.errors import SnnccError
-from snncc.hpo.outcome import DIRECTIONS, TrialOutcome
+from snncc.hpo.outcome import TrialOutcome, directions
 from snncc.hpo.space import GRID_KEYS, Range, grid_around, preset_in_space, space_from_dict
 
 STEPS = ("anneal", "grid")
@@ -81,7 +81,8 @@ class StudyPlan:
 
     @property
     def directions(self) -> list[str]:
-        return [DIRECTIONS[o] for o in self.objectives]
+        known = directions()
+        return [known[o] for o in self.objectives]
 
     @property
     def ranges(self) -> dict[str, Range]:
@@ -266,7 +267,7 @@ def best_params(study, objective: str = "accuracy") -> dict:
         if not o:
             continue
         v = TrialOutcome(**o).value(objective)
-        sign = 1 if DIRECTIONS[objective] == "maximize" else -1
+        sign = 1 if directions()[objective] == "maximize" else -1
         if best is None or sign * v > best[0]:
             best = (sign * v, o["params"])
     if best is None:

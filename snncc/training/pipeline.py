@@ -21,10 +21,10 @@ from snncc.training.baseline_presets import FAMILY
 from snncc.training.device import resolve_device
 from snncc.training.training_set import EVENT_KINDS, FRAME_DT_S, TrainingData, load_training_data, subset_indices
 from snncc.training.presets import OptimiserSettings, paper_preset, with_overrides
-from snncc.training.qat import loihi_quantization, quantized_forward
+from snncc.training.qat import chip_parameters, quantized_forward, target_arithmetic
 from snncc.data.split import Split, stratified_split
 from snncc.training.trainer import EpochRecord, History, TrainSettings, accuracy, build_model, train_model
-from snncc.verbs import VerbProgress
+from snncc.progress import Progress as VerbProgress
 
 KINDS = ("rsnn", "ffsnn", "lstm", "elstm") + BASELINE_KINDS
 N_SNN_OUTPUTS = 28   # 27 letters + 1 spare class (the authors' network)
@@ -47,6 +47,7 @@ class TrainRequest:
     params_file: str | None = None
     qat_from: str | None = None
     qat_epochs: int = 3
+    qat_target: str = "loihi"         # the target whose arithmetic QAT trains through (capability ``arithmetic``)
     device: str = "auto"
     n_hidden: int | None = None      # spiking models: hidden neurons (None: the paper's 450)
 
@@ -87,7 +88,7 @@ class TrainResult:
         if self.quantization:
             q = self.quantization
             console.print(f"quantization-aware fine-tuning ({q['epochs']} epochs): float "
-                          f"{100 * q['before']['float_test_accuracy']:.2f} % -> Loihi-quantized "
+                          f"{100 * q['before']['float_test_accuracy']:.2f} % -> {q.get('target', 'Loihi')}-quantized "
                           f"{100 * q['before']['quantized_test_accuracy']:.2f} % before (loss "
                           f"{q['loss_before_points']:.2f} points), {100 * q['after']['quantized_test_accuracy']:.2f} % "
                           f"after (loss {q['loss_after_points']:.2f} points vs the original float model)")
@@ -278,20 +279,26 @@ def finetune(req: TrainRequest, progress: VerbProgress | None = None, data: Trai
     if data is None:
         data = load_training_data(req.data, req.kind, req.threshold, hp.time_bin_size)
     split, train_set, test_set, val_set = _prepare(req, data, src.get("split_assignment"))
+    arithmetic = target_arithmetic(req.qat_target)
+
+    def forward(m, x):
+        return quantized_forward(m, x, arithmetic)
+
     before = {"float_test_accuracy": accuracy(model, *test_set),
-              "quantized_test_accuracy": accuracy(model, *test_set, forward=quantized_forward),
-              "quantization": asdict(loihi_quantization(model))}
+              "quantized_test_accuracy": accuracy(model, *test_set, forward=forward),
+              "quantization": dict(chip_parameters(model, arithmetic).record)}
     settings = _settings(req, hp, req.qat_epochs)
     torch.manual_seed(req.seed)
-    history = train_model(model, train_set, test_set, settings, val=val_set, forward=quantized_forward, progress=progress,
+    history = train_model(model, train_set, test_set, settings, val=val_set, forward=forward, progress=progress,
                           keep_start=True, device=device, on_epoch=on_epoch)
     after = {"float_test_accuracy": accuracy(model, *test_set),
-             "quantized_test_accuracy": accuracy(model, *test_set, forward=quantized_forward),
-             "quantization": asdict(loihi_quantization(model))}
-    record = {"from": str(req.qat_from), "epochs": req.qat_epochs, "before": before, "after": after,
+             "quantized_test_accuracy": accuracy(model, *test_set, forward=forward),
+             "quantization": dict(chip_parameters(model, arithmetic).record)}
+    record = {"from": str(req.qat_from), "epochs": req.qat_epochs, "target": arithmetic.label, "before": before,
+              "after": after,
               "loss_before_points": 100 * (before["float_test_accuracy"] - before["quantized_test_accuracy"]),
               "loss_after_points": 100 * (before["float_test_accuracy"] - after["quantized_test_accuracy"]),
-              "note": "accuracies of the fake-quantized model (Loihi weights, threshold and decays in float; the "
+              "note": f"accuracies of the fake-quantized model ({arithmetic.label} weights, threshold and decays in float; the "
                       "chip's per-step integer truncation of current and voltage is not modelled -- use snncc check "
                       "for the bit-exact emulator); best epoch 0 = no fine-tuned epoch beat the starting weights, "
                       "which were kept"}

@@ -1,26 +1,18 @@
-"""Quantization-aware fine-tuning over Loihi's quantization rules (straight-through estimator).
+"""Quantization-aware fine-tuning through a target's arithmetic (straight-through estimator).
 
-The rules (spec loihi.md, section 1), for the whole network at once::
-
-    w_scale = floor(256 / max_k max|W_k|)
-    w_q     = clip(round(W * w_scale / 2) * 2, -256, 254)      round half to even (torch.round)
-    vThMant = round(theta * w_scale)
-    iDecay  = int(4096 * (1 - exp(-dt / tau_syn)));  vDecay likewise with tau_mem
-
-The integer rules (w_scale, vThMant, decay registers) are the Loihi pass's own
-(``snncc.targets.loihi.lowering.quantize``); only the rounding of the weights is restated here, in torch, so that
-it can sit in the autograd graph. The fake-quantized forward pass runs the float model with ``W' = w_q / w_scale``, threshold
-``vThMant / w_scale`` and decays ``(4096 - iDecay) / 4096``, ``(4096 - vDecay) / 4096``: exactly
-the chip's arithmetic in float units, except that the chip truncates the decayed current and
-voltage to integers every step. The backward pass treats the rounding as the identity
-(straight-through): ``W' = W + (w_q / w_scale - W).detach()``.
+The target states its arithmetic (capability ``arithmetic``, ``snncc.targets.base.Arithmetic``):
+given the network's weights and LIF constants it returns the parameters the chip would run, in the
+float model's units -- weights whose forward value is the chip's and whose gradient is the identity,
+the chip's threshold and per-step decay factors. The fake-quantized forward pass runs the float
+model with those parameters (``quantized_forward``); training it moves the float weights so that
+the chip's parameters classify well. Loihi's rules: ``snncc.targets.loihi.arithmetic``.
 """
 
 from __future__ import annotations
 
 import math
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import torch
 from torch import nn
@@ -28,60 +20,33 @@ from torch.func import functional_call
 
 from snncc.errors import SnnccError
 from snncc.models import SpikingClassifier
-from snncc.targets.loihi.chip import DECAY_ONE, WEIGHT_MAX, WEIGHT_MIN
-from snncc.targets.loihi.lowering.quantize import decay_register, threshold_mantissa, weight_scale
 
-WEIGHT_RANGE = (WEIGHT_MIN, WEIGHT_MAX)
+if TYPE_CHECKING:
+    from snncc.targets.base import Arithmetic, QuantizedParameters
 
-
-@dataclass
-class LoihiQuantization:
-    """What the chip would be given for a network (the global-scale rule of the paper)."""
-
-    w_scale: int
-    v_th_mant: int
-    i_decay: int
-    v_decay: int
-    clipped_weights: int      # weights that rounded to +256 and were clipped to 254
-
-    @property
-    def threshold(self) -> float:
-        return self.v_th_mant / self.w_scale
-
-    @property
-    def alpha(self) -> float:
-        return (DECAY_ONE - self.i_decay) / DECAY_ONE
-
-    @property
-    def beta(self) -> float:
-        return (DECAY_ONE - self.v_decay) / DECAY_ONE
+DEFAULT_TARGET = "loihi"
 
 
-def quantize_weights(w: torch.Tensor, w_scale: int) -> torch.Tensor:
-    """Integer-valued (float dtype) clip(round(W * w_scale / 2) * 2, -256, 254), round half to even."""
-    return torch.clamp(torch.round(w * w_scale / 2) * 2, *WEIGHT_RANGE)
+def target_arithmetic(target: str = DEFAULT_TARGET) -> Arithmetic:
+    """The arithmetic of the registered target ``target`` (refused in one line when it has none)."""
+    from snncc.targets import capability, get_target
 
-
-def fake_quantize(w: torch.Tensor, w_scale: int) -> torch.Tensor:
-    """w_q / w_scale in the forward pass, identity gradient in the backward pass."""
-    return w + (quantize_weights(w.detach(), w_scale) / w_scale - w).detach()
+    return capability(get_target(target), "arithmetic",
+                      rule=f"target {target!r} offers no differentiable arithmetic to fine-tune through")()
 
 
 def spiking_weights(model: SpikingClassifier) -> dict[str, torch.Tensor]:
     return {name: p for name, p in model.named_parameters()}
 
 
-def loihi_quantization(model: SpikingClassifier) -> LoihiQuantization:
-    """The global-scale quantization record of ``model``'s current weights."""
+def chip_parameters(model: SpikingClassifier, arithmetic: Arithmetic) -> QuantizedParameters:
+    """The chip's parameters for ``model``'s current weights and constants (straight-through weights)."""
+    from snncc.targets.base import NeuronConstants
+
     if not isinstance(model, SpikingClassifier):
         raise SnnccError("quantization-aware fine-tuning applies to spiking models (rsnn, ffsnn) only", field="model")
-    weights = list(spiking_weights(model).values())
-    max_abs = max(float(w.detach().abs().max()) for w in weights)
-    ws = weight_scale(max_abs)
-    clipped = sum(int((torch.round(w.detach() * ws / 2) * 2 > WEIGHT_RANGE[1]).sum()) for w in weights)
     cfg = model.config
-    return LoihiQuantization(ws, threshold_mantissa(cfg.threshold, ws), decay_register(cfg.dt, cfg.tau_syn),
-                             decay_register(cfg.dt, cfg.tau_mem), clipped)
+    return arithmetic.quantize(spiking_weights(model), NeuronConstants(cfg.threshold, cfg.dt, cfg.tau_syn, cfg.tau_mem))
 
 
 def _tau_for(decay: float, dt: float) -> float:
@@ -94,8 +59,10 @@ def _tau_for(decay: float, dt: float) -> float:
 
 
 @contextmanager
-def chip_config(model: SpikingClassifier, q: LoihiQuantization, quantize_decays: bool = True):
+def chip_config(model: SpikingClassifier, q: QuantizedParameters, quantize_decays: bool = True):
     """Temporarily give ``model`` the chip's threshold (and decays)."""
+    from dataclasses import replace
+
     saved = model.config
     cfg = replace(saved, threshold=q.threshold)
     if quantize_decays:
@@ -107,9 +74,10 @@ def chip_config(model: SpikingClassifier, q: LoihiQuantization, quantize_decays:
         model.config = saved
 
 
-def quantized_forward(model: nn.Module, x: torch.Tensor, quantize_decays: bool = True):
-    """The model's forward pass with Loihi-quantized weights, threshold and decays (STE gradients)."""
-    q = loihi_quantization(model)
-    params = {name: fake_quantize(p, q.w_scale) for name, p in spiking_weights(model).items()}
+def quantized_forward(model: nn.Module, x: torch.Tensor, arithmetic: Arithmetic | None = None,
+                      quantize_decays: bool = True):
+    """The model's forward pass with the chip's weights, threshold and decays (STE gradients);
+    ``arithmetic`` default: Loihi's."""
+    q = chip_parameters(model, arithmetic or target_arithmetic())
     with chip_config(model, q, quantize_decays):
-        return functional_call(model, params, (x,))
+        return functional_call(model, dict(q.weights), (x,))

@@ -18,7 +18,7 @@ import torch
 from torch import nn
 
 from snncc.models import LSTMClassifier, SpikingClassifier
-from snncc.verbs import VerbProgress
+from snncc.progress import Progress as VerbProgress
 from snncc.training.loss import LossParts, lstm_loss, mse_sigmoid_loss, snn_loss, spike_count_prediction
 
 Forward = Callable[[nn.Module, torch.Tensor], object]

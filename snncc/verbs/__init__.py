@@ -10,19 +10,8 @@ with ``as_dict()`` (what ``--json`` prints) and ``render_text(console)`` (what t
 
 from __future__ import annotations
 
-from typing import Callable
+from snncc.progress import Progress, counting
 
-VerbProgress = Callable[[int, int, str], None]
+VerbProgress = Progress      # progress(done, total, phase) (``snncc.progress``)
 
-
-def counting(progress: VerbProgress | None, total: int, phase: str) -> Callable[[int], None] | None:
-    """A target-side ``progress(n)`` (n more done) that reports ``progress(done, total, phase)``."""
-    if progress is None:
-        return None
-    done = [0]
-
-    def advanced(n: int) -> None:
-        done[0] += n
-        progress(done[0], total, phase)
-
-    return advanced
+__all__ = ["VerbProgress", "counting"]

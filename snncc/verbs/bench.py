@@ -9,52 +9,43 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from snncc.errors import SnnccError
 from snncc.verbs import VerbProgress
 
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from snncc.targets.base import Record
+
 
 @dataclass
 class BenchResult:
-    """One artefact's benchmark record, as the command prints it."""
+    """One artefact's benchmark record, as the command prints it (the target renders it)."""
 
     artefact: str
     repeats: int
-    record: Any              # BenchRecord
+    record: Record
 
-    def as_dict(self) -> dict[str, Any]:
-        return self.record.as_dict()
+    def as_dict(self) -> dict[str, object]:
+        return dict(self.record.as_dict())
 
-    def render_text(self, console) -> None:
-        record = self.record
-        console.print(f"[bold]snncc bench[/bold] {self.artefact} ({record.variant}, {record.backend})  data: {record.data}")
-        console.print(f"per-sample latency: median {record.median_ms:.3f} ms, spread {record.spread_ms:.3f} ms over "
-                      f"{self.repeats} repeats ({', '.join(f'{v:.3f}' for v in record.per_sample_ms)} ms)")
-        if record.accuracy is not None:
-            console.print(f"accuracy: {record.accuracy:.2%}")
-        if record.power_summary:
-            p = record.power_summary
-            console.print(f"power ({p['rail']}): min {p['min_mw']:.0f} mW, max {p['max_mw']:.0f} mW, avg "
-                          f"{p['avg_mw']:.0f} mW; energy per sample {p['energy_per_sample_uj']:.0f} uJ "
-                          f"(spread {p['energy_spread_uj']:.0f})")
-        for note in record.notes:
-            console.print(f"note: {note}")
+    def render_text(self, console: Console) -> None:
+        self.record.render_text(console)
 
 
 @dataclass
 class ComparisonResult:
-    """Several artefacts timed side by side."""
+    """Several artefacts timed side by side (the target renders the comparison)."""
 
-    comparison: Any          # LatencyComparison
+    comparison: Record
 
-    def as_dict(self) -> dict[str, Any]:
-        return self.comparison.as_dict()
+    def as_dict(self) -> dict[str, object]:
+        return dict(self.comparison.as_dict())
 
-    def render_text(self, console) -> None:
-        console.print(self.comparison.table(), markup=False, soft_wrap=True)
-        console.print("note: batch-1 latency, the paper's protocol; ratios are to the first artefact; power not sampled",
-                      soft_wrap=True)
+    def render_text(self, console: Console) -> None:
+        self.comparison.render_text(console)
 
 
 def bench_artefacts(artefacts: str | Path | list[str | Path], *, target: str = "jetson", data: str | Path | None = None,

@@ -4,46 +4,59 @@ its agreement with the float graph)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from snncc.errors import SnnccError
 from snncc.verbs import VerbProgress, counting
 
-AGREEMENT_RULE = "agreement without labels is measured for --target loihi"
+if TYPE_CHECKING:
+    from snncc.targets.base import Record
+
+OFFERS = ("check", "agree")          # the capabilities whose options ``snncc check`` offers
 
 
 def check_model(model: str | Path, *, target: str = "loihi", data: str | Path | None = None,
                 params: str | Path | None = None, dt: float | None = None, reset: str | None = None,
-                timing: str | None = None, scale: str | None = None, allow_reset_change: bool = False,
-                stream: bool = False, limit: int | None = None, agreement: bool = False, density: float = 0.08,
-                noise: float = 0.01, progress: VerbProgress | None = None):
+                limit: int | None = None, agreement: bool = False, progress: VerbProgress | None = None,
+                **options: object) -> Record:
     """The target's check record (``as_dict``, ``render_text``) for ``model`` on ``data``.
 
     With ``agreement`` or without ``data``: the target's agreement with the float graph (no labels;
-    without data, ``limit or 40`` seeded random samples of ``density``, ceiling from ``noise``)."""
+    without data, ``samples`` (default: ``limit`` or 40) seeded random samples of ``density``, the
+    ceiling from ``noise``: the agreement's options). ``options``: the target's own (``scale``,
+    ``stream``, ...) and the agreement's; one that does not apply is refused."""
     from snncc.data.check_set import load_check_data
     from snncc.frontends import LoadOptions, load_model
-    from snncc.targets import capability, get_target, target_options
+    from snncc.targets import AgreementOptions, capability, get_target, offering, verb_options
 
     model = Path(model)
-    data = None if data is None else Path(data)
-    graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
-    given = {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change or None,
-             "stream": stream or None, "source": str(model)}
-    given = {k: v for k, v in given.items() if v is not None}   # only what the user gave (targets refuse the rest)
-    if data is None or agreement:
+    where = None if data is None else Path(data)
+    if limit is not None and limit < 1:
+        raise SnnccError("must be >= 1", field="--limit")
+    graph = load_model(model, LoadOptions(params=None if params is None else Path(params), dt=dt, reset=reset))
+    given = {**options, "source": str(model)}
+    if where is None or agreement:
+        rule = ("agreement without labels is measured for "
+                + (" or ".join(f"--target {name}" for name in offering("agree")) or "no installed target"))
         try:
             tgt = get_target(target)
         except SnnccError:
-            raise SnnccError(AGREEMENT_RULE, field="--target") from None
-        agree = capability(tgt, "agree", rule=AGREEMENT_RULE)
-        x = None if data is None else load_check_data(data, graph, limit, labels=False)[0]
-        return agree(graph, x, target_options(tgt, given), data=None if data is None else str(data),
-                     samples=limit or 40, density=density, noise=noise)
+            raise SnnccError(rule, field="--target") from None
+        agree = capability(tgt, "agree", rule=rule)
+        if where is not None and options.get("samples") is not None:
+            raise SnnccError("applies only to random inputs, not with --data (use --limit)", field="--samples")
+        if limit is not None and options.get("samples") is not None:
+            raise SnnccError("give --samples or --limit, not both", field="--samples")
+        if options.get("samples") is None and limit is not None:
+            given["samples"] = limit
+        split = verb_options(tgt, given, "agree", OFFERS)
+        x = None if where is None else load_check_data(where, graph, limit, labels=False)[0]
+        return agree(graph, x, split.target, split.of(AgreementOptions), data=None if where is None else str(where))
     tgt = get_target(target)
     check = capability(tgt, "check")
-    if limit is not None and limit < 1:
-        raise SnnccError("must be >= 1", field="--limit")
-    inputs, labels, meta = load_check_data(data, graph, limit)
-    return check(graph, inputs, labels, target_options(tgt, given), data=str(data),
+    split = verb_options(tgt, given, "check", OFFERS)
+    inputs, labels, meta = load_check_data(where, graph, limit)
+    assert labels is not None
+    return check(graph, inputs, labels, split.target, data=str(where),
                  synthetic=bool(isinstance(meta, dict) and meta.get("synthetic")),
                  progress=counting(progress, len(labels), "checking"))

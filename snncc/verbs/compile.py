@@ -7,9 +7,19 @@ output whose suffix names no target (a Jetson directory, any other name) needs `
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
+
+from snncc.errors import SnnccError
+from snncc.progress import Progress
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from snncc.ir.graph import Graph
+    from snncc.targets.base import Artefact
 
 
 @dataclass
@@ -19,16 +29,16 @@ class CompileRecord:
 
     target: str
     output: str
-    artefact: Any
-    graph: Any = None
+    artefact: Artefact
+    graph: Graph | None = None
     target_rule: str = "--target"      # how the target was chosen: "--target" or "the suffix '.net' of -o"
     warnings: list[str] = field(default_factory=list)   # e.g. a model silent in float (snncc.ir.liveness)
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> dict[str, object]:
         return {"target": self.target, "target_rule": self.target_rule, "output": self.output,
                 "warnings": list(self.warnings), **self.artefact.summary()}
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         from snncc.targets.base import RendersText
 
         if isinstance(self.artefact, RendersText):
@@ -40,7 +50,6 @@ class CompileRecord:
 
 def resolve_target(output: str | Path, target: str | None) -> tuple[str, str]:
     """(target name, how it was chosen) from ``target`` and the suffix of ``output`` (module docstring)."""
-    from snncc.errors import SnnccError
     from snncc.targets import available_targets, output_suffixes
 
     suffix = Path(output).suffix
@@ -60,32 +69,39 @@ def resolve_target(output: str | Path, target: str | None) -> tuple[str, str]:
     return by_suffix, f"the suffix '{suffix}' of -o"
 
 
-def compile_model(model: str | Path, *, output: str | Path, target: str | None = None, params: str | Path | None = None,
-                  dt: float | None = None, reset: str | None = None, timing: str | None = None,
-                  scale: str | None = None, allow_reset_change: bool = False, jetpack: str | None = None,
-                  time_steps: int | None = None) -> CompileRecord:
+def compile_model(model: str | Path, *, output: str | Path, target: str | None = None,
+                  params: str | Path | None = None, dt: float | None = None, reset: str | None = None,
+                  progress: Progress | None = None, **options: object) -> CompileRecord:
     """Compile ``model`` for ``target`` (None: the target ``output``'s suffix names) and write the artefact
-    to ``output``; every artefact is checked against the IR reference on the way. An option the target
-    does not take is refused."""
-    from snncc.frontends import LoadOptions, load_model
-    from snncc.frontends.buffered import compile_buffered  # buffered classifiers have no IR graph
-    from snncc.targets import capability, get_target, target_options
+    to ``output``; every artefact is checked against the IR reference on the way. ``options``: the
+    target's own (``scale="split"``, ``jetpack="6.1"``, ...; ``snncc.targets.offered_options(["lower"])``
+    lists them); one the target does not take is refused. ``progress(done, total, phase)`` as the target
+    lowers and validates."""
+    from snncc.frontends import LoadOptions
+    from snncc.frontends.buffered import BufferedModel, load_compilable
+    from snncc.targets import capability, get_target, takers, verb_options
 
-    target, target_rule = resolve_target(output, target)
+    name, target_rule = resolve_target(output, target)
     model = Path(model)
-    given = {"timing": timing, "scale": scale, "allow_reset_change": allow_reset_change or None,
-             "jetpack": jetpack, "source": str(model), "time_steps": time_steps}
-    given = {k: v for k, v in given.items() if v is not None}   # only what the user gave (targets refuse the rest)
-    artefact, graph, warnings = compile_buffered(model, target, given), None, []
-    if artefact is None:
+    loaded = load_compilable(model, LoadOptions(params=None if params is None else Path(params), dt=dt, reset=reset))
+    tgt = get_target(name)
+    kind = getattr(loaded, "model_kind", "graph")
+    if kind not in getattr(tgt, "model_kinds", ("graph",)):
+        assert isinstance(loaded, BufferedModel)
+        only = " or ".join(f"--target {t}" for t in takers(kind)) or "a target that takes it"
+        raise SnnccError(f"a {loaded.kind} (convolutional, buffered) has no IR graph and compiles only with {only}",
+                         file=str(model), field="--target")
+    given: Mapping[str, object] = {**options, "source": str(model)}
+    settings = verb_options(tgt, given, "lower").target
+    artefact = capability(tgt, "lower")(loaded, settings, progress=progress)
+    warnings: list[str] = []
+    if not isinstance(loaded, BufferedModel) and name != "ir":   # a lowered artefact claims exactness
         from snncc.ir.liveness import calibration_warning
         from snncc.ir.timebase import sample_steps
 
-        graph = load_model(model, LoadOptions(params=params, dt=dt, reset=reset))
-        tgt = get_target(target)
-        artefact = capability(tgt, "lower")(graph, target_options(tgt, given))
-        if target != "ir":   # a lowered artefact claims exactness; the IR file is the model itself
-            silent = calibration_warning(graph, sample_steps(graph, time_steps)[0])   # float, calibration inputs
-            warnings += [silent] if silent else []
+        steps = getattr(settings, "time_steps", None)      # the target's steps option, where it declares one
+        silent = calibration_warning(loaded, sample_steps(loaded, steps if isinstance(steps, int) else None)[0])
+        warnings += [silent] if silent else []
     artefact.write(output)
-    return CompileRecord(target, str(output), artefact, graph, target_rule, warnings)
+    return CompileRecord(name, str(output), artefact, None if isinstance(loaded, BufferedModel) else loaded,
+                         target_rule, warnings)

@@ -12,10 +12,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from snncc.errors import SnnccError
 from snncc.verbs import VerbProgress, counting
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from snncc.targets.base import Emulation
 
 
 @dataclass
@@ -23,30 +28,30 @@ class EmulateRecord:
     bundle: str
     output: str
     stream: bool
-    emulation: Any           # the target's emulation (samples, steps, result, padded_steps, output_shift, network)
+    emulation: Emulation     # the target's emulation (samples, steps, prediction, overflow, padded_steps, ...)
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> dict[str, object]:
         e = self.emulation
         return {"bundle": self.bundle, "output": self.output, "samples": e.samples, "steps": e.steps,
-                "mode": "stream" if self.stream else "batch", "prediction": e.result.prediction,
-                "overflow": e.result.overflow, "padded_steps": e.padded_steps}
+                "mode": "stream" if self.stream else "batch", "prediction": e.prediction,
+                "overflow": e.overflow, "padded_steps": e.padded_steps}
 
     def warnings(self) -> list[str]:
         """What the user should know but is not the result (the CLI prints it on stderr)."""
         e = self.emulation
-        if not e.padded_steps and e.output_shift and e.steps < e.network.t_sample:
+        if not e.padded_steps and e.output_shift and e.steps < e.t_sample:
             return [f"the bundle's outputs appear {e.output_shift} step(s) late and the input is shorter than "
-                    f"tSample ({e.network.t_sample}); the last output steps fall outside the run"]
+                    f"tSample ({e.t_sample}); the last output steps fall outside the run"]
         return []
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         e = self.emulation
         if e.padded_steps:
             console.print(f"appended {e.padded_steps} blank step(s) to each sample: on Loihi the outputs appear "
                           f"{e.padded_steps} step(s) later than in the model (see the bundle's timing record)")
-        prediction = e.result.prediction
+        prediction = e.prediction
         console.print(f"emulated {e.samples} sample(s) x {e.steps} steps ({'stream' if self.stream else 'batch'} "
-                      f"mode); overflow {e.result.overflow}; predictions "
+                      f"mode); overflow {e.overflow}; predictions "
                       f"{prediction[:20].tolist()}{' ...' if e.samples > 20 else ''}")
         console.print(f"wrote {self.output}")
 

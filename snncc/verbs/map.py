@@ -4,32 +4,39 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from snncc.targets.base import CoreMap
 
 
 @dataclass
 class MapRecord:
     source: str
-    core_map: Any            # the target's map (to_dict, render_text, plot)
+    core_map: CoreMap        # the target's map (to_dict, render_text, plot)
     plot: str | None = None
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> dict[str, object]:
         return {"source": self.source, **self.core_map.to_dict()}
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         self.core_map.render_text(console)
         if self.plot is not None:
             console.print(f"wrote {self.plot}")
 
 
 def map_cores(source: str | Path, *, target: str = "loihi", plot: str | Path | None = None,
-              timing: str | None = None, scale: str | None = None) -> MapRecord:
+              **options: object) -> MapRecord:
     """The core map of ``source``; ``plot`` also draws utilisation per core as a PNG (atomically).
-    ``timing``/``scale`` apply only when ``source`` is a model file (lowered first)."""
-    from snncc.targets import capability, get_target
+    ``options``: the target's for ``map`` (Loihi: ``timing``, ``scale``: they apply only when ``source``
+    is a model file, lowered first)."""
+    from snncc.targets import capability, get_target, verb_options
 
-    given = {k: v for k, v in {"timing": timing, "scale": scale}.items() if v is not None}
-    cmap = capability(get_target(target), "map")(Path(source), given)
+    tgt = get_target(target)
+    mapped = capability(tgt, "map")
+    cmap = mapped(Path(source), verb_options(tgt, options, "map").target)
     if plot is not None:
         cmap.plot(plot)
     return MapRecord(str(source), cmap, None if plot is None else str(plot))

@@ -8,22 +8,29 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from snncc.targets.base import RunResult
 
 
 @dataclass
 class RunRecord:
     artefact: str
-    result: Any              # the target's run (as_dict: backend, variant, samples, time_steps, prediction, classes)
+    result: RunResult        # the target's run (as_dict: backend, variant, samples, time_steps, prediction, classes)
     output: str | None = None
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> dict[str, object]:
         return {"artefact": self.artefact, **self.result.as_dict(), "output": self.output}
 
-    def render_text(self, console) -> None:
-        r = self.as_dict()
+    def render_text(self, console: Console) -> None:
+        r = self.result.as_dict()
+        classes = r["classes"]
+        assert isinstance(classes, list)
         console.print(f"{r['variant']} on {r['backend']}: {r['samples']} sample(s) x {r['time_steps']} steps")
-        console.print("predictions: " + " ".join(r["classes"][:20]) + (" ..." if len(r["classes"]) > 20 else ""))
+        console.print("predictions: " + " ".join(str(c) for c in classes[:20]) + (" ..." if len(classes) > 20 else ""))
         if self.output is not None:
             console.print(f"wrote {self.output}")
 

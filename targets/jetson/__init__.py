@@ -1,182 +1,31 @@
 """Jetson target: ONNX artefacts (whole-sequence and streaming step), a TensorRT recipe and a runner.
 
-``lower(graph, options)`` builds torch modules with the IR's exact semantics, exports them with
-the legacy ONNX exporter at the opset of the board's JetPack, validates them in ONNX Runtime
-against the IR reference (failing loudly) and returns a ``JetsonArtefact`` whose ``write(dir)``
-creates the directory atomically:
+The package's face. ``target`` (the registered target), ``JetsonTarget`` and ``JetsonOptions`` live in
+``capabilities.py`` (light: each capability imports its work on use). The parts:
 
-    model.onnx  step.onnx  manifest.json  build_engine.sh  run.py
+    lower.py               graph -> validated JetsonArtefact (export.py, validate.py, manifest.py, recipe.py)
+    buffered.py            a buffered classifier's artefact (its PyTorch module: no IR graph)
+    check.py               the IR reference vs the artefact on a data set
+    standalone_runner.py   run.py of every artefact (numpy + onnxruntime / tensorrt, never snncc)
+    run_artefact.py        ``snncc run``'s work     bench_artefacts.py, bench_protocol.py, power.py  ``snncc bench``'s
 
-Options (``JetsonOptions``): ``jetpack`` ("4.6" -> opset 13, default), ``time_steps`` (T of the
-unrolled sequence model; default recording_length_s / dt from the graph's metadata, else 100:
-``snncc.ir.timebase``), ``source``
-(model path), ``seed`` (of the validation inputs).
+Names below are resolved on first use, so choosing the target imports neither torch nor ONNX.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import replace
-from pathlib import Path
-from typing import Any
+import importlib
 
-import numpy as np
+_HOMES = {
+    "target": "capabilities", "JetsonTarget": "capabilities", "JetsonOptions": "capabilities",
+    "JetsonArtefact": "lower", "runner_source": "lower", "resolve_steps": "lower", "JetsonCheckRecord": "check",
+}
 
-from snncc.errors import SnnccError
-from snncc.ir.graph import Graph
-from snncc.ir.timebase import sample_steps
-from snncc.targets.base import JetsonOptions, Progress, TargetOptions, target_options
-from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
-from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
-from snncc.targets.jetson.manifest import ArtefactFiles, build_manifest, manifest_bytes
-from snncc.targets.jetson.plan import GraphPlan, plan_graph
-from snncc.targets.jetson.recipe import build_engine_script
-from snncc.targets.jetson.validate import validate_export
-from snncc.threads import one_thread
-
-MAX_UNROLLED_STEPS = 5000
+__all__ = ["target", "JetsonTarget", "JetsonOptions", "JetsonArtefact", "JetsonCheckRecord"]
 
 
-def runner_source() -> bytes:
-    """run.py: the runner module's own text (standalone: numpy + onnxruntime / tensorrt)."""
-    return (Path(__file__).with_name("standalone_runner.py")).read_bytes()
-
-
-def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> tuple[int, str]:
-    """(T for the export, the rule that gave it): --time-steps, else recording_length_s / dt, else the
-    default every target uses for a model that states no recording length (``snncc.ir.timebase``)."""
-    steps, rule = sample_steps(plan.graph, options.get("time_steps"))
-    if plan.has_lif and steps > MAX_UNROLLED_STEPS:
-        raise SnnccError(f"{steps} steps is too long to unroll (max {MAX_UNROLLED_STEPS}); the step model "
-                         "runs any length", field="--time-steps")
-    return steps, rule
-
-
-class JetsonArtefact(ArtefactFiles):
-    """The artefact's files (bytes, in write order) and its manifest."""
-
-    def summary(self) -> dict[str, Any]:
-        v = self.manifest["validation"]
-        return {
-            **self.file_summary(),
-            "validation": {
-                "reference": v["reference"],
-                "sequence": {k: x for k, x in v["sequence"].items() if k != "operators"},
-                "step": {k: x for k, x in v["step"].items() if k != "operators"},
-                "dynamic_axes_checked": v["dynamic_axes_checked"],
-                "fp16": v["fp16"],
-            },
-            "notes": self.notes,
-        }
-
-    def render_text(self, console) -> None:
-        from rich.table import Table
-
-        m, v = self.manifest, self.manifest["validation"]
-        console.print(f"[bold]Jetson artefact[/bold]  {m['model']['kind']} '{m['model']['name']}'   JetPack {m['jetpack']} "
-                      f"-> ONNX opset {m['opset']} (TensorRT {m['tensorrt']})")
-        table = Table(show_header=True)
-        for col in ("file", "bytes", "interface"):
-            table.add_column(col)
-        for var in m["variants"]:
-            sig = ", ".join(f"{t['name']}{tuple(t['shape'])}" for t in var["inputs"][:2])
-            if len(var["inputs"]) > 2:
-                sig += f", +{len(var['inputs']) - 2} state"
-            outs = ", ".join(f"{t['name']}{tuple(t['shape'])}" for t in var["outputs"][:2])
-            table.add_row(var["file"], f"{len(self.files[var['file']]):,}", f"{sig} -> {outs}")
-        for name in ("manifest.json", "build_engine.sh", "run.py"):
-            table.add_row(name, f"{len(self.files[name]):,}", "")
-        console.print(table)
-        inp = m["input"]
-        console.print(f"input: {inp['channels']} channels x {m['time_steps']} steps (dt {m['dt']} s); "
-                      f"{inp['note']}")
-        seq, step, fp16 = v["sequence"], v["step"], v["fp16"]
-        if "spike_agreement" in seq:
-            console.print(f"validated against the IR reference ({v['samples']} seeded samples): output spike agreement "
-                          f"model.onnx {seq['spike_agreement']:.4%}, step.onnx {step['spike_agreement']:.4%}; "
-                          f"predictions {seq['prediction_agreement']:.0%} equal")
-        else:
-            console.print(f"validated against the IR reference ({v['samples']} seeded samples): max |delta| score "
-                          f"{seq['max_abs_delta_score']:.2g} (model.onnx), {step['max_abs_delta_score']:.2g} (step.onnx); "
-                          f"predictions {seq['prediction_agreement']:.0%} equal")
-        flips = f"{fp16['spike_flips']} spike flips, " if "spike_flips" in fp16 else ""
-        console.print(f"fp16 emulation: {flips}max |delta| score {fp16['max_abs_delta_score']:.3g} "
-                      f"(range {fp16['score_range']:.3g}), {fp16['predictions_changed']} predictions changed")
-        for note in self.notes:
-            console.print(f"note: {note}")
-
-
-class JetsonTarget:
-    """Capabilities: lower, check (IR vs ONNX Runtime on data), run (an artefact on inputs), bench
-    (the paper's latency and power protocol)."""
-
-    name = "jetson"
-    description = "NVIDIA Jetson: ONNX (sequence + streaming step) + TensorRT recipe, validated in ONNX Runtime"
-    output_kind = "directory"
-    options_type = JetsonOptions
-
-    def lower(self, graph: Graph, options: TargetOptions | Mapping[str, Any] | None = None, *,
-              progress: Progress | None = None) -> JetsonArtefact:
-        opts = target_options(self, options)
-        plan = plan_graph(graph.copy())
-        steps, steps_rule = resolve_steps(plan, opts.as_dict())
-        jetpack = str(opts.jetpack or "4.6")
-        opset = opset_for_jetpack(jetpack)
-        with one_thread():
-            sequence = export_sequence(plan, steps, opset)
-            step = export_step(plan, opset)
-        record = validate_export(plan, steps, sequence, step, seed=int(opts.seed))
-        manifest = build_manifest(plan, steps, opset, jetpack, record.as_dict(), opts.source)
-        files = {
-            "model.onnx": sequence.data,
-            "step.onnx": step.data,
-            "manifest.json": manifest_bytes(manifest),
-            "build_engine.sh": build_engine_script(manifest).encode("utf-8"),
-            "run.py": runner_source(),
-        }
-        notes = ["validated in ONNX Runtime on this machine; TensorRT engines are built and run on the board"]
-        if plan.has_lif:
-            notes.append(f"model.onnx is unrolled for T = {steps} ({steps_rule}); step.onnx runs any length")
-        else:
-            notes.append(f"validated on T = {steps} ({steps_rule}); both models run any length")
-        return JetsonArtefact(files, manifest, notes)
-
-    def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray | None,
-              options: TargetOptions | Mapping[str, Any] | None = None, *, data: str | None = None,
-              synthetic: bool = False, progress: Progress | None = None) -> JetsonCheckRecord:
-        """IR reference vs the ONNX Runtime artefact on a data set (see ``check.check_artefact``)."""
-        opts = target_options(self, options)
-        x = np.asarray(inputs)
-        if x.ndim == 2:
-            x = x[None]
-        if opts.time_steps is None:
-            opts = replace(opts, time_steps=int(x.shape[1]))
-        artefact = self.lower(graph, opts)
-        with one_thread():
-            return check_artefact(plan_graph(graph.copy()), artefact, x, labels, progress)
-
-    def run(self, artefact: Path, inputs, *, source: str | None = None, stream: bool = False,
-            backend: str = "auto"):
-        from snncc.targets.jetson.run_artefact import run_artefact
-
-        return run_artefact(artefact, inputs, source=source, stream=stream, backend=backend)
-
-    def bench(self, artefacts: list[Path], *, data: Path | None = None, samples: int = 64, power: bool = False,
-              power_root: Path = Path("/"), rail: str = "VDD_IN", repeats: int = 3, warmup_passes: int = 6,
-              timed_passes: int = 6, stream: bool = False, backend: str = "auto", progress=None):
-        """One artefact: a ``BenchRecord`` (with power); several: a ``LatencyComparison`` (ratios to the first)."""
-        from snncc.targets.jetson.bench_artefacts import bench_many, bench_one
-
-        if len(artefacts) > 1:
-            if power:
-                raise SnnccError("power is sampled for one artefact at a time", field="--power")
-            return bench_many(artefacts, data=data, samples=samples, repeats=repeats, warmup_passes=warmup_passes,
-                              timed_passes=timed_passes, stream=stream, backend=backend)
-        return bench_one(artefacts[0], data=data, samples=samples, power=power, power_root=power_root, rail=rail,
-                         repeats=repeats, warmup_passes=warmup_passes, timed_passes=timed_passes, stream=stream,
-                         backend=backend, progress=progress)
-
-
-target = JetsonTarget()
-
-__all__ = ["target", "JetsonTarget", "JetsonArtefact", "JetsonCheckRecord"]
+def __getattr__(name: str):
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'snncc.targets.jetson' has no attribute {name!r}")
+    return getattr(importlib.import_module(f"snncc.targets.jetson.{home}"), name)

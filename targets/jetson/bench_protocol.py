@@ -40,6 +40,20 @@ class BenchRecord:
     def as_dict(self) -> dict:
         return asdict(self)
 
+    def render_text(self, console) -> None:
+        console.print(f"[bold]snncc bench[/bold] {self.artefact} ({self.variant}, {self.backend})  data: {self.data}")
+        console.print(f"per-sample latency: median {self.median_ms:.3f} ms, spread {self.spread_ms:.3f} ms over "
+                      f"{len(self.per_sample_ms)} repeats ({', '.join(f'{v:.3f}' for v in self.per_sample_ms)} ms)")
+        if self.accuracy is not None:
+            console.print(f"accuracy: {self.accuracy:.2%}")
+        if self.power_summary:
+            p = self.power_summary
+            console.print(f"power ({p['rail']}): min {p['min_mw']:.0f} mW, max {p['max_mw']:.0f} mW, avg "
+                          f"{p['avg_mw']:.0f} mW; energy per sample {p['energy_per_sample_uj']:.0f} uJ "
+                          f"(spread {p['energy_spread_uj']:.0f})")
+        for note in self.notes:
+            console.print(f"note: {note}")
+
 
 def _predict(runner, x: np.ndarray, stream: bool) -> np.ndarray:
     res = runner.stream(x) if stream else runner.run(x)
@@ -122,6 +136,11 @@ class LatencyComparison:
             lines.append(f"| {r.artefact} | {k} | {r.variant} | {r.backend} | {r.time_steps} x {r.protocol.get('channels')} | "
                          f"{r.median_ms:.3f} | {r.spread_ms:.3f} | {q:.2f} |")
         return "\n".join(lines) + "\n"
+
+    def render_text(self, console) -> None:
+        console.print(self.table(), markup=False, soft_wrap=True)
+        console.print("note: batch-1 latency, the paper's protocol; ratios are to the first artefact; power not sampled",
+                      soft_wrap=True)
 
 
 def compare_protocol(entries: list, progress: Callable[[str, int], None] | None = None, **protocol) -> LatencyComparison:

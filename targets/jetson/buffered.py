@@ -8,43 +8,30 @@ max |delta score| <= 1e-3 x max(1, max |score|) and the same predictions, else S
 There is no step model: a buffered classifier needs the whole sample before it can answer.
 
 Files: model.onnx, manifest.json (the same format the runner and ``snncc bench`` read),
-build_engine.sh, run.py.
+build_engine.sh, run.py. The model record (PyTorch module, metadata, source) comes from the frontend
+(``snncc.frontends.buffered``) through ``lower``.
 """
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
 
 import snncc
-from snncc.atomic import file_sha256
 from snncc.errors import InternalError, SnnccError
-from snncc.frontends.checkpoint import is_checkpoint, model_metadata, module_from_checkpoint
-from snncc.frontends.torchfile import load_torch_file
-from snncc.models.baselines import BASELINE_KINDS, BufferedClassifier
 from snncc.targets.jetson.export import _export, opset_for_jetpack
 from snncc.targets.jetson.manifest import FORMAT, FORMAT_VERSION, ArtefactFiles, manifest_bytes
 from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK, build_engine_script
 from snncc.targets.jetson.validate import VALUE_TOLERANCE, check_structure, session
 from snncc.threads import one_thread
 
+if TYPE_CHECKING:
+    from snncc.frontends.buffered import BufferedModel
+    from snncc.models.baselines import BufferedClassifier
+
 MAIN_BATCH, SECOND_BATCH = 8, 3
-
-
-def buffered_checkpoint(path: str | os.PathLike) -> dict | None:
-    """The checkpoint in ``path`` when it holds a buffered classifier, else None (not read as one)."""
-    p = Path(path)
-    if p.suffix.lower() not in (".pt", ".pth", ".ckpt") or not p.is_file():
-        return None
-    obj = load_torch_file(p)
-    if is_checkpoint(obj) and isinstance(obj.get("architecture"), dict) \
-            and obj["architecture"].get("kind") in BASELINE_KINDS:
-        return obj
-    return None
 
 
 def seeded_frames(batch: int, steps: int, channels: int, seed: int) -> np.ndarray:
@@ -139,11 +126,14 @@ class BufferedArtefact(ArtefactFiles):
             console.print(f"note: {note}")
 
 
-def lower_buffered(module: BufferedClassifier, metadata: dict | None = None, options: dict | None = None) -> BufferedArtefact:
-    """A validated Jetson artefact of a buffered classifier (options: jetpack, seed, source, source_sha256)."""
-    from snncc.targets.jetson import runner_source
+def lower_buffered(model: BufferedModel, options: dict | None = None, progress=None) -> BufferedArtefact:
+    """A validated Jetson artefact of a buffered classifier (``snncc.frontends.buffered.BufferedModel``;
+    options: jetpack, seed, time_steps); ``progress(done, total, phase)`` through export and validation."""
+    from snncc.targets.jetson.lower import EXPORTING, VALIDATING, runner_source
 
-    options, meta = dict(options or {}), dict(metadata or {})
+    module, meta = model.module, dict(model.metadata)
+    options = {**dict(options or {}), "source": model.source_file, "source_sha256": model.source_sha256}
+    report = progress or (lambda done, total, phase: None)
     given = options.get("time_steps")
     if given is not None and int(given) != module.config.n_steps:
         raise SnnccError(f"a buffered {module.config.kind} takes exactly {module.config.n_steps} frames "
@@ -152,10 +142,14 @@ def lower_buffered(module: BufferedClassifier, metadata: dict | None = None, opt
     opset = opset_for_jetpack(jetpack)
     module = module.eval()
     with one_thread():
+        report(0, 1, EXPORTING)
         example = torch.from_numpy(seeded_frames(2, module.config.n_steps, module.config.n_inputs, 7))
         exported = _export(module, (example,), ["frames"], ["scores"], {"frames": {0: "batch"}, "scores": {0: "batch"}},
                            opset)
-        validation = validate_buffered(module, exported.data, seed=int(options.get("seed", 0)))
+        report(1, 1, EXPORTING)
+        report(0, 1, VALIDATING)
+        validation = validate_buffered(module, exported.data, seed=int(options.get("seed") or 0))
+        report(1, 1, VALIDATING)
     manifest = build_buffered_manifest(module, meta, opset, jetpack, validation, options.get("source"),
                                        options.get("source_sha256"))
     files = {"model.onnx": exported.data, "manifest.json": manifest_bytes(manifest),
@@ -164,10 +158,3 @@ def lower_buffered(module: BufferedClassifier, metadata: dict | None = None, opt
              "and run on the board",
              "buffered classifier: one variant (model.onnx), no streaming step model; fp16 not emulated"]
     return BufferedArtefact(files, manifest, notes)
-
-
-def lower_checkpoint(path: str | os.PathLike, obj: dict, options: dict | None = None) -> BufferedArtefact:
-    """``snncc compile --target jetson`` for a buffered-classifier checkpoint already read from ``path``."""
-    module = module_from_checkpoint(obj, source=str(path))
-    opts = {**dict(options or {}), "source": Path(path).name, "source_sha256": file_sha256(path)}
-    return lower_buffered(module, model_metadata(obj), opts)

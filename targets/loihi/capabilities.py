@@ -1,25 +1,64 @@
 """The registered Loihi target: its options record and capabilities, each importing its work on use.
 
-This module imports nothing heavy, so verbs that only read, map, emulate or estimate a bundle
-never load the compiler's torch-based reference simulator.
+This module imports nothing heavy, so listing or choosing the target, and verbs that only read,
+map, emulate or estimate a bundle, never load the compiler's torch-based reference simulator.
 
-    lower     -> LoihiArtefact (lowering/lower.py: timing, quantization, bundle checked by the emulator)
-    check     -> CheckRecord   (checks/accuracy.py: accuracy lost on a labelled data set, and why)
-    agree     -> AgreementRecord (checks/agreement.py: agreement with the float graph, no labels)
-    emulate   -> BundleEmulation (emulation/run_bundle.py: a bundle on 0/1 inputs, bit-exact)
-    map       -> CoreMap       (mapping/partition.py: populations placed on cores under every limit)
-    estimate  -> EnergyReport  (estimate/report.py: ESTIMATE of energy and delay per sample)
+    lower      -> LoihiArtefact   (lowering/lower.py: timing, quantization, bundle checked by the emulator)
+    check      -> CheckRecord     (checks/accuracy.py: accuracy lost on a labelled data set, and why)
+    agree      -> AgreementRecord (checks/agreement.py: agreement with the float graph, no labels)
+    emulate    -> BundleEmulation (emulation/run_bundle.py: a bundle on 0/1 inputs, bit-exact)
+    map        -> CoreMap         (mapping/partition.py: populations placed on cores under every limit)
+    estimate   -> EnergyReport    (estimate/report.py: ESTIMATE of energy and delay per sample)
+    hardware   -> LoihiHardware   (estimate/search_figures.py: a search trial's cores, energy, delay)
+    arithmetic -> LoihiArithmetic (arithmetic/straight_through.py: the quantization in torch, for QAT)
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING
 
-from snncc.targets.base import LoihiOptions, Progress, TargetOptions, target_options
+from snncc.progress import Progress as PhaseProgress
+from snncc.targets.base import (
+    AgreementOptions, Arithmetic, Artefact, CoreMap, Emulation, Given, HardwareCosts, Progress, Record,
+    TargetOptions, capability_options, option, target_options,
+)
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from snncc.ir.graph import Graph
+    from snncc.targets.base import Model
+
+MODEL_VERBS = ("lower", "check", "agree", "map")   # map lowers a model file first
+TIMINGS = ("exact", "paper")                       # = lowering/timing.py's TIMINGS (tested)
+SCALE_RULES = ("auto", "global", "per-layer", "split", "fine")   # = lowering/quantize.py's (tested)
 
 
-def _settings(options: LoihiOptions, **extra) -> dict[str, Any]:
+@dataclass(frozen=True)
+class LoihiOptions(TargetOptions):
+    """Loihi's options (each declared for the verbs that read it)."""
+
+    timing: str | None = option(
+        "Timing: 'exact' (default) lowers the IR's delays and refractory period; 'paper' reproduces the "
+        "authors' export (refDelay 1, no delays).", choices=TIMINGS, rule=f"timing must be one of {TIMINGS}",
+        capabilities=MODEL_VERBS)
+    scale: str | None = option(
+        "Weight scale rule: 'global' (the paper's), 'per-layer', 'split' (per-layer, outlier weights in a "
+        "second synapse format with a coarser exponent), 'fine' (each synapse its finest exponent), or 'auto' "
+        "(default: the paper's unless outliers make it lossy; then the candidate with the smallest measured error).",
+        choices=SCALE_RULES, rule="scale must be one of global, per-layer, split, fine, auto", capabilities=MODEL_VERBS)
+    allow_reset_change: bool = option(
+        "Accept a subtract-reset model deployed with reset to zero (snncc check reports the cost).",
+        default=False, capabilities=("lower", "check", "agree"))
+    stream: bool = option("The paper's protocol, one stream with 100 blank steps between samples.",
+                          default=False, capabilities=("check",))
+    time_steps: int | None = option("tSample (default: the model's recording length / dt, else 100).",
+                                    minimum=1, rule="time steps must be a whole number >= 1", capabilities=("lower",))
+
+
+def _settings(options: LoihiOptions, **extra: object) -> dict[str, object]:
     """The options as the plain settings mapping the lowering functions read (``lower_model``)."""
     return {**options.as_dict(), **extra}
 
@@ -31,52 +70,75 @@ class LoihiTarget:
     output_suffix = ".net"
     options_type = LoihiOptions
 
-    def lower(self, graph, options: TargetOptions | Mapping[str, Any] | None = None, *,
-              progress: Progress | None = None):
+    def _options(self, options: Given, capability: str) -> LoihiOptions:
+        opts = target_options(self, options, capability)
+        assert isinstance(opts, LoihiOptions)
+        return opts
+
+    def lower(self, model: Model, options: Given = None, *, progress: PhaseProgress | None = None) -> Artefact:
         from snncc.targets.loihi.lowering.lower import lower_artefact
 
-        return lower_artefact(graph, _settings(target_options(self, options)))
+        found: Artefact = lower_artefact(model, _settings(self._options(options, "lower")), progress=progress)
+        return found
 
-    def check(self, graph, inputs, labels, options: TargetOptions | Mapping[str, Any] | None = None, *,
-              data: str | None = None, synthetic: bool = False, progress: Progress | None = None):
+    def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
+              data: str | None = None, synthetic: bool = False, progress: Progress | None = None) -> Record:
         from snncc.targets.loihi.checks.accuracy import check_model
 
-        opts = target_options(self, options)
+        opts = self._options(options, "check")
         settings = _settings(opts, data=data, synthetic=synthetic, mode="stream" if opts.stream else "batch")
-        return check_model(graph, inputs, labels, settings, progress=progress)
+        found: Record = check_model(graph, inputs, labels, settings, progress=progress)
+        return found
 
-    def agree(self, graph, inputs, options: TargetOptions | Mapping[str, Any] | None = None, *,
-              data: str | None = None, samples: int = 40, density: float = 0.08, noise: float = 0.01):
+    def agree(self, graph: Graph, inputs: np.ndarray | None, options: Given = None,
+              agreement: AgreementOptions | None = None, *, data: str | None = None) -> Record:
         from snncc.targets.loihi.checks.agreement import measure_agreement
 
-        settings = _settings(target_options(self, options), data=data)
-        return measure_agreement(graph, settings, inputs, samples=samples, density=density, noise=noise)
+        how = agreement or capability_options(AgreementOptions)
+        settings = _settings(self._options(options, "agree"), data=data)
+        found: Record = measure_agreement(graph, settings, inputs, samples=how.samples, density=how.density,
+                                          noise=how.noise)
+        return found
 
-    def emulate(self, bundle: Path, inputs, *, record: str = "outputs", stream: bool = False, gap: int | None = None,
-                source: str | None = None, progress: Progress | None = None):
+    def emulate(self, bundle: Path, inputs: np.ndarray, *, record: str = "outputs", stream: bool = False,
+                gap: int | None = None, source: str | None = None, progress: Progress | None = None) -> Emulation:
         from snncc.targets.loihi.bundle.hdf5 import read_bundle
         from snncc.targets.loihi.emulation.run_bundle import emulate_bundle
 
-        return emulate_bundle(read_bundle(bundle), inputs, record=record, stream=stream, gap=gap, source=source,
-                              progress=progress)
+        found: Emulation = emulate_bundle(read_bundle(bundle), inputs, record=record, stream=stream, gap=gap,
+                                          source=source, progress=progress)
+        return found
 
-    def map(self, source: Path, options: TargetOptions | Mapping[str, Any] | None = None):
+    def map(self, source: Path, options: Given = None) -> CoreMap:
         from snncc.errors import SnnccError
-        from snncc.targets.loihi.mapping.partition import map_network
         from snncc.targets.loihi.bundle.load import load_network
+        from snncc.targets.loihi.mapping.partition import map_network
 
-        given = options.as_dict() if isinstance(options, TargetOptions) else dict(options or {})
-        network = load_network(source, given.get("timing"), given.get("scale"))
+        opts = self._options(options, "map")
+        network = load_network(source, opts.timing, opts.scale)
         try:
-            return map_network(network)
+            found: CoreMap = map_network(network)
         except SnnccError as err:
             raise err.with_file(str(source)) from None
+        return found
 
-    def estimate(self, source: Path, inputs, *, data: str | None = None, note: str = "", limit: int | None = None,
-                 progress: Progress | None = None):
+    def estimate(self, source: Path, inputs: object, *, data: str | None = None, note: str = "",
+                 limit: int | None = None, progress: Progress | None = None) -> Record:
         from snncc.targets.loihi.estimate.report import estimate_bundle
 
-        return estimate_bundle(source, inputs, data=data, note=note, limit=limit, progress=progress)
+        found: Record = estimate_bundle(source, inputs, data=data, note=note, limit=limit, progress=progress)
+        return found
+
+    def hardware(self) -> HardwareCosts:
+        from snncc.targets.loihi.estimate.search_figures import LoihiHardware
+
+        return LoihiHardware(self)
+
+    def arithmetic(self, options: Given = None) -> Arithmetic:
+        from snncc.targets.loihi.arithmetic.straight_through import LoihiArithmetic
+
+        self._options(options, "lower")
+        return LoihiArithmetic()
 
 
 target = LoihiTarget()

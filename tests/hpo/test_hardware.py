@@ -6,7 +6,8 @@ import numpy as np
 import torch
 
 from snncc.hpo.search_events import load_source
-from snncc.hpo.hardware import fit_inputs, hardware_figures
+from snncc.hpo.hardware import hardware_figures
+from snncc.targets.loihi.estimate.search_figures import fit_inputs
 from snncc.training.pipeline import TrainRequest, assigned, train
 from snncc.training.trainer import accuracy
 

@@ -83,3 +83,15 @@ def test_check_reports_accuracy_agreement_and_fp16(graphs):
     console = Console(record=True, width=120)
     rec.render_text(console)
     assert "output spike agreement" in console.export_text()
+
+
+def test_check_names_its_data_and_says_when_it_is_synthetic(graphs):
+    """``check(data=, synthetic=)`` are honoured: a data error names the file, synthetic data is said so."""
+    g = graphs["rsnn"]
+    x = seeded_inputs(g, 4, 12, seed=5)
+    rec = target.check(g, x, np.arange(4) % 5, {}, data="d.npz", synthetic=True)
+    assert "the data set is synthetic: these accuracies are not the paper's" in rec.notes
+    assert not any("synthetic" in n for n in target.check(g, x, np.arange(4) % 5, {}, data="d.npz").notes)
+    with pytest.raises(SnnccError) as err:
+        target.check(g, x, np.arange(3), {}, data="d.npz")
+    assert err.value.line() == "d.npz: labels: 3 labels for 4 samples"

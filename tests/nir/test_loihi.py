@@ -5,6 +5,7 @@ recordings). Figures measured on these graphs are bounds for regressions, not ac
 """
 
 import json
+from pathlib import Path
 
 import nir
 import numpy as np
@@ -202,3 +203,17 @@ def test_per_neuron_parameters_become_compartment_profiles(tmp_path, capsys):
         assert len(vth) <= 8 and len(cx) <= 32, core
     agree, _, _ = _agreement(src, net_path, x)
     assert agree >= 0.85, agree   # measured 0.89 on this near-chaotic random graph
+
+
+def test_compile_reports_progress_through_the_scale_candidates_and_the_validation(tmp_path):
+    """``--scale auto`` measures its candidates (up to 31 s on larger graphs): ``lower`` says so as it goes."""
+    import snncc.api as api
+
+    calls = []
+    api.compile(Path(__file__).resolve().parents[1] / "data" / "nir" / "braille_zero_2023.nir", dt=1e-4,
+                target="loihi", output=tmp_path / "b.net", progress=lambda *c: calls.append(c))
+    measuring = [c for c in calls if c[2] == "measuring scale candidates"]
+    assert measuring[0] == (0, measuring[0][1], "measuring scale candidates") and measuring[0][1] >= 3
+    assert [d for d, _, _ in measuring] == sorted(d for d, _, _ in measuring) and measuring[-1][0] == measuring[-1][1]
+    assert calls[-2:] == [(0, 1, "validating the bundle against the IR reference"),
+                          (1, 1, "validating the bundle against the IR reference")]

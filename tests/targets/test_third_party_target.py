@@ -1,5 +1,7 @@
 """A third-party target plugs in through the ``snncc.targets`` entry point, with only the capabilities
-it has; the option records refuse what a target does not take, in today's words."""
+it has and an option of its own (``--toy-precision``), offered by the CLI, validated by the target
+and read by its ``lower`` and ``check``, from the command line and from ``snncc.api``, with no edit in
+snncc; the option records refuse what a target does not take, in today's words."""
 
 from __future__ import annotations
 
@@ -13,10 +15,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import snncc.api as api
 from snncc.errors import SnnccError
-from snncc.targets import (
-    IROptions, JetsonOptions, LoihiOptions, available_targets, capability, get_target, target_options,
-)
+from snncc.targets import available_targets, capability, get_target, offered_options, target_options
+from snncc.targets.ir import IROptions
+from snncc.targets.jetson.capabilities import JetsonOptions
+from snncc.targets.loihi.capabilities import LoihiOptions
 
 from snncc_test_helpers import run_cli
 
@@ -64,6 +68,7 @@ def test_compile_and_check_with_a_third_party_target(toy, toy_data, small_rsnn_c
     assert written["time_steps"] == 30 and written["nodes"] >= 3
     assert json.loads(stdout) == {"target": "toy", "target_rule": "--target", "output": str(out), "warnings": [],
                                   **written}
+    assert written["precision"] is None
 
     code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data, "--json"],
                                 capsys)
@@ -76,7 +81,7 @@ def test_compile_and_check_with_a_third_party_target(toy, toy_data, small_rsnn_c
     with np.load(toy_data) as z:
         x, y = z["inputs"], z["labels"]
     expected = float(np.mean(simulate(load_model(small_rsnn_checkpoint), x.astype(np.float32)).prediction.numpy() == y))
-    assert record == {"target": "toy", "samples": 6, "accuracy": expected}
+    assert record == {"target": "toy", "samples": 6, "accuracy": expected, "precision": None}
     code, stdout, _ = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data], capsys)
     assert code == 0 and stdout.startswith("toy check: 6 samples, accuracy")
 
@@ -94,7 +99,7 @@ def test_a_capability_the_target_lacks_is_refused_in_one_line(toy, toy_data, sma
         assert err == f"snncc: error: --target: target 'toy' has no {verb} in this snncc\n"
     assert not (tmp_path / "o.npz").exists()
     code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "toy", "-o", out, "--scale", "global"], capsys)
-    assert code == 2 and err == ("snncc: error: --scale: does not apply to --target toy (it takes --time-steps)\n")
+    assert code == 2 and err == ("snncc: error: --scale: does not apply to --target toy (it takes --time-steps, --toy-precision)\n")
     code, _, err = run_cli(["check", small_rsnn_checkpoint, "-t", "toy"], capsys)   # no labels: agreement
     assert code == 2 and "agreement without labels is measured for --target loihi" in err
 
@@ -110,6 +115,63 @@ def test_the_toy_target_through_the_installed_command(tmp_path, small_rsnn_check
                            "-o", str(out)], capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.splitlines()[-1] == f"wrote {out}" and json.loads(out.read_text())["nodes"] >= 3
+    proc = subprocess.run([sys.executable, "-m", "snncc.cli.main", "compile", str(small_rsnn_checkpoint), "-t", "toy",
+                           "-o", str(out), "--toy-precision", "6"], capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(out.read_text())["precision"] == 6
+    proc = subprocess.run([sys.executable, "-m", "snncc.cli.main", "compile", "--help"], capture_output=True, text=True,
+                          env=dict(env, COLUMNS="200"), timeout=300)
+    assert proc.returncode == 0 and "--toy-precision" in proc.stdout and "(--target toy)" in proc.stdout
+
+
+# -- the toy's own option ---------------------------------------------------------------------------
+def test_the_toy_option_is_offered_with_help_naming_its_target(toy, capsys):
+    offers = {o.name: o for o in offered_options(["lower"])}
+    assert offers["toy_precision"].targets == ("toy",) and offers["toy_precision"].kind is int
+    assert offers["toy_precision"].help == "Bits of the toy's weights (2..16). (--target toy)"
+    assert offers["time_steps"].targets == ("jetson", "loihi", "toy")          # one flag, three targets
+    assert all(f"--target {t}:" in offers["time_steps"].help for t in ("jetson", "loihi", "toy"))
+    assert "toy_precision" in {o.name for o in offered_options(["check", "agree"])}
+    assert "toy_precision" not in {o.name for o in offered_options(["map"])}
+    for verb, shown in (("compile", True), ("check", True), ("map", False)):
+        code, stdout, _ = run_cli([verb, "--help"], capsys)
+        assert code == 0 and ("--toy-precision" in stdout) == shown, verb
+
+
+def test_the_toy_option_is_validated_by_the_toy_and_reaches_lower_and_check(toy, toy_data, small_rsnn_checkpoint,
+                                                                            tmp_path, capsys):
+    out = tmp_path / "m.toy"
+    code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "toy", "-o", out, "--toy-precision", "8"], capsys)
+    assert code == 0, err
+    assert json.loads(out.read_text())["precision"] == 8
+    bad = tmp_path / "bad.toy"
+    code, stdout, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "toy", "-o", bad, "--toy-precision", "1"],
+                                capsys)
+    assert (code, stdout) == (2, "") and not bad.exists()
+    assert err == "snncc: error: --toy-precision: precision must be a whole number in [2, 16], got 1\n"
+    code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "loihi", "-o", tmp_path / "m.net",
+                            "--toy-precision", "8"], capsys)
+    assert code == 2 and err == ("snncc: error: --toy-precision: does not apply to --target loihi (it takes --timing, "
+                                 "--scale, --allow-reset-change, --time-steps)\n")
+    code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "-t", "toy", "--data", toy_data, "--toy-precision",
+                                 "4", "--json"], capsys)
+    assert code == 0, err
+    assert json.loads(stdout)["precision"] == 4
+
+
+def test_the_toy_option_from_the_api(toy, toy_data, small_rsnn_checkpoint, tmp_path):
+    out = tmp_path / "m.toy"
+    record = api.compile(small_rsnn_checkpoint, target="toy", output=out, toy_precision=12, time_steps=30)
+    assert record.as_dict()["precision"] == 12 and json.loads(out.read_text())["time_steps"] == 30
+    assert api.check(small_rsnn_checkpoint, target="toy", data=toy_data, toy_precision=5).as_dict()["precision"] == 5
+    with pytest.raises(SnnccError) as err:
+        api.compile(small_rsnn_checkpoint, target="toy", output=out, toy_precision=17)
+    assert err.value.line() == "--toy-precision: precision must be a whole number in [2, 16], got 17"
+    with pytest.raises(SnnccError) as err:
+        api.compile(small_rsnn_checkpoint, target="ir", output=tmp_path / "m.snnir", toy_precision=8)
+    assert err.value.line() == "--toy-precision: does not apply to --target ir (it takes no target options)"
+    with pytest.raises(TypeError):          # an option no installed target declares is a bug, as in Python
+        api.compile(small_rsnn_checkpoint, target="toy", output=out, toy_colour="red")
 
 
 # -- option records --------------------------------------------------------------------------------
@@ -128,6 +190,7 @@ def test_an_option_the_target_does_not_take_is_refused(name, given, line):
 
 
 def test_option_records_are_built_from_the_given_values():
+    """(``snncc.targets.target_options``: the registry's, which knows every installed target's options.)"""
     loihi, jetson = get_target("loihi"), get_target("jetson")
     assert target_options(loihi, {"scale": "global", "timing": None, "source": "m.pt"}) == LoihiOptions(
         scale="global", source="m.pt")

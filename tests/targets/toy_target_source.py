@@ -1,6 +1,8 @@
 """A third-party target as an outside package would write it (installed by the tests through a
-``*.dist-info/entry_points.txt``): lower writes a small JSON summary of the graph; check measures
-the IR reference's accuracy on the data. It has no map, emulate, run, estimate or bench."""
+``*.dist-info/entry_points.txt``), reading nothing of snncc but ``snncc.targets.base`` and the graph:
+lower writes a small JSON summary of the graph; check measures the IR reference's accuracy on the
+data. It declares an option of its own (``--toy-precision``, validated by its declaration) beside
+``--time-steps``, which Loihi and Jetson declare too. It has no map, emulate, run, estimate or bench."""
 
 from __future__ import annotations
 
@@ -10,14 +12,17 @@ from pathlib import Path
 
 import numpy as np
 
-from snncc.targets.base import TargetOptions, target_options
+from snncc.targets.base import TargetOptions, option, target_options
 
 
 @dataclass(frozen=True)
 class ToyOptions(TargetOptions):
-    """The toy target takes --time-steps only."""
+    """The toy target takes --time-steps and its own --toy-precision."""
 
-    time_steps: int | None = None
+    time_steps: int | None = option("Steps the toy summary records.", minimum=1, capabilities=("lower",))
+    toy_precision: int | None = option("Bits of the toy's weights (2..16).", minimum=2, maximum=16,
+                                       rule="precision must be a whole number in [2, 16]",
+                                       capabilities=("lower", "check"))
 
 
 @dataclass
@@ -25,21 +30,23 @@ class ToyArtefact:
     nodes: int
     dt: float
     time_steps: int | None
+    precision: int | None
 
     def write(self, path) -> None:
         Path(path).write_text(json.dumps(self.summary()))
 
     def summary(self) -> dict:
-        return {"nodes": self.nodes, "dt": self.dt, "time_steps": self.time_steps}
+        return {"nodes": self.nodes, "dt": self.dt, "time_steps": self.time_steps, "precision": self.precision}
 
 
 @dataclass
 class ToyCheck:
     samples: int
     accuracy: float
+    precision: int | None
 
     def as_dict(self) -> dict:
-        return {"target": "toy", "samples": self.samples, "accuracy": self.accuracy}
+        return {"target": "toy", "samples": self.samples, "accuracy": self.accuracy, "precision": self.precision}
 
     def render_text(self, console) -> None:
         console.print(f"toy check: {self.samples} samples, accuracy {100 * self.accuracy:.1f} %")
@@ -52,17 +59,19 @@ class ToyTarget:
     options_type = ToyOptions
 
     def lower(self, graph, options=None, *, progress=None) -> ToyArtefact:
-        opts = target_options(self, options)
-        return ToyArtefact(len(list(graph)), float(graph.dt), opts.time_steps)
+        opts = target_options(self, options, "lower")
+        if progress is not None:
+            progress(1, 1, "summarising")
+        return ToyArtefact(len(list(graph)), float(graph.dt), opts.time_steps, opts.toy_precision)
 
     def check(self, graph, inputs, labels, options=None, *, data=None, synthetic=False, progress=None) -> ToyCheck:
         from snncc.ir.simulate import simulate
 
-        target_options(self, options)
+        opts = target_options(self, options, "check")
         prediction = simulate(graph, np.asarray(inputs, np.float32)).prediction.numpy()
         if progress is not None:
             progress(len(labels))
-        return ToyCheck(len(labels), float(np.mean(prediction == np.asarray(labels))))
+        return ToyCheck(len(labels), float(np.mean(prediction == np.asarray(labels))), opts.toy_precision)
 
 
 target = ToyTarget()

@@ -131,11 +131,12 @@ def test_bad_records_and_kinds_give_one_line(frames_set, tmp_path, capsys):
 
 @pytest.mark.parametrize("kind", ["resnet", "inception"])
 def test_residual_networks_export_and_agree(kind, tmp_path):
-    from snncc.targets.jetson.buffered import lower_buffered
+    from snncc.frontends.buffered import BufferedModel
+    from snncc.targets.jetson import target
 
     torch.manual_seed(0)
     module = BufferedClassifier(kind=kind, n_steps=20)
-    art = lower_buffered(module, {}, {"jetpack": "5.1"})
+    art = target.lower(BufferedModel(module), {"jetpack": "5.1"})
     v = art.manifest["validation"]
     assert art.manifest["opset"] == 17 and v["prediction_agreement"] == 1.0 and v["max_abs_delta_score"] < 1e-3
     art.write(tmp_path / "a")
@@ -145,13 +146,13 @@ def test_residual_networks_export_and_agree(kind, tmp_path):
 def test_bench_times_baselines_beside_an_lstm_in_one_run(tmp_path, capsys):
     from snncc.frontends import graph_from_object
     from snncc.models import LSTMClassifier
+    from snncc.frontends.buffered import BufferedModel
     from snncc.targets.jetson import target
-    from snncc.targets.jetson.buffered import lower_buffered
 
     torch.manual_seed(0)
     lstm = LSTMClassifier(n_inputs=12, n_hidden=8, n_outputs=27)
     target.lower(graph_from_object(lstm), {"time_steps": 12}).write(tmp_path / "lstm")
-    lower_buffered(BufferedClassifier(kind="tcnn", n_steps=12), {}, {}).write(tmp_path / "tcnn")
+    target.lower(BufferedModel(BufferedClassifier(kind="tcnn", n_steps=12))).write(tmp_path / "tcnn")
     args = ["bench", str(tmp_path / "lstm"), str(tmp_path / "tcnn"), "--samples", "3", "--repeats", "1",
             "--warmup-passes", "0", "--timed-passes", "1"]
     assert run([*args, "--json"]) == 0

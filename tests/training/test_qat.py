@@ -1,4 +1,4 @@
-"""The straight-through fake-quantizer over Loihi's rules."""
+"""The straight-through fake-quantizer over Loihi's rules, reached through the ``arithmetic`` capability."""
 
 import numpy as np
 import pytest
@@ -7,8 +7,12 @@ import torch
 from snncc.errors import SnnccError
 from snncc.models import SNNConfig, SpikingClassifier
 from snncc.targets.loihi.lowering import quantize as loihi_pass
-from snncc.training.qat import (chip_config, fake_quantize, loihi_quantization, quantize_weights,
-                                quantized_forward)
+from snncc.targets.loihi.arithmetic.straight_through import fake_quantize, quantize_weights
+from snncc.training.qat import chip_config, chip_parameters, quantized_forward, target_arithmetic
+
+
+def loihi_quantization(model):
+    return chip_parameters(model, target_arithmetic("loihi")).quantization
 
 
 def test_rounding_is_half_to_even_and_clipped():
@@ -67,7 +71,7 @@ def test_quantized_forward_is_the_model_with_chip_parameters(order):
     with torch.no_grad():
         for p in ref.parameters():
             p.copy_(quantize_weights(p, q.w_scale) / q.w_scale)
-    with chip_config(ref, q):
+    with chip_config(ref, chip_parameters(m, target_arithmetic())):
         assert ref.alpha == pytest.approx((4096 - 2315) / 4096, abs=1e-15)
         assert ref.beta == pytest.approx((4096 - 327) / 4096, abs=1e-15)
         out_r, hid_r = ref(x)
@@ -93,3 +97,9 @@ def test_all_zero_weights_are_refused():
             p.zero_()
     with pytest.raises(SnnccError, match="w_scale"):
         loihi_quantization(m)
+
+
+def test_a_target_without_arithmetic_is_refused_in_one_line():
+    with pytest.raises(SnnccError) as err:
+        target_arithmetic("jetson")
+    assert err.value.line() == "--target: target 'jetson' offers no differentiable arithmetic to fine-tune through"

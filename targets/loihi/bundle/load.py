@@ -29,8 +29,7 @@ def load_network(source: Path, timing: str | None = None, scale: str | None = No
         raise SnnccError(f"expected a Loihi bundle (HDF5) or a model file ({', '.join(MODEL_SUFFIXES)})",
                          file=str(source))
     from snncc.frontends import load_model
-    from snncc.targets.base import LoihiOptions
-    from snncc.targets.loihi.capabilities import target
+    from snncc.targets.loihi.lowering.lower import lower_artefact
 
     graph = load_model(source)
-    return target.lower(graph, LoihiOptions(timing=timing, scale=scale, source=str(source))).network
+    return lower_artefact(graph, {"timing": timing, "scale": scale, "source": str(source)}).network

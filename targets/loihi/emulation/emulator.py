@@ -19,29 +19,19 @@ The widths and formats are ``chip.py``'s (read at call time here; the kernel fre
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.limits import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, whole_number
 from snncc.targets.loihi import chip
+from snncc.targets.loihi.emulation.result import EmulationResult, SparseBlock, _prediction  # noqa: F401  (re-exported)
 from snncc.targets.loihi.network import LoihiNetwork
 
 DEFAULT_GAP = 100                # blank steps between samples in stream mode (the paper's protocol)
 RECORD_CHOICES = ("outputs", "all")
 MODES = ("batch", "stream")
-
-
-@dataclass
-class EmulationResult:
-    output_spikes: np.ndarray                          # (B, T, n_out) uint8
-    counts: np.ndarray                                 # (B, n_out) int64
-    prediction: np.ndarray                             # (B,) int64, argmax with ties to the lowest index
-    spikes: dict[int, np.ndarray] = field(default_factory=dict)    # layer index -> (B, T, n) uint8
-    voltage: dict[int, np.ndarray] = field(default_factory=dict)   # layer index -> (B, T, n) post-reset v
-    current: dict[int, np.ndarray] = field(default_factory=dict)   # layer index -> (B, T, n) u
-    overflow: dict[str, int] = field(default_factory=lambda: {"q_wrap": 0, "u_wrap": 0, "v_clip": 0})
 
 
 def wrap(x: np.ndarray, bits: int) -> np.ndarray:
@@ -77,10 +67,6 @@ def check_inputs(inputs, width: int, source: str | None = None) -> np.ndarray:
     if x.dtype.kind in "bu" and x.size and x.max() <= 1:   # unsigned and at most 1: binary (one pass)
         return check_batch(x, width, spikes=False, source=source).astype(np.uint8, copy=False)
     return check_batch(x, width, spikes=True, source=source).astype(np.uint8, copy=False)
-
-
-def _prediction(counts: np.ndarray) -> np.ndarray:
-    return np.argmax(counts, axis=1).astype(np.int64)  # numpy argmax returns the first maximum
 
 
 # -- the readable statement ------------------------------------------------------------------------
@@ -234,30 +220,6 @@ def _chip_weights(weight, exp, where: str) -> np.ndarray:
     if exp.size and exp.min() < chip.WGT_EXP_MIN:
         raise SnnccError(f"wgtExp below {chip.WGT_EXP_MIN} gives fractional chip weights", field=where)
     return np.asarray(weight, np.int64) << (chip.WEIGHT_SHIFT + exp)
-
-
-@dataclass
-class SparseBlock:
-    """A projection's synapses grouped by source neuron (what the chip stores per input axon):
-    synapses ptr[k]..ptr[k+1]-1 of source k go to ``post`` with chip weight ``w`` and delay ``delay``."""
-
-    n_pre: int
-    n_post: int
-    ptr: np.ndarray          # (n_pre + 1,) int64
-    post: np.ndarray         # (nnz,) int64
-    w: np.ndarray            # (nnz,) int64, chip units
-    delay: np.ndarray        # (nnz,) int64
-
-    def dense_transposed(self) -> tuple[np.ndarray, np.ndarray]:
-        """(weights, delays) as dense (n_pre, n_post) int64 arrays, zeros where there is no synapse
-        (for comparisons with dense code, e.g. an earlier kernel; the kernel itself never densifies)."""
-        pre = np.repeat(np.arange(self.n_pre), np.diff(self.ptr))
-        w = np.zeros((self.n_pre, self.n_post), np.int64)
-        uniform = self.delay.size and np.all(self.delay == self.delay[0])
-        d = np.full((self.n_pre, self.n_post), int(self.delay[0]) if uniform else 0, np.int64)
-        w[pre, self.post] = self.w
-        d[pre, self.post] = self.delay
-        return w, d
 
 
 def _sparse_eligible(weight) -> bool:

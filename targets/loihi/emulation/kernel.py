@@ -531,7 +531,7 @@ def narrowest_int(lo: int, hi: int):
 
 
 def _is_sparse(block) -> bool:
-    from snncc.targets.loihi.emulation.emulator import SparseBlock
+    from snncc.targets.loihi.emulation.result import SparseBlock
 
     return isinstance(block, SparseBlock)
 
@@ -719,7 +719,7 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads
     ``threads``: threads to spread the batch over (default ``NUMBA_NUM_THREADS``, the core
     count unless set); batch 1 or ``threads=1`` runs on the calling thread.
     """
-    from snncc.targets.loihi.emulation.emulator import EmulationResult, _prediction
+    from snncc.targets.loihi.emulation.result import EmulationResult, _prediction
 
     prog = flat.prog
     layers = len(prog.n)

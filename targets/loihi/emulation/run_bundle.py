@@ -27,6 +27,18 @@ class BundleEmulation:
     padded_steps: int        # blank steps appended for the outputs' shift
     output_shift: int
 
+    @property
+    def prediction(self) -> np.ndarray:
+        return self.result.prediction
+
+    @property
+    def overflow(self) -> dict[str, int]:
+        return self.result.overflow
+
+    @property
+    def t_sample(self) -> int:
+        return int(self.network.t_sample)
+
     def arrays(self) -> dict[str, np.ndarray]:
         """What OUT.npz holds: outputs, counts, prediction, overflow; layer{i}_* named by HDF5 layer index
         (the model's units only: always-on bias sources are left out)."""

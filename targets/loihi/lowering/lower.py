@@ -18,9 +18,9 @@ from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.passes.fold_linear import fold_linear
 from snncc.ir.timebase import sample_steps
+from snncc.progress import Progress
 from snncc.targets.loihi.lowering.timing import lower_timing
 from snncc.targets.loihi.lowering.artefact import LoihiArtefact
-from snncc.targets.loihi.capabilities import LoihiTarget, target  # noqa: F401  (the registered target, re-exported)
 from snncc.targets.loihi.lowering.chip_units import in_chip_units
 from snncc.targets.loihi.lowering.registers import build_network, chain, lif_params_check
 from snncc.targets.loihi.network import LoihiNetwork
@@ -28,6 +28,7 @@ from snncc.targets.loihi.mapping.partition import map_network
 from snncc.targets.loihi.mapping.resources import LOIHI1
 
 VALIDATION_BATCH = 4
+VALIDATING = "validating the bundle against the IR reference"
 
 
 @dataclass
@@ -45,8 +46,9 @@ class LoweredModel:
     notes: list[str] = field(default_factory=list)
 
 
-def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
-    """Timing, quantization and register values (no validation)."""
+def lower_model(graph: Graph, options: dict[str, Any], progress: Progress | None = None) -> LoweredModel:
+    """Timing, quantization and register values (no validation); ``progress(done, total, phase)`` as the
+    scale rule's candidates are measured (``--scale auto``)."""
     from snncc.ir.liveness import calibration_spikes, calibration_text
     from snncc.targets.loihi.lowering import scaling
     from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
@@ -80,7 +82,7 @@ def lower_model(graph: Graph, options: dict[str, Any]) -> LoweredModel:
         emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
         return float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
 
-    quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps))
+    quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps), progress=progress)
     quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
     meta = {
         "source_sha256": graph.metadata.get("source_sha256", ""),
@@ -125,19 +127,22 @@ def attach_core_map(network: LoihiNetwork) -> None:
     network.core_map = core_map.to_dict()
 
 
-def lower_artefact(graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
+def lower_artefact(graph: Graph, options: dict[str, Any], progress: Progress | None = None) -> LoihiArtefact:
     """``target.lower``: lower (``lower_model``), place on cores (relays where fan-in needs them) and
-    check the bundle against the IR reference (``checks/exactness.py``)."""
+    check the bundle against the IR reference (``checks/exactness.py``); ``progress(done, total,
+    phase)`` through the scale candidates' measurements and the validation."""
     from snncc.targets.loihi.mapping.relays import needs_relays, relay_agreement, relay_network
     from snncc.targets.loihi.checks.exactness import lead_steps, pad, random_spikes, validate_lowering
 
-    lowered = lower_model(graph, options)
+    lowered = lower_model(graph, options, progress)
     notes: list[str] = list(lowered.notes)
     network, plan = lowered.network, None
     if needs_relays(lowered.network):
         network, plan = relay_network(lowered.network)   # the mapper's relays: the bundle holds them
     else:
         attach_core_map(lowered.network)
+    if progress is not None:
+        progress(0, 1, VALIDATING)
     record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
                                lowered.timing_record.shifts, lowered.timing_record.output_shift,
                                batch=VALIDATION_BATCH)
@@ -154,6 +159,8 @@ def lower_artefact(graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
                                               validation["relays"]["spike_agreement"].items())
                      + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
                      + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
+    if progress is not None:
+        progress(1, 1, VALIDATING)
     notes.append(f"tSample {network.t_sample}: {lowered.network.metadata['t_sample_rule']}"
                  + (f" + {plan.total_shift} relay step(s)" if plan is not None and plan.total_shift else ""))
     if network.metadata.get("output_shift"):
@@ -163,4 +170,4 @@ def lower_artefact(graph: Graph, options: dict[str, Any]) -> LoihiArtefact:
                          timing=lowered.timing_record.as_dict(), validation=validation, notes=notes)
 
 
-__all__ = ["target", "LoihiTarget", "LoihiArtefact", "LoihiNetwork", "lower_model", "lower_artefact"]
+__all__ = ["LoihiArtefact", "LoihiNetwork", "lower_model", "lower_artefact"]

@@ -26,11 +26,13 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
+from snncc.progress import Progress
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.lowering.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
                                           quantize_graph)
 
 MIN_RANGE = 1.0 / 8.0
+MEASURING = "measuring scale candidates"
 
 
 class FlagKind(Enum):
@@ -94,8 +96,10 @@ def split_projections(record: QuantizationRecord) -> list[str]:
     return sorted(p.dense for p in record.projections if p.wgt_exp_outliers is not None)
 
 
-def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple[Graph, QuantizationRecord]:
-    """Quantize ``graph`` under ``rule``; for "auto", decide by the screen and by measured error."""
+def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
+           progress: Progress | None = None) -> tuple[Graph, QuantizationRecord]:
+    """Quantize ``graph`` under ``rule``; for "auto", decide by the screen and by measured error
+    (``progress(done, total, phase)`` after each candidate)."""
     if rule == "global":
         return quantize_graph(graph, "global", reason="requested: the paper's rule (one w_scale, wgtExp 0)")
     if rule == "per-layer":
@@ -124,6 +128,8 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
             sc.flagged["graph"] = Flag(FlagKind.GLOBAL_REFUSED, "the paper's global rule cannot be lowered")
             sc.global_possible = False
     candidates: list[tuple[str, Graph, QuantizationRecord, float]] = []
+    planned = int(sc.global_possible) + 1 + int(bool(outliers)) + len(FINE_STEPS)
+    considered = [0]
 
     def consider(name: str, make: Callable[[], tuple[Graph, QuantizationRecord]]) -> None:
         """Quantize and measure a candidate; one that cannot be lowered (a register out of range) is left out."""
@@ -132,6 +138,12 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
             candidates.append((name, g, r, measure(g, r)))
         except SnnccError as ex:
             refused[name] = str(ex)
+        considered[0] += 1
+        if progress is not None:
+            progress(considered[0], planned, MEASURING)
+
+    if progress is not None:
+        progress(0, planned, MEASURING)
 
     if sc.global_possible:
         consider("global", lambda: quantize_graph(graph, "global"))
@@ -149,6 +161,8 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str) -> tuple
     if not candidates:
         raise SnnccError(f"no scale rule can be lowered: {'; '.join(f'{k}: {v}' for k, v in refused.items())}",
                          field="--scale")
+    if progress is not None:
+        progress(planned, planned, MEASURING)
     errors = {name: err for name, _, _, err in candidates}
     paper = errors.get("global")
     name, g, r, err = min(candidates, key=lambda c: c[3])   # min keeps the first of equal errors

@@ -1,0 +1,155 @@
+"""Jetson's ``lower`` and ``check`` work: torch modules with the IR's exact semantics exported to ONNX
+(whole sequence and streaming step) at the opset of the board's JetPack, validated in ONNX Runtime
+against the IR reference (failing loudly); a ``JetsonArtefact`` whose ``write(dir)`` creates the
+directory atomically:
+
+    model.onnx  step.onnx  manifest.json  build_engine.sh  run.py
+
+A buffered classifier (no IR graph) is lowered from its PyTorch module (``buffered.py``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.ir.timebase import sample_steps
+from snncc.progress import Progress
+from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
+from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
+from snncc.targets.jetson.manifest import ArtefactFiles, build_manifest, manifest_bytes
+from snncc.targets.jetson.plan import GraphPlan, plan_graph
+from snncc.targets.jetson.recipe import build_engine_script
+from snncc.targets.jetson.validate import validate_export
+from snncc.threads import one_thread
+
+MAX_UNROLLED_STEPS = 5000
+EXPORTING = "exporting the ONNX models"
+VALIDATING = "validating in ONNX Runtime against the IR reference"
+
+
+def runner_source() -> bytes:
+    """run.py: the standalone runner module's own text (numpy + onnxruntime / tensorrt)."""
+    return (Path(__file__).with_name("standalone_runner.py")).read_bytes()
+
+
+def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> tuple[int, str]:
+    """(T for the export, the rule that gave it): --time-steps, else recording_length_s / dt, else the
+    default every target uses for a model that states no recording length (``snncc.ir.timebase``)."""
+    steps, rule = sample_steps(plan.graph, options.get("time_steps"))
+    if plan.has_lif and steps > MAX_UNROLLED_STEPS:
+        raise SnnccError(f"{steps} steps is too long to unroll (max {MAX_UNROLLED_STEPS}); the step model "
+                         "runs any length", field="--time-steps")
+    return steps, rule
+
+
+class JetsonArtefact(ArtefactFiles):
+    """The artefact's files (bytes, in write order) and its manifest."""
+
+    def summary(self) -> dict[str, Any]:
+        v = self.manifest["validation"]
+        return {
+            **self.file_summary(),
+            "validation": {
+                "reference": v["reference"],
+                "sequence": {k: x for k, x in v["sequence"].items() if k != "operators"},
+                "step": {k: x for k, x in v["step"].items() if k != "operators"},
+                "dynamic_axes_checked": v["dynamic_axes_checked"],
+                "fp16": v["fp16"],
+            },
+            "notes": self.notes,
+        }
+
+    def render_text(self, console) -> None:
+        from rich.table import Table
+
+        m, v = self.manifest, self.manifest["validation"]
+        console.print(f"[bold]Jetson artefact[/bold]  {m['model']['kind']} '{m['model']['name']}'   JetPack {m['jetpack']} "
+                      f"-> ONNX opset {m['opset']} (TensorRT {m['tensorrt']})")
+        table = Table(show_header=True)
+        for col in ("file", "bytes", "interface"):
+            table.add_column(col)
+        for var in m["variants"]:
+            sig = ", ".join(f"{t['name']}{tuple(t['shape'])}" for t in var["inputs"][:2])
+            if len(var["inputs"]) > 2:
+                sig += f", +{len(var['inputs']) - 2} state"
+            outs = ", ".join(f"{t['name']}{tuple(t['shape'])}" for t in var["outputs"][:2])
+            table.add_row(var["file"], f"{len(self.files[var['file']]):,}", f"{sig} -> {outs}")
+        for name in ("manifest.json", "build_engine.sh", "run.py"):
+            table.add_row(name, f"{len(self.files[name]):,}", "")
+        console.print(table)
+        inp = m["input"]
+        console.print(f"input: {inp['channels']} channels x {m['time_steps']} steps (dt {m['dt']} s); "
+                      f"{inp['note']}")
+        seq, step, fp16 = v["sequence"], v["step"], v["fp16"]
+        if "spike_agreement" in seq:
+            console.print(f"validated against the IR reference ({v['samples']} seeded samples): output spike agreement "
+                          f"model.onnx {seq['spike_agreement']:.4%}, step.onnx {step['spike_agreement']:.4%}; "
+                          f"predictions {seq['prediction_agreement']:.0%} equal")
+        else:
+            console.print(f"validated against the IR reference ({v['samples']} seeded samples): max |delta| score "
+                          f"{seq['max_abs_delta_score']:.2g} (model.onnx), {step['max_abs_delta_score']:.2g} (step.onnx); "
+                          f"predictions {seq['prediction_agreement']:.0%} equal")
+        flips = f"{fp16['spike_flips']} spike flips, " if "spike_flips" in fp16 else ""
+        console.print(f"fp16 emulation: {flips}max |delta| score {fp16['max_abs_delta_score']:.3g} "
+                      f"(range {fp16['score_range']:.3g}), {fp16['predictions_changed']} predictions changed")
+        for note in self.notes:
+            console.print(f"note: {note}")
+
+
+def lower_graph(graph: Graph, options: dict[str, Any], progress: Progress | None = None) -> JetsonArtefact:
+    """The validated artefact of ``graph`` (options: jetpack, time_steps, seed, source);
+    ``progress(done, total, phase)`` through the export and the validation."""
+    plan = plan_graph(graph.copy())
+    steps, steps_rule = resolve_steps(plan, options)
+    jetpack = str(options.get("jetpack") or "4.6")
+    opset = opset_for_jetpack(jetpack)
+    report = progress or (lambda done, total, phase: None)
+    report(0, 2, EXPORTING)
+    with one_thread():
+        sequence = export_sequence(plan, steps, opset)
+        report(1, 2, EXPORTING)
+        step = export_step(plan, opset)
+        report(2, 2, EXPORTING)
+    report(0, 1, VALIDATING)
+    record = validate_export(plan, steps, sequence, step, seed=int(options.get("seed") or 0))
+    report(1, 1, VALIDATING)
+    manifest = build_manifest(plan, steps, opset, jetpack, record.as_dict(), options.get("source"))
+    files = {
+        "model.onnx": sequence.data,
+        "step.onnx": step.data,
+        "manifest.json": manifest_bytes(manifest),
+        "build_engine.sh": build_engine_script(manifest).encode("utf-8"),
+        "run.py": runner_source(),
+    }
+    notes = ["validated in ONNX Runtime on this machine; TensorRT engines are built and run on the board"]
+    if plan.has_lif:
+        notes.append(f"model.onnx is unrolled for T = {steps} ({steps_rule}); step.onnx runs any length")
+    else:
+        notes.append(f"validated on T = {steps} ({steps_rule}); both models run any length")
+    return JetsonArtefact(files, manifest, notes)
+
+
+def check_graph(graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, options: dict[str, Any], *,
+                data: str | None = None, synthetic: bool = False,
+                progress=None) -> JetsonCheckRecord:
+    """IR reference vs the ONNX Runtime artefact on a data set (``check.check_artefact``), the
+    artefact unrolled for the data's T unless --time-steps says otherwise; errors name ``data``."""
+    x = np.asarray(inputs)
+    if x.ndim == 2:
+        x = x[None]
+    if options.get("time_steps") is None:
+        options = {**options, "time_steps": int(x.shape[1])}
+    artefact = lower_graph(graph, options)
+    try:
+        with one_thread():
+            record = check_artefact(plan_graph(graph.copy()), artefact, x, labels, progress)
+    except SnnccError as err:
+        raise (err.with_file(data) if data is not None else err) from None
+    if synthetic:
+        record.notes.append("the data set is synthetic: these accuracies are not the paper's")
+    return record
