@@ -9,6 +9,25 @@ verb imports only what it needs. ``docs/api.md`` shows the Python equivalent of 
 from __future__ import annotations
 
 import importlib
+from typing import TYPE_CHECKING, Callable
+
+if TYPE_CHECKING:   # what type checkers see: the functions themselves, with their signatures
+    from snncc.verbs.analyse_ttc import analyse_ttc
+    from snncc.verbs.bench import bench_artefacts as bench
+    from snncc.verbs.check import check_model as check
+    from snncc.verbs.compile import compile_model as compile
+    from snncc.verbs.data_analyse import data_analyse
+    from snncc.verbs.data_encode import data_encode
+    from snncc.verbs.data_frames import data_frames
+    from snncc.verbs.data_synth import data_synth
+    from snncc.verbs.emulate import emulate_bundle as emulate
+    from snncc.verbs.export import export
+    from snncc.verbs.hpo import hpo_report, hpo_run, hpo_space
+    from snncc.verbs.inspect import inspect
+    from snncc.verbs.map import map_cores as map
+    from snncc.verbs.report import report_energy as report
+    from snncc.verbs.run import run_artefact as run
+    from snncc.verbs.train import train
 
 # public name -> "module:attribute" that defines it (verb names follow the CLI: ``compile``,
 # ``check``, ``data_encode`` for ``snncc data encode``, ...)
@@ -44,12 +63,13 @@ _HOMES = {**_TARGET_HOMES, **_MODEL_DATA_HOMES}
 __all__ = sorted(_HOMES)
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Callable[..., object]:
     home = _HOMES.get(name)
     if home is None:
         raise AttributeError(f"module 'snncc.api' has no attribute {name!r}")
     module, _, attribute = home.partition(":")
-    return getattr(importlib.import_module(module), attribute or name)
+    found: Callable[..., object] = getattr(importlib.import_module(module), attribute or name)
+    return found
 
 
 def __dir__() -> list[str]:

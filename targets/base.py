@@ -55,7 +55,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, ClassVar, Literal, Protocol, TypeVar, Union, get_args, overload, runtime_checkable
+from typing import TYPE_CHECKING, Literal, Protocol, TypeVar, Union, get_args, overload, runtime_checkable
 
 from snncc.errors import SnnccError
 from snncc.progress import Progress as PhaseProgress
@@ -281,8 +281,8 @@ def target_options(target: Target, given: Given = None, capability: str | None =
             raise SnnccError(f"does not apply to {VERB_OF.get(capability, capability)} (--target {target.name} takes it "
                              f"for {verbs})", field=spec.flag)
         values[key] = spec.parse(value)
-    built: TargetOptions = kind(**values)
-    return built
+    build: Callable[..., TargetOptions] = kind
+    return build(**values)
 
 
 def capability_options(kind: type[R], given: Given = None) -> R:
@@ -297,7 +297,8 @@ def capability_options(kind: type[R], given: Given = None) -> R:
             raise TypeError(f"{kind.__name__} has no option {key!r}")
         if value is not None:
             values[key] = declared[key].parse(value)
-    return kind(**values)
+    build: Callable[..., R] = kind
+    return build(**values)
 
 
 # -- records and artefacts --------------------------------------------------------------------------
@@ -332,11 +333,20 @@ class HasArrays(Protocol):
 class Emulation(HasArrays, Protocol):
     """What ``emulate`` returns: the run's size and result, and what the lowering shifted."""
 
-    samples: int
-    steps: int
-    padded_steps: int
-    output_shift: int
-    t_sample: int
+    @property
+    def samples(self) -> int: ...
+
+    @property
+    def steps(self) -> int: ...
+
+    @property
+    def padded_steps(self) -> int: ...
+
+    @property
+    def output_shift(self) -> int: ...
+
+    @property
+    def t_sample(self) -> int: ...
 
     @property
     def prediction(self) -> np.ndarray: ...
@@ -431,9 +441,14 @@ class HardwareCosts(Protocol):
     ``published``: a published measurement shown beside the trials (figure keys and ``accuracy`` in
     %, ``label``), or empty; ``label``: what the figures are (ESTIMATE wording)."""
 
-    objectives: Mapping[str, Objective]
-    published: Mapping[str, float | str]
-    label: str
+    @property
+    def objectives(self) -> Mapping[str, Objective]: ...
+
+    @property
+    def published(self) -> Mapping[str, float | str]: ...
+
+    @property
+    def label(self) -> str: ...
 
     def figures(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
                 estimate_samples: int = 16, emulate_samples: int = 0) -> HardwareFigures:
@@ -460,10 +475,17 @@ class QuantizedParameters(Protocol):
     straight-through: forward = the chip's value, gradient = identity), ``threshold``, per-step decay
     factors ``alpha`` (current) and ``beta`` (voltage), and ``record`` (the integers chosen, plain data)."""
 
-    weights: Mapping[str, torch.Tensor]
-    threshold: float
-    alpha: float
-    beta: float
+    @property
+    def weights(self) -> Mapping[str, torch.Tensor]: ...
+
+    @property
+    def threshold(self) -> float: ...
+
+    @property
+    def alpha(self) -> float: ...
+
+    @property
+    def beta(self) -> float: ...
 
     @property
     def record(self) -> Mapping[str, int | float]: ...
@@ -475,7 +497,9 @@ class Arithmetic(Protocol):
     rounding); a full model of its integer dynamics (state rounding, saturation, reset, spike rule)
     belongs here too, as methods beside ``quantize``."""
 
-    label: str                       # the chip's name in records ("Loihi")
+    @property
+    def label(self) -> str:
+        """The chip's name in records ("Loihi")."""
 
     def quantize(self, weights: Mapping[str, torch.Tensor], neurons: NeuronConstants) -> QuantizedParameters:
         """The chip's parameters for a network with ``weights`` (all its projections) and ``neurons``."""
@@ -492,12 +516,21 @@ CAPABILITIES: dict[str, type] = {
 
 
 class Target(Protocol):
-    name: str
-    description: str
-    output_kind: str  # "file" or "directory"
-    options_type: ClassVar[type[TargetOptions]]
-    # optional ``output_suffix``: the file suffix that names this target's artefact (".net"), so that
-    # ``compile -o x.net`` needs no --target; a target without one (a directory) is always named
+    """What every target states (class attributes will do): ``output_kind`` is "file" or "directory".
+    Optional: ``output_suffix``, the file suffix that names its artefact (".net"), so that ``compile -o
+    x.net`` needs no --target (a target without one, e.g. a directory, is always named); ``model_kinds``."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def description(self) -> str: ...
+
+    @property
+    def output_kind(self) -> str: ...
+
+    @property
+    def options_type(self) -> type[TargetOptions]: ...
 
 
 def model_kinds(target: Target) -> tuple[str, ...]:

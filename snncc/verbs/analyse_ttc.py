@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from snncc.training.ttc import TTCRecord
 
 
@@ -27,7 +30,7 @@ class TTCResult:
 
         return to_jsonable({"rule": self.rule, "models": [r.as_dict() for r in self.records]})
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         from snncc.training.ttc import ttc_table
 
         console.print(ttc_table(self.records), markup=False, soft_wrap=True)
@@ -49,10 +52,10 @@ def analyse_ttc(models: Sequence[str | os.PathLike], *, data: Sequence[str | os.
     from snncc.training.ttc import RULE, check_figure_path, plot_records, ttc_of_checkpoints, ttc_payload
 
     if figure is not None:
-        check_figure_path(figure)
+        check_figure_path(Path(figure))
     records = ttc_of_checkpoints([str(m) for m in models], [str(d) for d in data], split)
     if output is not None:
         write_text_atomic(output, json.dumps(ttc_payload(records), indent=2) + "\n")
     if figure is not None:
-        plot_records(records, figure)
+        plot_records(records, Path(figure))
     return TTCResult(records, RULE, None if output is None else str(output), None if figure is None else str(figure))

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import os
 from dataclasses import asdict, dataclass
-from typing import Iterable
+from typing import TYPE_CHECKING, Iterable
 
 from snncc.verbs import VerbProgress
+
+if TYPE_CHECKING:
+    from rich.console import Console
 
 
 @dataclass
@@ -40,7 +43,7 @@ class AnalysisResult:
 
         return to_jsonable(asdict(self))
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         from snncc.data.analysis_text import render_analysis
 
         render_analysis(asdict(self), console)

@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING
 from snncc.verbs import VerbProgress
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from snncc.data.encoding import EncodedSet
 
 
@@ -27,7 +29,7 @@ class EncodeResult:
 
         return to_jsonable(self.encoded.summary(self.written))
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         inputs, meta = self.encoded.inputs, self.encoded.meta
         console.print(f"{inputs.shape[0]} samples x {inputs.shape[1]} bins x 24 channels (th {meta['threshold']:g}, "
                       f"bin {self.bin_ms:g} ms) -> {', '.join(self.written)}")

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from snncc.data.encoding import EncodedSet
 
 
@@ -24,7 +26,7 @@ class FramesResult:
 
         return to_jsonable(self.encoded.summary(self.written))
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         n, t = self.encoded.inputs.shape[:2]
         console.print(f"{n} samples x {t} frames x 12 taxels -> {', '.join(self.written)}")
 

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import os
 from dataclasses import asdict, dataclass
-from typing import Iterable
+from typing import TYPE_CHECKING, Iterable
 
 from snncc.verbs import VerbProgress
+
+if TYPE_CHECKING:
+    from rich.console import Console
 
 
 @dataclass
@@ -28,7 +31,7 @@ class SynthResult:
         """What ``snncc data synth --json`` prints."""
         return asdict(self)
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         console.print(f"wrote {self.samples} synthetic samples ({self.samples // 27} x 27 letters, seed {self.seed}) "
                       f"to {self.out}")
         console.print("mean events per taxel and sample: "
@@ -58,11 +61,13 @@ def data_synth(*, out: str | os.PathLike, repetitions: int = 200, seed: int = 0,
     written = [0]
 
     def on_frames(k: int) -> None:
-        progress(k, total, "generating frames")
+        if progress is not None:
+            progress(k, total, "generating frames")
 
     def on_file() -> None:
         written[0] += 1
-        progress(samples + written[0], total, "encoding and writing")
+        if progress is not None:
+            progress(samples + written[0], total, "encoding and writing")
 
     if progress is not None:
         progress(0, total, "generating frames")

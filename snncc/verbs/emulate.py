@@ -72,5 +72,5 @@ def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path,
     total = int(x.shape[0]) if x.ndim == 3 else 1
     emulation = emulate(Path(bundle), x, record=record, stream=stream, gap=gap, source=str(input),
                         progress=counting(progress, total, "emulating"))
-    write_npz_atomic(output, emulation.arrays())      # zlib level 1: numpy's level 6 took longer than the emulation
+    write_npz_atomic(output, dict(emulation.arrays()))      # zlib level 1: numpy's level 6 took longer than the emulation
     return EmulateRecord(str(bundle), str(output), stream, emulation)

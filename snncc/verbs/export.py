@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from snncc.exporters.nir import ExportReport
 
 FORMATS = ("nir",)
@@ -29,7 +31,7 @@ class ExportResult:
 
         return to_jsonable({"format": self.format, **asdict(self.report)})
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         for line in self.report.lines():
             console.print(line, markup=False)
 

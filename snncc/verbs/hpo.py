@@ -7,6 +7,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from snncc.hpo.progress import StudyView
     from snncc.hpo.report import HpoReport
     from snncc.hpo.space import Range
@@ -30,7 +32,7 @@ class HpoRunResult:
 
         return to_jsonable(self.summaries)
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         for s in self.summaries:
             b = s.budget
             console.print(f"study {s.study} ({s.step}): {b['complete']} complete, {b['pruned']} pruned, "
@@ -82,7 +84,7 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
         summaries = run_hpo(req, view)
     finally:
         torch.set_num_threads(before)
-    return HpoRunResult(summaries, report_command(summaries[-1].study, storage, workdir))
+    return HpoRunResult(summaries, report_command(summaries[-1].study, storage, os.fspath(workdir)))
 
 
 @dataclass
@@ -99,7 +101,7 @@ class HpoReportResult:
 
         return to_jsonable({**self.report.as_dict(), "figure": self.figure})
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         self.report.render_text(console)
         if self.figure:
             console.print(f"wrote {self.figure}")
@@ -115,9 +117,9 @@ def hpo_report(study: str, *, storage: str | None = None, workdir: str | os.Path
     from snncc.hpo.report import study_report
     from snncc.hpo.storage import open_storage, redact, study_storage_url
 
-    url = study_storage_url(storage, workdir, must_exist=True)
+    url = study_storage_url(storage, os.fspath(workdir), must_exist=True)
     report = study_report(open_storage(url), study, redact(url))
-    written = None if no_plot else report.plot(output or (Path(workdir) / f"{study}-front.png"))
+    written = None if no_plot else report.plot(Path(output) if output else Path(workdir) / f"{study}-front.png")
     return HpoReportResult(report, str(written) if written else None)
 
 
@@ -138,7 +140,7 @@ class HpoSpaceResult:
                             "paper_presets": {th: p.as_dict() for th, p in self.paper_presets.items()},
                             "note": self.note})
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         from rich.table import Table
 
         t = Table(title="search space (ranges: snncc's choice; the paper gives none) and the paper's presets")

@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import os
 from dataclasses import dataclass, field
+
+if TYPE_CHECKING:
+    from rich.console import Console
 
 
 @dataclass
@@ -20,7 +25,7 @@ class InspectResult:
 
         return to_jsonable(self.summary)
 
-    def render_text(self, console) -> None:
+    def render_text(self, console: Console) -> None:
         from snncc.ir.summary_text import render_graph_summary
 
         render_graph_summary(self.summary, console)

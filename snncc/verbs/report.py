@@ -4,16 +4,21 @@ beside the paper's measurement, on a data set, a spike file or seeded random inp
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.verbs import VerbProgress, counting
 
+if TYPE_CHECKING:
+    from snncc.inputs import RandomSpikes
+    from snncc.targets.base import Record
+
 
 def report_energy(bundle: str | Path, *, target: str = "loihi", energy: bool = False, data: str | Path | None = None,
                   input: str | Path | None = None, limit: int | None = None, samples: int | None = None,
-                  rate: float | None = None, seed: int | None = None, progress: VerbProgress | None = None):
+                  rate: float | None = None, seed: int | None = None, progress: VerbProgress | None = None) -> Record:
     """The target's energy report (``as_dict``, ``render_text``) for ``bundle``. Inputs: ``data`` (a data
     set .npz), ``input`` (a spike .npy), or ``samples`` seeded random samples (default 8) with spike
     probability ``rate`` (default 0.05) per channel and step, ``seed`` (default 0)."""
@@ -31,6 +36,7 @@ def report_energy(bundle: str | Path, *, target: str = "loihi", energy: bool = F
             if value is not None:
                 raise SnnccError("applies only to random inputs, not with --data or --input", field=flag)
     estimate = capability(get_target(target), "estimate")
+    x: np.ndarray | RandomSpikes
     if data is not None:
         from snncc.data.dataset_file import load_dataset
 

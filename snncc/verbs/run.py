@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -48,7 +48,8 @@ def run_artefact(artefact: str | Path, *, input: str | Path, target: str = "jets
     run = capability(get_target(target), "run")
     result = run(Path(artefact), load_array(input), source=str(input), stream=stream, backend=backend)
     if output is not None:
+        save: Callable[..., None] = np.savez       # its keywords are array names here, never allow_pickle
         with atomic_path(output) as tmp:
             with open(tmp, "wb") as fh:  # a file object: savez must not append '.npz' to the temp name
-                np.savez(fh, **result.arrays())
+                save(fh, **result.arrays())
     return RunRecord(str(artefact), result, None if output is None else str(output))

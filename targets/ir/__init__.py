@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from snncc.errors import SnnccError
 from snncc.progress import Progress as PhaseProgress
 from snncc.targets.base import Given, TargetOptions, target_options
 
@@ -45,7 +46,7 @@ class IRArtefact:
     def render_text(self, console: Console) -> None:
         from snncc.ir.summary_text import render_graph_summary
 
-        render_graph_summary(self.summary(), console)
+        render_graph_summary(dict(self.summary()), console)
 
 
 class IRTarget:
@@ -59,7 +60,8 @@ class IRTarget:
         from snncc.ir.graph import Graph
 
         target_options(self, options, "lower")
-        assert isinstance(model, Graph), "the verbs hand ir only IR graphs (model_kinds)"
+        if not isinstance(model, Graph):
+            raise SnnccError("ir writes IR graphs only (model_kinds)", field="--target")
         return IRArtefact(model.copy())
 
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from snncc.errors import SnnccError
 from snncc.progress import Progress as PhaseProgress
 from snncc.targets.base import (
     AgreementOptions, Arithmetic, Artefact, CoreMap, Emulation, Given, HardwareCosts, Progress, Record,
@@ -76,9 +77,13 @@ class LoihiTarget:
         return opts
 
     def lower(self, model: Model, options: Given = None, *, progress: PhaseProgress | None = None) -> Artefact:
+        from snncc.ir.graph import Graph
         from snncc.targets.loihi.lowering.lower import lower_artefact
 
-        found: Artefact = lower_artefact(model, _settings(self._options(options, "lower")), progress=progress)
+        settings = _settings(self._options(options, "lower"))
+        if not isinstance(model, Graph):
+            raise SnnccError("Loihi lowers IR graphs only (model_kinds)", field="--target")
+        found: Artefact = lower_artefact(model, settings, progress=progress)
         return found
 
     def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
@@ -110,7 +115,6 @@ class LoihiTarget:
         return found
 
     def map(self, source: Path, options: Given = None) -> CoreMap:
-        from snncc.errors import SnnccError
         from snncc.targets.loihi.bundle.load import load_network
         from snncc.targets.loihi.mapping.partition import map_network
 
