@@ -9,8 +9,9 @@ The package's face. ``target`` (the registered target) and ``LoihiTarget`` live 
     mapping/        the network placed on cores under every per-core limit (relays for wide fan-in)
     emulation/      the bit-exact emulator and ``snncc emulate``'s work
     bundle/         the HDF5 bundle (netx layout) read, written and checked
-    estimate/       ESTIMATE of energy and delay per sample
+    estimate/       ESTIMATE of energy and delay per sample; a search trial's figures (``hardware``)
     checks/         comparisons with a reference: exactness (compile), accuracy (labels), agreement
+    arithmetic/     the quantization in torch, straight-through (``arithmetic``: training through it)
 
 Names below are resolved on first use, so tools that only read, map or emulate a bundle never
 import the compiler's torch-based reference simulator.
