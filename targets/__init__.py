@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 from typing import TypeVar
 
 from snncc.errors import SnnccError
@@ -56,9 +56,15 @@ def targets_for_suffix(suffix: str) -> list[str]:
 
 
 def get_target(name: str) -> Target:
+    """The registered target ``name`` (the first entry point of that name), or a one-line refusal: not
+    installed, or its entry point fails to load (the plug-in's own error, named)."""
     for ep in entry_points(group=GROUP):
         if ep.name == name:
-            found: Target = ep.load()
+            try:
+                found: Target = ep.load()
+            except Exception as ex:
+                raise SnnccError(f"target {name!r} is installed but does not load ({ep.value}): "
+                                 f"{type(ex).__name__}: {ex}", field="--target") from None
             return found
     raise SnnccError(f"unknown target {name!r} (installed: {', '.join(available_targets()) or 'none'})", field="--target")
 
@@ -66,10 +72,13 @@ def get_target(name: str) -> Target:
 def loaded_targets() -> list[Target]:
     """Every registered target that loads, by name (one whose entry point fails is left out here: it
     is refused, with its reason, when a user chooses it)."""
+    first: dict[str, EntryPoint] = {}
+    for ep in entry_points(group=GROUP):
+        first.setdefault(ep.name, ep)
     out = []
-    for name in available_targets():
+    for name in sorted(first):
         try:
-            out.append(get_target(name))
+            out.append(first[name].load())
         except Exception:  # a broken plug-in must not take every command's flags down with it
             continue
     return out

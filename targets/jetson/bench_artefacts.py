@@ -66,9 +66,11 @@ def bench_one(artefact: Path, *, data: Path | None = None, samples: int = 64, po
 
 
 def bench_many(artefacts: list[Path], *, data: Path | None = None, samples: int = 64, repeats: int = 3,
-               warmup_passes: int = 6, timed_passes: int = 6, stream: bool = False, backend: str = "auto"):
+               warmup_passes: int = 6, timed_passes: int = 6, stream: bool = False, backend: str = "auto",
+               progress: Callable[[int, int, str], None] | None = None):
     """``LatencyComparison`` of several artefacts with the same protocol; each takes ``data`` when its
-    channels (and, for a fixed time axis, its steps) fit, else seeded synthetic inputs."""
+    channels (and, for a fixed time axis, its steps) fit, else seeded synthetic inputs;
+    ``progress(samples_done, total, phase)`` over all of them."""
     from snncc.targets.jetson.bench_protocol import compare_protocol
     from snncc.targets.jetson.run_artefact import open_runner
     from snncc.targets.jetson.standalone_runner import RunnerError
@@ -90,8 +92,16 @@ def bench_many(artefacts: list[Path], *, data: Path | None = None, samples: int 
             inputs, labels = synthetic_inputs(runner.manifest, samples, seed=0), None
             label = f"synthetic random inputs ({samples} samples, seed 0): latency only"
         entries.append((runner, inputs, labels, label))
+    total = sum((warmup_passes + timed_passes * repeats) * len(inputs) for _, inputs, _, _ in entries)
+    done = [0]
+
+    def tick(phase: str, k: int) -> None:
+        done[0] += k
+        if progress is not None:
+            progress(done[0], total, phase)
+
     try:
-        return compare_protocol(entries, warmup_passes=warmup_passes, timed_passes=timed_passes, repeats=repeats,
-                                stream=stream)
+        return compare_protocol(entries, progress=tick, warmup_passes=warmup_passes, timed_passes=timed_passes,
+                                repeats=repeats, stream=stream)
     except RunnerError as ex:
         raise SnnccError(ex.rule, file=str(data or artefacts[0]), field=ex.field) from None

@@ -95,7 +95,7 @@ class JetsonTarget:
                 raise SnnccError("power is sampled for one artefact at a time", field="--power")
             many: Record = bench_many(artefacts, data=data, samples=samples, repeats=repeats,
                                       warmup_passes=warmup_passes, timed_passes=timed_passes, stream=stream,
-                                      backend=backend)
+                                      backend=backend, progress=progress)
             return many
         one: Record = bench_one(artefacts[0], data=data, samples=samples, power=power, power_root=power_root,
                                 rail=rail, repeats=repeats, warmup_passes=warmup_passes, timed_passes=timed_passes,

@@ -213,3 +213,21 @@ def test_capability_returns_the_bound_method_or_refuses():
     assert err.value.line() == "--target: target 'ir' has no check in this snncc"
     with pytest.raises(ValueError):
         capability(loihi, "fly")
+
+
+def test_a_plug_in_that_does_not_load_is_refused_when_chosen_and_hides_no_other_flag(tmp_path, monkeypatch, capsys,
+                                                                                     small_rsnn_checkpoint):
+    root = tmp_path / "site"
+    root.mkdir()
+    (root / "snncc_broken.py").write_text("raise ImportError('needs the vendor SDK')\n")
+    info = root / "snncc_broken-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: snncc-broken\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text("[snncc.targets]\nbroken = snncc_broken:target\n")
+    monkeypatch.syspath_prepend(str(root))
+    code, stdout, _ = run_cli(["compile", "--help"], capsys)
+    assert code == 0 and "--scale" in stdout and "--jetpack" in stdout
+    code, stdout, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "broken", "-o", tmp_path / "m.x"], capsys)
+    assert (code, stdout) == (2, "") and not (tmp_path / "m.x").exists()
+    assert err == ("snncc: error: --target: target 'broken' is installed but does not load (snncc_broken:target): "
+                   "ImportError: needs the vendor SDK\n")

@@ -161,3 +161,9 @@ def test_bench_times_baselines_beside_an_lstm_in_one_run(tmp_path, capsys):
     assert record["models"][0]["ratio_to_reference"] == 1.0 and record["models"][1]["median_ms"] > 0
     assert run([*args, "--stream"]) == 2
     assert "no step variant" in capsys.readouterr().err
+    import snncc.api as api
+
+    calls = []
+    api.bench([tmp_path / "lstm", tmp_path / "tcnn"], samples=3, repeats=1, warmup_passes=1, timed_passes=1,
+              progress=lambda *c: calls.append(c))
+    assert calls[-1] == (12, 12, "timing") and {c[2] for c in calls} == {"warm-up", "timing"}   # 2 x (3 + 3)
