@@ -159,43 +159,44 @@ def target_options(target: Target, given: Given = None, capability: str | None =
 
 @dataclass(frozen=True)
 class VerbOptions:
-    """What a verb hands its capability: the target's record, and the capability's own (or None)."""
+    """What a verb hands its capabilities: the target's record, and each used capability's own."""
 
     target: TargetOptions
-    capability: OptionRecord | None = None
+    capabilities: Mapping[str, OptionRecord] = dataclasses.field(default_factory=dict)
 
     def of(self, kind: type[R]) -> R:
-        """The capability's record as ``kind`` (its defaults when none was built)."""
-        return self.capability if isinstance(self.capability, kind) else capability_options(kind)
+        """The capability record of type ``kind`` (its defaults when none was built)."""
+        found = next((r for r in self.capabilities.values() if isinstance(r, kind)), None)
+        return found if found is not None else capability_options(kind)
 
 
-def verb_options(target: Target, given: Mapping[str, object], use: str,
+def verb_options(target: Target, given: Mapping[str, object], use: str | Sequence[str],
                  offers: Iterable[str] | None = None) -> VerbOptions:
-    """Split the options a verb was given (keyword -> value; None: not given) for the capability ``use``.
+    """Split the options a verb was given (keyword -> value; None: not given) for the capabilities it
+    calls, ``use`` (one, or several: compile with fine-tuning calls two).
 
     ``offers``: the capabilities whose options the verb's command offers (default ``use``); a key no
     installed target declares for them is a bug (TypeError). A capability's option goes to its record
-    when ``use`` is that capability, else it is refused in one line; the rest build ``target``'s
-    record (``target_options``: validated by the target, refused when it does not take them)."""
-    offered = list(offers or (use,))
+    when that capability is used, else it is refused in one line; the rest build ``target``'s record
+    (``target_options``: validated by the target, refused when it does not take them)."""
+    uses = (use,) if isinstance(use, str) else tuple(use)
+    offered = list(offers or uses)
     _check_known(given, offered)
-    own = {f.name for f in dataclasses.fields(CAPABILITY_OPTIONS[use])} if use in CAPABILITY_OPTIONS else set()
+    owner = {f.name: cap for cap in offered if cap in CAPABILITY_OPTIONS
+             for f in dataclasses.fields(CAPABILITY_OPTIONS[cap])}
     rest: dict[str, object] = {}
-    mine: dict[str, object] = {}
+    mine: dict[str, dict[str, object]] = {cap: {} for cap in uses if cap in CAPABILITY_OPTIONS}
     for key, value in given.items():
-        if key in own:
-            mine[key] = value
-            continue
-        other = next((c for c in offered if c != use and c in CAPABILITY_OPTIONS
-                      and key in {f.name for f in dataclasses.fields(CAPABILITY_OPTIONS[c])}), None)
-        if other is not None:
-            if value is not None and value is not False:
-                raise SnnccError(f"applies only to {VERB_OF.get(other, other)}, not to {VERB_OF.get(use, use)}",
-                                 field="--" + key.replace("_", "-"))
-            continue
-        rest[key] = value
-    record = capability_options(CAPABILITY_OPTIONS[use], mine) if use in CAPABILITY_OPTIONS else None
-    return VerbOptions(_target_options(target, rest, use), record)
+        cap = owner.get(key)
+        if cap is None:
+            rest[key] = value
+        elif cap in mine:
+            mine[cap][key] = value
+        elif value is not None and value is not False:
+            raise SnnccError(f"applies only to {VERB_OF.get(cap, cap)}, not to {VERB_OF.get(uses[0], uses[0])}",
+                             field="--" + key.replace("_", "-"))
+    records = {cap: capability_options(CAPABILITY_OPTIONS[cap], values) for cap, values in mine.items()}
+    return VerbOptions(_target_options(target, rest, uses), records)
 
 
 def offering(name: str) -> list[str]:

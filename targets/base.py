@@ -238,9 +238,13 @@ R = TypeVar("R", bound=OptionRecord)
 Given = Union[Mapping[str, object], OptionRecord, None]
 
 
-def _takes(target: Target, capability: str | None) -> str:
-    flags = [o.flag for o in declared_options(target.options_type).values()
-             if capability is None or capability in o.capabilities]
+def _uses(capability: str | Sequence[str] | None) -> tuple[str, ...]:
+    return () if capability is None else (capability,) if isinstance(capability, str) else tuple(capability)
+
+
+def _takes(target: Target, capability: str | Sequence[str] | None) -> str:
+    uses = set(_uses(capability))
+    flags = [o.flag for o in declared_options(target.options_type).values() if not uses or uses & set(o.capabilities)]
     return ", ".join(flags) or "no target options"
 
 
@@ -250,12 +254,14 @@ def _values(kind: type[OptionRecord], given: Given) -> dict[str, object]:
     return {k: v for k, v in (given or {}).items()}
 
 
-def target_options(target: Target, given: Given = None, capability: str | None = None) -> TargetOptions:
+def target_options(target: Target, given: Given = None, capability: str | Sequence[str] | None = None
+                   ) -> TargetOptions:
     """``target.options_type`` built from the user-given values (None entries dropped), each value
     validated by the target's declaration. A given option (not None, not False) that the record lacks
     is refused: ``--flag: does not apply to --target NAME (it takes --a, --b)``; one the target takes
-    for other verbs than ``capability``'s: ``--flag: does not apply to <verb> (--target NAME takes it
-    for <verbs>)``."""
+    only for other verbs than ``capability``'s (one capability, or the several a verb calls):
+    ``--flag: does not apply to <verb> (--target NAME takes it for <verbs>)``."""
+    uses = _uses(capability)
     kind = getattr(target, "options_type", TargetOptions)
     if isinstance(given, kind):
         return given
@@ -274,11 +280,11 @@ def target_options(target: Target, given: Given = None, capability: str | None =
         if spec is None:
             values[key] = value
             continue
-        if capability is not None and capability not in spec.capabilities:
+        if uses and not set(uses) & set(spec.capabilities):
             if value is False:
                 continue
             verbs = ", ".join(dict.fromkeys(VERB_OF.get(c, c) for c in spec.capabilities))
-            raise SnnccError(f"does not apply to {VERB_OF.get(capability, capability)} (--target {target.name} takes it "
+            raise SnnccError(f"does not apply to {VERB_OF.get(uses[0], uses[0])} (--target {target.name} takes it "
                              f"for {verbs})", field=spec.flag)
         values[key] = spec.parse(value)
     build: Callable[..., TargetOptions] = kind

@@ -40,8 +40,20 @@ class TargetFlagged:
         self.__qualname__ = command.__qualname__
         self.__module__ = command.__module__
         self.__doc__ = command.__doc__
+        self._built: tuple[object, list[inspect.Parameter]] | None = None
 
     def _parameters(self) -> list[inspect.Parameter]:
+        """The command's parameters with the targets' flags (rebuilt when the installed targets change)."""
+        from importlib.metadata import entry_points
+
+        from snncc.targets import GROUP
+
+        key = tuple(sorted((ep.name, ep.value) for ep in entry_points(group=GROUP)))
+        if self._built is None or self._built[0] != key:
+            self._built = (key, self._build())
+        return self._built[1]
+
+    def _build(self) -> list[inspect.Parameter]:
         from snncc.targets import offered_options
 
         hints = typing.get_type_hints(self.command)       # the command's own annotations, resolved in its module

@@ -191,3 +191,13 @@ def test_check_refuses_agreement_options_with_labelled_data(small_rsnn_checkpoin
     code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "loihi", "-o", tmp_path / "m.net", "--scale", "x"],
                            capsys)
     assert code == 2 and err == "snncc: error: --scale: scale must be one of global, per-layer, split, fine, auto\n"
+
+
+def test_a_verb_calling_two_capabilities_takes_the_options_of_both():
+    """(compile with fine-tuning will call lower and the fine-tuning capability: one call splits both.)"""
+    loihi = get_target("loihi")
+    both = verb_options(loihi, {"time_steps": 50, "density": 0.3}, ("lower", "agree"))
+    assert both.target.time_steps == 50 and both.of(AgreementOptions).density == 0.3
+    with pytest.raises(SnnccError) as err:
+        verb_options(loihi, {"stream": True}, ("lower", "agree"), ("lower", "check", "agree"))
+    assert err.value.line() == "--stream: does not apply to compile (--target loihi takes it for check with labelled data)"
