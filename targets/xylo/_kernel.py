@@ -109,7 +109,7 @@ def _padded(values, width: int, fill: float = 0.0) -> np.ndarray:
 
 def prepare(spec) -> Prepared:
     """Flatten ``spec`` (an ``XyloSpec``) for the kernel."""
-    from snncc.targets.xylo.emulator import effective_weights
+    from snncc.targets.xylo.weights import effective_weights
 
     n, n_out = spec.n_hidden, spec.n_out
     np_, nop = _round_up(n), _round_up(n_out)
@@ -313,7 +313,7 @@ def _reciprocal(threshold: np.ndarray) -> np.ndarray:
 def run_prepared(p: Prepared, x: np.ndarray, *, record: bool = False, threads: int | None = None):
     """Run (B, T, Nin) uint8 event counts (already clipped) through a prepared network -> ``XyloResult``."""
     from snncc.limits import check_memory
-    from snncc.targets.xylo.emulator import XyloResult
+    from snncc.targets.xylo.result import XyloResult
 
     batch, t_steps, _ = x.shape
     x = np.ascontiguousarray(x, np.uint8)

@@ -35,15 +35,15 @@ Both start every sample from zero state, as XyloSim after ``reset_all()``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 
 import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.targets.xylo.chip import CORE
+from snncc.targets.xylo.result import STATE_NAMES, XyloResult  # noqa: F401  (re-exported)
 from snncc.targets.xylo.spec import XyloSpec
+from snncc.targets.xylo.weights import effective_weights, wrap16, wrapped_weights  # noqa: F401  (re-exported)
 
-STATE_NAMES = ("vmem", "isyn", "isyn2", "spikes", "vmem_out", "isyn_out")
 COUNTERS = {
     "input_clipped": "input counts above the cap of 15 (per channel and step)",
     "wrapped_weight_deliveries": "deliveries through a weight whose w << shift wrapped in int16",
@@ -56,42 +56,6 @@ COUNTERS = {
 }
 
 
-@dataclass
-class XyloResult:
-    """What a run gives: output event counts, and per-step states when recorded."""
-
-    output_spikes: np.ndarray               # (B, T, Nout) uint8 output events per step (0 or 1)
-    vmem: np.ndarray | None = None          # (B, T, N) int16 hidden membrane potentials
-    isyn: np.ndarray | None = None          # (B, T, N) int16 hidden synaptic currents, synapse 1
-    isyn2: np.ndarray | None = None         # (B, T, N) int16 hidden synaptic currents, synapse 2
-    spikes: np.ndarray | None = None        # (B, T, N) uint8 hidden event counts (0 .. 31)
-    vmem_out: np.ndarray | None = None      # (B, T, Nout) int16
-    isyn_out: np.ndarray | None = None      # (B, T, Nout) int16
-    events: dict[str, int] | None = None    # reference_run(count=True): how often each rule bit (COUNTERS)
-
-    @property
-    def recorded(self) -> bool:
-        return self.vmem is not None
-
-    @property
-    def counts(self) -> np.ndarray:
-        """(B, Nout) output events summed over time."""
-        return self.output_spikes.sum(axis=1, dtype=np.int64)
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The result as named arrays (what a file of results holds)."""
-        out = {"output_spikes": self.output_spikes}
-        if self.recorded:
-            out.update({name: getattr(self, name) for name in STATE_NAMES})
-        return out
-
-
-def wrap16(x):
-    """Two's complement narrowing to the state width (``CORE.state_bits``), elementwise on int64."""
-    half = np.int64(1) << (CORE.state_bits - 1)
-    return ((np.asarray(x, np.int64) + half) & (2 * half - 1)) - half
-
-
 def sat16(x):
     return np.clip(x, CORE.state_min, CORE.state_max)
 
@@ -100,29 +64,6 @@ def decay(x: np.ndarray, dash: np.ndarray) -> np.ndarray:
     """x >> dash (arithmetic, rounds toward -inf), replaced by sign(x) where it is 0."""
     d = np.right_shift(x, dash)
     return np.where(d == 0, np.sign(x), d)
-
-
-def _shifted(spec: XyloSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """w << shift (int64, before narrowing) for the three matrices, shaped (Nin, N_ien, 2), (N, N, 2)
-    and (N_oen, Nout); an absent synapse axis means synapse 1 only (zeros on synapse 2)."""
-    def both_synapses(w):
-        w = w if w.ndim == 3 else w[:, :, None]
-        pad = np.zeros(w.shape[:2] + (CORE.hidden_synapse_states - w.shape[2],), np.int64)
-        return np.concatenate([w.astype(np.int64), pad], axis=2)
-
-    return (both_synapses(spec.weights_in) << spec.weight_shift_in,
-            both_synapses(spec.weights_rec) << spec.weight_shift_rec,
-            spec.weights_out.astype(np.int64) << spec.weight_shift_out)
-
-
-def effective_weights(spec: XyloSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The weights a delivery adds: int16(w << shift) (wraps, never saturates), shapes as ``_shifted``."""
-    return tuple(wrap16(w) for w in _shifted(spec))
-
-
-def wrapped_weights(spec: XyloSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """True where w << shift does not fit int16 and wraps (shapes as ``effective_weights``)."""
-    return tuple(w != wrap16(w) for w in _shifted(spec))
 
 
 def check_inputs(inputs, n_in: int, source: str | None = None, *, clip: bool = True) -> np.ndarray:
