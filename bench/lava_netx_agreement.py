@@ -74,6 +74,7 @@ class Case:
     params: Path | None = None
     copies: int = 1            # the bundle's input copies (authors' RSNN: each event channel fed twice)
     quick: bool = True
+    max_samples: int | None = None   # a cap for large models (Lava's Python simulation is slow)
 
 
 @dataclass
@@ -157,7 +158,7 @@ def cases(nir: Path, work: Path, seed: int) -> list[Case]:
         "braille_zero_2023": ({"dt": 1e-4}, 0.08, True),
         "braille_noDelay_noBias_subtract": ({"dt": 1e-4, "reset": "subtract", "allow_reset_change": True}, 0.08, True),
         "braille_subgraph_2023": ({"dt": 1e-4}, 0.08, False),
-        "cnn_sinabs": ({}, 0.05, False),
+        "cnn_sinabs": ({}, 0.05, False),      # 2,312 -> 4,096 -> 4,096 -> 512 -> 256 -> 10: minutes per sample in Lava
         "lif_norse": ({"dt": 1e-4}, 0.2, True),
         "lif_rockpool": ({}, 0.2, True),
         "two_lif_neurons": ({"dt": 1e-4}, 0.2, True),
@@ -165,7 +166,8 @@ def cases(nir: Path, work: Path, seed: int) -> list[Case]:
     out = []
     for path in sorted(nir.glob("*.nir")):
         options, density, quick = known.get(path.stem, ({}, 0.05, False))
-        out.append(Case(path.stem, path, options, density, quick=quick))
+        out.append(Case(path.stem, path, options, density, quick=quick,
+                        max_samples=2 if path.stem == "cnn_sinabs" else None))
     weights, params = authors_rsnn(work, seed)
     out.append(Case("rsnn_authors_th1", weights, {}, 0.02, params=params, copies=2, quick=False))
     return out
@@ -208,6 +210,9 @@ def features(bundle: Path) -> tuple[dict[str, Any], list[str], str]:
             "n": lay.n, "kind": lay.kind, "always_on": lay.always_on,
             "wgtExp": exponent_text(lay.wgt_exp),
             "weight_max_abs": int(np.abs(lay.weight).max(initial=0)),
+            # Lava clips each synapse matrix by its own sign mode: an all-negative one to -255 (see docs)
+            "inhibitory_with_min": [name for name, w in (("weight", lay.weight), ("weight_rec", lay.weight_rec))
+                                    if w is not None and w.size and w.max() <= 0 and w.min() == -256],
             "delay_max": int(d.max(initial=0)),
             "refDelay": int(lay.ref_delay),
             "bias": lay.bias is not None,
@@ -230,9 +235,13 @@ def features(bundle: Path) -> tuple[dict[str, Any], list[str], str]:
     return facts, compat, str(quant.get("reason", ""))
 
 
-def predicted_differences(facts: dict[str, Any]) -> list[str]:
-    """What netx 0.6 + Lava fixed_pt ignore or read differently in this bundle (from their source; see the docs)."""
-    why = []
+def predicted_differences(facts: dict[str, Any], overflow: dict[str, int] | None = None) -> tuple[list[str], list[str]]:
+    """(differences, caveats): what netx 0.6 + Lava fixed_pt ignore or read differently in this bundle
+    (docs/lava_netx.md's definition of a netx-runnable bundle), and what runs identically only under a
+    condition. ``overflow``: snncc's overflow counts on the inputs used (q wraps that Lava does not make)."""
+    why, caveats = [], []
+    if facts["input_always_on"]:
+        caveats.append(f"{facts['input_always_on']} always-on input axon(s): identical only if the driver holds them at 1")
     for i, lay in enumerate(facts["layers"], start=1):
         e = lay["wgtExp"]
         if isinstance(e, dict):
@@ -252,12 +261,20 @@ def predicted_differences(facts: dict[str, Any]) -> list[str]:
             why.append(f"layer {i}: feed-forward delays on a recurrent layer (netx gives its recurrent synapse the "
                        "feed-forward delay matrix and no weight exponent)")
         if lay["per_neuron"]:
-            why.append(f"layer {i}: per-neuron {lay['per_neuron']}")
+            caveats.append(f"layer {i}: per-neuron {lay['per_neuron']} (Lava's LIF declares one value; its CPU model "
+                           "broadcasts the array)")
         if lay["always_on"] and lay["refDelay"] != 1:
             why.append(f"layer {i}: {lay['always_on']} always-on bias compartment(s) timed by refDelay")
-        if lay["weight_max_abs"] == 0:
-            why.append(f"layer {i}: every weight 0 (netx's optimize_weight_bits divides by max|W|)")
-    return why
+        if lay.get("inhibitory_with_min"):
+            why.append(f"layer {i}: {lay['inhibitory_with_min']} all <= 0 and holding -256 (Lava clips it to -255, "
+                       "then truncates it with netx's bit count)")
+        if lay["weight_max_abs"] == 0 and lay["kind"] == "dense":
+            why.append(f"layer {i}: every weight 0 (netx's optimize_weight_bits divides by max|W|: load error)")
+    if overflow and overflow.get("overflow_q_wrap"):
+        why.append(f"q wrapped {overflow['overflow_q_wrap']} time(s) in snncc (21 bits + sign); Lava does not wrap q")
+    if overflow and overflow.get("u_at_minus_2pow23"):
+        why.append(f"u = -2**23 {overflow['u_at_minus_2pow23']} time(s) in snncc; Lava's wrap turns it into +2**23")
+    return why, caveats
 
 
 # -- running both sides ----------------------------------------------------------------------------
@@ -423,10 +440,10 @@ def probe_networks(seed: int):
          base(hid__weight_rec=lambda h, o, i: np.zeros_like(h.weight_rec)), 0.15),
         ("zero_weights_dense", "an all-zero feed-forward matrix into a dense layer",
          base(out__weight=lambda h, o, i: np.zeros_like(o.weight)), 0.15),
-        ("overflow", "thresholds at the 17-bit maximum and dense strong input (q wrap, u wrap, v clip)",
-         base(hid__weight=lambda h, o, i: np.full_like(h.weight, 254), hid__weight_rec=lambda h, o, i: np.full_like(h.weight_rec, 254),
-              hid__wgt_exp=7, hid__wgt_exp_rec=7, hid__i_decay=0, hid__v_decay=0, hid__v_th_mant=2**17 - 1), 0.9),
-        ("overflow_wgtexp0", "q beyond 21 bits with wgtExp 0: 12 inputs x 254 into a neuron at every step, no decay",
+        ("inhibitory_with_min", "an inhibitory-only matrix (every weight < 0) that holds -256",
+         base(out__weight=lambda h, o, i: np.where(np.abs(o.weight) > 100, -256, -np.abs(o.weight) - 2).astype(np.int16)),
+         0.15),
+        ("overflow_u_v", "u wraps and v clips (wgtExp 0, strong input, no decay, threshold at the 17-bit maximum)",
          base(hid__weight=lambda h, o, i: np.full_like(h.weight, 254), hid__weight_rec=lambda h, o, i: np.full_like(h.weight_rec, 254),
               hid__i_decay=0, hid__v_decay=0, hid__v_th_mant=2**17 - 1), 0.9),
     ]
@@ -436,16 +453,31 @@ def probe_networks(seed: int):
                        i_decay=4096, v_decay=4096)
     probes.append(("q_wrap", "one step's input q beyond 21 bits + sign (160 inputs x 254, wgtExp 0)",
                    LoihiNetwork([q_in, q_hid], steps, metadata={"probe": True}), 0.95))
-    # u lands exactly on -2**23: 8 inputs x -256 x 2**6 = -2**17 a step, no current decay, 64 steps
-    u_in = LoihiLayer("input", "input", 8)
-    u_hid = LoihiLayer("hidden", "dense", 1, weight=np.full((1, 8), -256, np.int16), v_th_mant=1, i_decay=0,
+    # u lands exactly on -2**23: weights (-256, +128) both firing = -128 x 2**6 = -2**13 a step, no current
+    # decay, 1024 steps (mixed signs: netx mangles an all-negative matrix holding -256, see inhibitory_with_min)
+    u_in = LoihiLayer("input", "input", 2)
+    u_hid = LoihiLayer("hidden", "dense", 1, weight=np.array([[-256, 128]], np.int16), v_th_mant=1, i_decay=0,
                        v_decay=4096)
     probes.append(("u_at_minus_2pow23", "u reaches exactly -2**23 (the edge of its 23 bits + sign)",
-                   LoihiNetwork([u_in, u_hid], 80, metadata={"probe": True}), 1.0))
+                   LoihiNetwork([u_in, u_hid], 1040, metadata={"probe": True}), 1.0))
     return probes
 
 
 # -- main ------------------------------------------------------------------------------------------
+def overflow_counts(snn: dict[str, np.ndarray]) -> dict[str, int]:
+    """snncc's overflow counters, and how often a recorded u sat exactly on -2**23."""
+    out = {k: int(snn[k]) for k in snn if k.startswith("overflow_")}
+    out["u_at_minus_2pow23"] = int(sum(np.count_nonzero(snn[k] == -(2 ** 23)) for k in snn if k.endswith("_current")))
+    return out
+
+
+def definition_holds(res: dict[str, Any]) -> bool:
+    """Whether the definition of a netx-runnable bundle predicted the measurement: no predicted
+    difference <=> Lava ran it identically (spikes and state)."""
+    identical = bool(res.get("all_spikes_identical") and res.get("all_state_identical")) and not res.get("lava_error")
+    return identical == (not res["predicted"])
+
+
 def verdict(row: Row) -> str:
     if not row.compiled:
         return "compile refused"
@@ -460,7 +492,7 @@ def verdict(row: Row) -> str:
 
 
 def table(rows: list[Row]) -> str:
-    head = f"{'graph':34s} {'rule':9s} {'timing':6s} {'verdict':32s} {'out eq%':>8s}  first diff / why"
+    head = f"{'graph':32s} {'rule':9s} {'timing':6s} {'verdict':31s} {'out eq%':>8s} {'def':3s}  first diff / why"
     lines = [head, "-" * len(head)]
     for row in rows:
         r = row.result
@@ -474,7 +506,12 @@ def table(rows: list[Row]) -> str:
             fd = r.get("first_state_difference")
             note = (f"layer {fd['layer']} {fd['field']} @ step {fd['step']} n{fd['neuron']}; " if fd else "")
             note += "; ".join(r.get("predicted", []))[:160]
-        lines.append(f"{row.case:34s} {row.rule:9s} {row.timing:6s} {verdict(row):32s} {frac_s}  {note}")
+        if row.rule == "auto" and "chose '" in row.chosen:
+            note = f"[auto chose {row.chosen.split(chr(39))[1]}] " + note
+        elif row.rule == "auto":
+            note = "[auto chose global] " + note
+        holds = {True: "ok", False: "NO"}.get(r.get("definition_holds"), "-")
+        lines.append(f"{row.case:32s} {row.rule:9s} {row.timing:6s} {verdict(row):31s} {frac_s} {holds:3s}  {note}")
     return "\n".join(lines)
 
 
@@ -561,7 +598,7 @@ def run(args, py: Path, versions: dict[str, str], work: Path, samples: int) -> d
     t0 = time.perf_counter()
     for digest, group in by_digest.items():
         first, case = group[0], case_of[digest]
-        x = make_inputs(first, case, first.features, samples, args.seed)
+        x = make_inputs(first, case, first.features, min(samples, case.max_samples or samples), args.seed)
         tag = digest[:16]
         snn = emulate_snncc(Path(first.bundle), x, work, tag)
         xd = drive(Path(first.bundle), x)
@@ -589,9 +626,10 @@ def run(args, py: Path, versions: dict[str, str], work: Path, samples: int) -> d
                 res = compare(snn, lava, group[0].features)
                 res["first_state_difference"] = first_state_difference(res)
                 res["netx_load_warnings"] = json.loads(str(lava["load_warnings"]))
-        res["predicted"] = predicted_differences(group[0].features)
-        res["samples"] = samples
-        res["overflow_snncc"] = {k: int(snn[k]) for k in snn if k.startswith("overflow_")}
+        res["overflow_snncc"] = overflow_counts(snn)
+        res["predicted"], res["caveats"] = predicted_differences(group[0].features, res["overflow_snncc"])
+        res["definition_holds"] = definition_holds(res)
+        res["samples"] = int(snn["output_spikes"].shape[0])
         res["same_bundle_as"] = [f"{r.rule}/{r.timing}" for r in group]
         for row in group:
             row.result = res
@@ -601,6 +639,10 @@ def run(args, py: Path, versions: dict[str, str], work: Path, samples: int) -> d
     if probes:
         print()
         print(probe_table(probes))
+    judged = [r.result for r in rows if r.compiled] + [p["result"] for p in probes]
+    held = sum(bool(r.get("definition_holds")) for r in judged)
+    print(f"\nthe netx-runnable definition (docs/lava_netx.md) predicted {held} of {len(judged)} measured bundles "
+          "(rows and probes): 'def' ok = no predicted difference <=> Lava ran it identically")
     return {
         "benchmark": "lava-dl netx 0.6 + Lava Loihi1SimCfg(fixed_pt) against snncc emulate, spike for spike",
         "synthetic_inputs": True,
@@ -657,15 +699,16 @@ def run_probes(py: Path, work: Path, seed: int, timeout: float) -> list[dict[str
             else:
                 res = compare(snn, lava, facts)
                 res["first_state_difference"] = first_state_difference(res)
-        res["overflow_snncc"] = {k: int(snn[k]) for k in snn if k.startswith("overflow_")}
-        results.append({"probe": name, "feature": what, "netx_compat": compat,
-                        "predicted": predicted_differences(facts), "result": res,
+        res["overflow_snncc"] = overflow_counts(snn)
+        res["predicted"], res["caveats"] = predicted_differences(facts, res["overflow_snncc"])
+        res["definition_holds"] = definition_holds(res)
+        results.append({"probe": name, "feature": what, "netx_compat": compat, "result": res,
                         "verdict": verdict(Row(name, "", "", compiled=True, result=res))})
     return results
 
 
 def probe_table(probes: list[dict[str, Any]]) -> str:
-    head = f"{'probe':24s} {'verdict':32s} {'out eq%':>8s}  first state difference / overflow (snncc)"
+    head = f"{'probe':24s} {'verdict':31s} {'out eq%':>8s} {'def':3s}  first state difference / overflow (snncc)"
     lines = [head, "-" * len(head)]
     for p in probes:
         r = p["result"]
@@ -675,7 +718,8 @@ def probe_table(probes: list[dict[str, Any]]) -> str:
         note = r.get("lava_error", "")[:100] or (f"layer {fd['layer']} {fd['field']} @ step {fd['step']} "
                                                   f"(lava {fd['lava']}, snncc {fd['snncc']})" if fd else "")
         ov = {k.replace("overflow_", ""): v for k, v in r.get("overflow_snncc", {}).items() if v}
-        lines.append(f"{p['probe']:24s} {p['verdict']:32s} {frac_s}  {note} {ov if ov else ''}")
+        holds = {True: "ok", False: "NO"}.get(r.get("definition_holds"), "-")
+        lines.append(f"{p['probe']:24s} {p['verdict']:31s} {frac_s} {holds:3s}  {note} {ov if ov else ''}")
     return "\n".join(lines)
 
 
