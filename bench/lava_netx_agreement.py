@@ -41,6 +41,7 @@ import hashlib
 import json
 import os
 import platform
+import re
 import shutil
 import subprocess
 import sys
@@ -506,10 +507,9 @@ def table(rows: list[Row]) -> str:
             fd = r.get("first_state_difference")
             note = (f"layer {fd['layer']} {fd['field']} @ step {fd['step']} n{fd['neuron']}; " if fd else "")
             note += "; ".join(r.get("predicted", []))[:160]
-        if row.rule == "auto" and "chose '" in row.chosen:
-            note = f"[auto chose {row.chosen.split(chr(39))[1]}] " + note
-        elif row.rule == "auto":
-            note = "[auto chose global] " + note
+        if row.rule == "auto" and row.compiled:
+            chosen = re.search(r"chose '([^']+)'", row.chosen)
+            note = f"[auto chose {chosen.group(1) if chosen else 'global'}] " + note
         holds = {True: "ok", False: "NO"}.get(r.get("definition_holds"), "-")
         lines.append(f"{row.case:32s} {row.rule:9s} {row.timing:6s} {verdict(row):31s} {frac_s} {holds:3s}  {note}")
     return "\n".join(lines)
@@ -648,6 +648,7 @@ def run(args, py: Path, versions: dict[str, str], work: Path, samples: int) -> d
         "synthetic_inputs": True,
         "lava_venv": versions,
         "snncc_python": platform.python_version(),
+        "snncc_revision": git_revision(),
         "samples_per_bundle": samples,
         "seed": args.seed,
         "timings_s": {"compile": round(compile_s, 1), "emulate": round(emulate_s, 1), "lava": round(lava_s, 1)},
@@ -655,6 +656,17 @@ def run(args, py: Path, versions: dict[str, str], work: Path, samples: int) -> d
         "probes": probes,
         "load_1min": os.getloadavg()[0],
     }
+
+
+def git_revision() -> str:
+    """The repository's HEAD (and '+dirty' when tracked files differ), or 'unknown' outside git."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=REPO, capture_output=True, text=True, check=True).stdout
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO, capture_output=True,
+                               text=True, check=True).stdout
+        return head.strip() + ("+dirty" if dirty.strip() else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
 
 
 def row_dict(row: Row) -> dict[str, Any]:
