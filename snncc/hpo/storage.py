@@ -44,6 +44,24 @@ def redact(url: str) -> str:
     return re.sub(r"(://[^:/@]+:)[^@]*@", r"\1***@", url)
 
 
+def sqlite_file(url: str) -> Path | None:
+    """The database file of an SQLite URL (``sqlite:///rel.db``, ``sqlite:////abs.db``); None for
+    other schemes and in-memory databases."""
+    if not url.startswith("sqlite:///"):
+        return None
+    path = url[len("sqlite:///"):].split("?", 1)[0]
+    return Path(path) if path and path != ":memory:" else None
+
+
+def shown(url: str) -> str:
+    """How an error line names a storage: its SQLite file's path, else the URL without its scheme
+    and password (a scheme's ``://`` would break the ``<file>: <field>: <rule>`` shape)."""
+    db = sqlite_file(url)
+    if db is not None:
+        return str(db)
+    return redact(url).split("://", 1)[-1] or url
+
+
 def open_storage(url: str, heartbeat: int = 30, grace: int | None = None):
     """An Optuna RDBStorage for ``url`` with heartbeats and the retry of stale trials."""
     import optuna
@@ -55,14 +73,14 @@ def open_storage(url: str, heartbeat: int = 30, grace: int | None = None):
     scheme = url.split("://", 1)[0] if "://" in url else ""
     if not scheme or not re.fullmatch(r"[a-z0-9+]+", scheme):
         raise SnnccError("expected an Optuna storage URL such as sqlite:///path.db or "
-                         "postgresql://user:pass@host/db", file=redact(url), field="--storage")
+                         "postgresql://user:pass@host/db", file=shown(url), field="--storage")
     kwargs = {}
     if scheme == "sqlite":
-        path = url[len("sqlite:///"):]
-        if path and path != ":memory:":
-            parent = Path(path).parent
+        path = sqlite_file(url)
+        if path is not None:
+            parent = path.parent
             if not parent.is_dir():
-                raise SnnccError("the SQLite file's directory does not exist", file=redact(url), field="--storage")
+                raise SnnccError("the SQLite file's directory does not exist", file=shown(url), field="--storage")
         kwargs = {"connect_args": {"timeout": SQLITE_TIMEOUT_S}}
     else:
         kwargs = {"pool_pre_ping": True}
@@ -76,13 +94,13 @@ def open_storage(url: str, heartbeat: int = 30, grace: int | None = None):
         except ImportError as ex:
             missing = getattr(ex.__cause__, "name", None) or type(ex).__name__
             raise SnnccError(f"no database driver for {scheme!r} URLs (missing {missing}; PostgreSQL: "
-                             "pip install 'snncc[postgres]')", file=redact(url), field="--storage") from None
+                             "pip install 'snncc[postgres]')", file=shown(url), field="--storage") from None
         except Exception as ex:  # sqlalchemy: bad URL, unreachable server, bad credentials, a creation race
             if _creation_race(ex) and attempt + 1 < CREATE_RETRIES:
                 time.sleep(0.5 * (attempt + 1))   # another worker is creating the tables this instant
                 continue
             first = str(ex).strip().splitlines()[0] if str(ex).strip() else type(ex).__name__
-            raise SnnccError(f"cannot open the storage ({type(ex).__name__}: {first[:160]})", file=redact(url),
+            raise SnnccError(f"cannot open the storage ({type(ex).__name__}: {first[:160]})", file=shown(url),
                              field="--storage") from None
     raise AssertionError("unreachable")
 

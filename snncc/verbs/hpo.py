@@ -114,12 +114,15 @@ def hpo_report(study: str, *, storage: str | None = None, workdir: str | os.Path
     ``output`` (default WORKDIR/STUDY-front.png) unless ``no_plot``."""
     from pathlib import Path
 
+    from snncc.atomic import protecting
     from snncc.hpo.report import study_report
-    from snncc.hpo.storage import open_storage, redact, study_storage_url
+    from snncc.hpo.storage import open_storage, redact, sqlite_file, study_storage_url
 
     url = study_storage_url(storage, os.fspath(workdir), must_exist=True)
     report = study_report(open_storage(url), study, redact(url))
-    written = None if no_plot else report.plot(Path(output) if output else Path(workdir) / f"{study}-front.png")
+    database = sqlite_file(url)
+    with protecting([database] if database is not None else []):   # the study's storage is an input
+        written = None if no_plot else report.plot(Path(output) if output else Path(workdir) / f"{study}-front.png")
     return HpoReportResult(report, str(written) if written else None)
 
 

@@ -147,9 +147,15 @@ def replace_refusal(directory) -> str | None:
         name = variant.get("file") if isinstance(variant, dict) else None
         if isinstance(name, str):
             ours |= {name, name.replace(".onnx", ".plan")}
-    foreign = sorted(p.name for p in directory.iterdir() if p.name not in ours)
+    entries = list(directory.iterdir())
+    foreign = sorted(p.name for p in entries if p.name not in ours)
     if foreign:
         return f"it holds files snncc did not write ({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''})"
+    # snncc writes only regular files: a directory, symlink or device of a listed name is a user's
+    odd = sorted(p.name for p in entries if p.is_symlink() or not p.is_file())
+    if odd:
+        return (f"{', '.join(odd[:3])}{', ...' if len(odd) > 3 else ''} is not a regular file "
+                "(snncc writes only regular files there)")
     return None
 
 

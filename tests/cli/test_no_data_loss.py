@@ -204,3 +204,40 @@ def test_devices_as_inputs_are_refused_and_as_outputs_written_through(tmp_path, 
     after = os.stat("/dev/null")
     assert (after.st_mode, after.st_rdev, after.st_ino) == (before.st_mode, before.st_rdev, before.st_ino)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rsnn.pt"]
+
+
+@pytest.mark.parametrize("kind", ["directory", "symlink"])
+def test_jetson_replacement_checks_kinds_not_only_names(tmp_path, small_rsnn_checkpoint, capsys, kind):
+    """A directory (or symlink) named like a file the manifest lists is a user's, not snncc's: refused."""
+    art = tmp_path / "art"
+    args = ["compile", small_rsnn_checkpoint, "-t", "jetson", "-o", art, "--time-steps", "20"]
+    code, _, err = run_cli(args, capsys)
+    assert code == 0, err
+    (art / "step.onnx").unlink()
+    if kind == "directory":
+        (art / "step.onnx").mkdir()
+        (art / "step.onnx" / "notes.txt").write_text("mine")
+    else:
+        (tmp_path / "elsewhere.onnx").write_text("mine")
+        (art / "step.onnx").symlink_to(tmp_path / "elsewhere.onnx")
+    before = snapshot(tmp_path)
+    code, _, err = run_cli(args, capsys)
+    assert "step.onnx is not a regular file" in one_error_line(code, err)
+    assert snapshot(tmp_path) == before
+    assert (art / "step.onnx").is_symlink() == (kind == "symlink")
+
+
+def test_hpo_report_never_writes_its_figure_over_the_study_storage(tmp_path, capsys):
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    work = tmp_path / "D"
+    work.mkdir()
+    optuna.create_study(study_name="s", storage=f"sqlite:///{work / 'hpo.sqlite3'}")
+    optuna.create_study(study_name="s", storage=f"sqlite:///{work / 'other.db'}")
+    before = snapshot(tmp_path)
+    for args in (["--dir", work, "-o", work / "hpo.sqlite3"],
+                 ["--storage", f"sqlite:///{work / 'other.db'}", "-o", work / "other.db"]):
+        code, _, err = run_cli(["hpo", "report", "s", *args], capsys)
+        assert "is an input of this command" in one_error_line(code, err)
+        assert snapshot(tmp_path) == before
