@@ -572,6 +572,7 @@ def check_declared_sizes(path: Path) -> None:
     allocates them (a small file can declare a huge dataset that is never written)."""
     import h5py
 
+    from snncc.hdf5_links import check_self_contained
     from snncc.limits import check_memory
 
     try:
@@ -579,6 +580,7 @@ def check_declared_sizes(path: Path) -> None:
     except (OSError, RuntimeError, ValueError):
         return   # nir.read reports what the file is not
     with f:
+        check_self_contained(f, str(path))   # no link or dataset may lead to another file
         sizes: list[tuple[str, int]] = []
         f.visititems(lambda key, obj: sizes.append((key, int(obj.size) * obj.dtype.itemsize))
                      if isinstance(obj, h5py.Dataset) else None)

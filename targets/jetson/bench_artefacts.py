@@ -34,7 +34,7 @@ def bench_one(artefact: Path, *, data: Path | None = None, samples: int = 64, po
     from snncc.targets.jetson.run_artefact import open_runner
     from snncc.targets.jetson.standalone_runner import RunnerError
 
-    runner = open_runner(artefact, backend)
+    runner = open_runner(artefact, backend, "step" if stream else "sequence")
     labels = None
     if data is not None:
         from snncc.data.dataset_file import load_dataset
@@ -82,7 +82,7 @@ def bench_many(artefacts: list[Path], *, data: Path | None = None, samples: int 
         loaded = load_dataset(data)
     entries = []
     for artefact in artefacts:
-        runner = open_runner(artefact, backend)
+        runner = open_runner(artefact, backend, "step" if stream else "sequence")
         channels = runner.manifest["input"]["channels"]
         if loaded is not None and loaded[0].shape[2] == channels and (
                 runner.manifest["time_axis"] == "dynamic" or loaded[0].shape[1] == runner.manifest["time_steps"]):

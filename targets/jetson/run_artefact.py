@@ -15,12 +15,16 @@ import numpy as np
 from snncc.errors import SnnccError
 
 
-def open_runner(artefact: Path, backend: str):
-    """An ``ArtefactRunner`` on the artefact directory, or a one-line error."""
+def open_runner(artefact: Path, backend: str, variant: str | None = None):
+    """An ``ArtefactRunner`` on the artefact directory, with ``variant``'s model already loaded (so
+    that a damaged model file is named as part of the artefact), or a one-line error."""
     from snncc.targets.jetson.standalone_runner import ArtefactRunner, RunnerError
 
     try:
-        return ArtefactRunner(str(artefact), backend)
+        runner = ArtefactRunner(str(artefact), backend)
+        if variant is not None:
+            runner.session(variant)
+        return runner
     except RunnerError as ex:
         raise SnnccError(ex.rule, file=str(artefact), field=ex.field) from None
 
@@ -54,7 +58,7 @@ def run_artefact(artefact: Path, inputs, *, source: str | None = None, stream: b
     from snncc.inputs import check_batch
     from snncc.targets.jetson.standalone_runner import RunnerError
 
-    runner = open_runner(artefact, backend)
+    runner = open_runner(artefact, backend, "step" if stream else "sequence")
     x = check_batch(inputs, spikes=runner.manifest["input"]["signal"] == "spikes", source=source)
     try:
         res = runner.stream(x) if stream else runner.run(x)

@@ -39,14 +39,32 @@ def load_manifest(directory: str) -> dict:
             manifest = json.load(f)
     except (OSError, ValueError) as ex:
         raise RunnerError(f"manifest.json cannot be read ({type(ex).__name__})", field=path) from None
-    if manifest.get("format") != "snncc-jetson-artefact":
+    if not isinstance(manifest, dict) or manifest.get("format") != "snncc-jetson-artefact":
         raise RunnerError("manifest.json is not an snncc Jetson manifest (field 'format')", field=path)
+    variants = manifest.get("variants")
+    if not isinstance(variants, list) or not all(isinstance(v, dict) for v in variants):
+        raise RunnerError("must be a list of objects", field="manifest.json/variants")
+    for i, v in enumerate(variants):
+        artefact_file(directory, v.get("file"), f"manifest.json/variants/{i}/file")
     return manifest
+
+
+def artefact_file(directory: str, name, field: str) -> str:
+    """The path of a file the manifest names, which must lie inside the artefact directory: a
+    relative name without '..' whose real path (after symlinks) is under the directory's."""
+    parts = name.replace("\\", "/").split("/") if isinstance(name, str) else []
+    if not parts or not name or os.path.isabs(name) or ".." in parts:
+        raise RunnerError(f"{name!r} is not a file name inside the artefact (no absolute path, no '..')",
+                          field=field)
+    root = os.path.realpath(directory)
+    if os.path.commonpath([root, os.path.realpath(os.path.join(root, name))]) != root:
+        raise RunnerError(f"{name!r} leads outside the artefact (through a symlink)", field=field)
+    return os.path.join(directory, name)
 
 
 def _variant(manifest: dict, name: str) -> dict:
     for v in manifest["variants"]:
-        if v["name"] == name:
+        if v.get("name") == name:
             return v
     raise RunnerError(f"the artefact has no {name} variant", field="manifest.json")
 
@@ -65,7 +83,11 @@ class OnnxRuntimeSession:
         opts.enable_mem_reuse = False
         if threads:
             opts.intra_op_num_threads = int(threads)
-        self.session = ort.InferenceSession(path, opts, providers=["CPUExecutionProvider"])
+        try:
+            self.session = ort.InferenceSession(path, opts, providers=["CPUExecutionProvider"])
+        except Exception as ex:  # onnxruntime's InvalidProtobuf, InvalidGraph, Fail...: a damaged file
+            raise RunnerError(f"ONNX Runtime cannot load it ({type(ex).__name__}); it is damaged or not "
+                              "an ONNX model: compile the artefact again", field=os.path.basename(path)) from None
         self.output_names = [o.name for o in self.session.get_outputs()]
 
     def run(self, feeds: dict) -> list:
@@ -153,7 +175,8 @@ def tensorrt_available() -> bool:
 
 def open_session(directory: str, variant: dict, backend: str = "auto", threads: int | None = None):
     """A session for one variant: TensorRT if asked/auto and possible, else ONNX Runtime."""
-    plan = os.path.join(directory, variant["file"].replace(".onnx", ".plan"))
+    path = artefact_file(directory, variant.get("file"), f"manifest.json/variants/{variant.get('name')}/file")
+    plan = artefact_file(directory, variant["file"].replace(".onnx", ".plan"), "engine")
     names = [o["name"] for o in variant["outputs"]]
     if backend not in ("auto", "tensorrt", "onnxruntime"):
         raise RunnerError("backend must be auto, tensorrt or onnxruntime", field="--backend")
@@ -163,7 +186,6 @@ def open_session(directory: str, variant: dict, backend: str = "auto", threads: 
         if not os.path.isfile(plan):
             raise RunnerError(f"no engine {os.path.basename(plan)}: run build_engine.sh on the board first", field="--backend")
         return TensorRTSession(plan, names)
-    path = os.path.join(directory, variant["file"])
     if not os.path.isfile(path):
         raise RunnerError(f"missing {variant['file']}", field=str(directory))
     return OnnxRuntimeSession(path, threads)

@@ -30,6 +30,7 @@ import numpy as np
 
 from snncc.atomic import write_bytes_atomic
 from snncc.errors import SnnccError
+from snncc.hdf5_links import check_self_contained
 from snncc.limits import check_memory, check_time_steps
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
@@ -335,6 +336,7 @@ def read_bundle(path: str | Path) -> LoihiNetwork:
         _fail(path, "format", "not an HDF5 file (a Loihi bundle is HDF5)")
     with f:
         try:
+            check_self_contained(f, path)   # before any value is read: no link may lead to another file
             return _read(f, path)
         except SnnccError as err:
             raise err.with_file(path) from None
