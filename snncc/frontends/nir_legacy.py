@@ -65,6 +65,13 @@ def _fed_sizes(graph: dict, name: str) -> set[int | None]:
 
 def normalise(graph: dict, path: str, notes: list[str], source: str) -> None:
     """Fix, in place, the Input shapes of ``graph`` and its sub-graphs that disagree with what they feed."""
+    where_graph = f"node/{path.replace('.', '/')}" if path else "node/"
+    for key in ("nodes", "edges"):
+        if not isinstance(graph.get(key), dict if key == "nodes" else (list, tuple, np.ndarray)):
+            raise SnnccError(f"missing or not a {'group of nodes' if key == 'nodes' else 'list of edges'} (every NIR "
+                             "graph and sub-graph has both)", file=source, field=where_graph + key)
+    if any(np.shape(e) != (2,) for e in graph["edges"]):
+        raise SnnccError("every edge must be a pair (source, target)", file=source, field=where_graph + "edges")
     graph["edges"] = [(_text(a), _text(b)) for a, b in graph["edges"]]
     for name, node in graph["nodes"].items():
         where = f"{path}{name}"

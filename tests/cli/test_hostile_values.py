@@ -147,6 +147,17 @@ def test_nir_weights_must_be_real_and_fit(files, tmp_path, capsys, variant, need
     refused(capsys, ["compile", bad, "-o", out], needle=needle, out=out, inputs=[bad])
 
 
+@pytest.mark.parametrize("missing", ["node/edges", "node/nodes"])
+def test_nir_graph_without_edges_or_nodes_is_one_line(files, tmp_path, capsys, missing):
+    bad = tmp_path / "bad.nir"
+    shutil.copy(files / "g.nir", bad)
+    with h5py.File(bad, "r+") as f:
+        del f[missing]
+    out = tmp_path / "o.snnir"
+    refused(capsys, ["compile", bad, "-o", out], needle=missing.split("/")[1], out=out, inputs=[bad])
+    refused(capsys, ["inspect", bad], needle=missing.split("/")[1], inputs=[bad])
+
+
 def test_tiny_time_bin_refused(files, tmp_path, capsys):
     params = tmp_path / "p.txt"
     params.write_text(TH1_PARAMS.replace("nb_input_copies 2", "nb_input_copies 1").replace("time_bin_size 5",
