@@ -81,6 +81,23 @@ def check_request(req: HpoRequest) -> None:
         raise SnnccError("must be 1, 2, 5 or 10 (the paper's presets)", field="--threshold")
 
 
+def check_sizes(plan: StudyPlan, source) -> None:
+    """Refuse, before any trial, a model too large for this machine at the plan's largest input copies
+    and finest time bin (``snncc.models.size``)."""
+    from snncc.data.binning import n_bins_for
+    from snncc.models import SNNConfig
+    from snncc.models.size import check_snn_size
+    from snncc.training.pipeline import N_SNN_OUTPUTS
+
+    ranges = plan.ranges
+    if source.fixed is not None:
+        steps = int(source.fixed.inputs.shape[1])
+    else:
+        steps = n_bins_for(source.record_ms, ranges["time_bin_size"].low)
+    check_snn_size(source.channels, int(ranges["nb_input_copies"].high), plan.n_hidden or SNNConfig.n_hidden,
+                   N_SNN_OUTPUTS, plan.kind == "rsnn", min(plan.batch_size, int(source.labels.shape[0])), steps)
+
+
 def run_hpo(req: HpoRequest, view: StudyView | None = None) -> list:
     """Run (or resume) the requested step(s); returns one ``RunSummary`` per step run.
 
@@ -97,6 +114,7 @@ def run_hpo(req: HpoRequest, view: StudyView | None = None) -> list:
     source = load_source(req.data, req.threshold)
     step1 = _anneal_plan(req, source)
     step1.check()
+    check_sizes(step1, source)
     worker = worker_name()
     summaries = []
 

@@ -69,6 +69,11 @@ class EventSource:
             self._cache.popitem(last=False)
         return data
 
+    @property
+    def channels(self) -> int:
+        """Input channels of the binned data (ON and OFF per taxel, or the encoded set's own)."""
+        return int(self.fixed.inputs.shape[-1]) if self.fixed is not None else 2 * int(self.events.n_taxels)
+
     def facts(self) -> dict:
         return {"path": self.path, "threshold": self.threshold, "samples": int(self.labels.shape[0]),
                 "synthetic": self.synthetic, "record_ms": self.record_ms, "fixed_bin_ms": self.fixed_bin_ms}

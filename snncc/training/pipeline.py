@@ -15,8 +15,9 @@ from snncc.errors import SnnccError
 from snncc.frontends.checkpoint import is_checkpoint, module_from_checkpoint, save_checkpoint
 from snncc.frontends.params import PaperParams, load_params
 from snncc.frontends.torchfile import load_torch_file
-from snncc.models import SpikingClassifier, count_trainable
+from snncc.models import SNNConfig, SpikingClassifier, count_trainable
 from snncc.models.baselines import BASELINE_KINDS
+from snncc.models.size import check_snn_size
 from snncc.training.baseline_presets import FAMILY
 from snncc.training.device import resolve_device
 from snncc.training.training_set import EVENT_KINDS, FRAME_DT_S, TrainingData, load_training_data, subset_indices
@@ -147,6 +148,8 @@ def _new_model(req: TrainRequest, hp: PaperParams, data: TrainingData) -> torch.
         if n_classes > N_SNN_OUTPUTS:
             raise SnnccError(f"labels reach {n_classes - 1}; the SNN has {N_SNN_OUTPUTS} outputs", field="labels")
         size = {} if req.n_hidden is None else {"n_hidden": int(req.n_hidden)}
+        check_snn_size(channels, hp.nb_input_copies, size.get("n_hidden", SNNConfig.n_hidden), N_SNN_OUTPUTS,
+                       req.kind == "rsnn", min(batch_size_of(req), int(data.labels.shape[0])), int(data.inputs.shape[1]))
         model = build_model(req.kind, n_inputs=channels, n_outputs=N_SNN_OUTPUTS, input_copies=hp.nb_input_copies,
                             tau_mem=hp.tau_mem, tau_syn=hp.tau_syn, dt=hp.dt, scale=hp.scale, order=req.order, **size)
         model.reset_parameters(hp.fwd_weight_scale, hp.weight_scale_factor)

@@ -101,6 +101,7 @@ def test_two_workers_share_one_study(braille_dir, tmp_path):
     (["--range", "tau_mem=0.2:0.01"], "--range"),
     (["--objectives", "speed"], "--objectives"),
     (["--select", "train"], "--select"),
+    (["--hidden", "1000000000"], "--hidden: 1,000,000,000 hidden neurons: the input weights"),   # not 192 GB
 ])
 def test_bad_input_is_one_line_and_exit_2(braille_dir, tmp_path, capsys, extra, field):
     from snncc.cli.main import run as cli
