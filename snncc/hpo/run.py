@@ -14,7 +14,7 @@ from snncc.errors import SnnccError
 from snncc.hpo.annealing import evenly_spaced_restarts
 from snncc.hpo.trial import TrialObjective
 from snncc.hpo.space import search_space, space_as_dict
-from snncc.hpo.storage import default_url, open_storage
+from snncc.hpo.storage import check_writable, default_url, open_storage, storage_errors
 from snncc.hpo.study import StudyPlan, best_params, grid_plan, load_study, run_study, worker_name
 
 if TYPE_CHECKING:
@@ -108,8 +108,10 @@ def run_hpo(req: HpoRequest, view: StudyView | None = None) -> list:
     check_request(req)
     _anneal_plan(req, None).check()   # bad settings and ranges fail before anything is opened or loaded
     url = req.storage or default_url(req.workdir)
+    where = "--storage" if req.storage else "--dir"
     if req.storage is None:
         Path(req.workdir).mkdir(parents=True, exist_ok=True)
+    check_writable(url, where)
     storage = open_storage(url, req.heartbeat)
     source = load_source(req.data, req.threshold)
     step1 = _anneal_plan(req, source)
@@ -125,7 +127,8 @@ def run_hpo(req: HpoRequest, view: StudyView | None = None) -> list:
         if view is not None:
             view.study_start(plan.name)
         try:
-            return run_study(plan, storage, factory, view=view)
+            with storage_errors(url, where):
+                return run_study(plan, storage, factory, view=view)
         finally:
             if view is not None:
                 view.close()

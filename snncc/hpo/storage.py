@@ -8,10 +8,13 @@ so a finished trial is never run twice and a killed one is not lost.
 
 from __future__ import annotations
 
+import contextlib
+import os
 import re
 import time
 import warnings
 from pathlib import Path
+from typing import Iterator
 
 from snncc.errors import SnnccError
 
@@ -45,11 +48,13 @@ def redact(url: str) -> str:
 
 
 def sqlite_file(url: str) -> Path | None:
-    """The database file of an SQLite URL (``sqlite:///rel.db``, ``sqlite:////abs.db``); None for
-    other schemes and in-memory databases."""
+    """The database file of an SQLite URL (``sqlite:///rel.db``, ``sqlite:////abs.db``, or the URI
+    form ``sqlite:///file:PATH?mode=ro&uri=true``); None for other schemes and in-memory databases."""
     if not url.startswith("sqlite:///"):
         return None
-    path = url[len("sqlite:///"):].split("?", 1)[0]
+    path, _, query = url[len("sqlite:///"):].partition("?")
+    if "uri=true" in query.lower().split("&") and path.startswith("file:"):
+        path = path[len("file:"):]
     return Path(path) if path and path != ":memory:" else None
 
 
@@ -60,6 +65,42 @@ def shown(url: str) -> str:
     if db is not None:
         return str(db)
     return redact(url).split("://", 1)[-1] or url
+
+
+def check_writable(url: str, field: str = "--storage") -> None:
+    """Refuse, before any trial, an SQLite storage ``hpo run`` cannot write: a read-only file, a
+    directory where SQLite cannot write its journal, or a URI opened read-only (``mode=ro``)."""
+    db = sqlite_file(url)
+    if db is None:
+        return
+    query = url.partition("?")[2].lower().split("&")
+    if "mode=ro" in query or "immutable=1" in query:
+        raise SnnccError("is opened read-only (mode=ro); hpo run records every trial in its storage",
+                         file=str(db), field=field)
+    if db.exists() and not os.access(db, os.W_OK):
+        raise SnnccError("is read-only; hpo run records every trial in its storage (make it writable, or give "
+                         "another --dir or --storage)", file=str(db), field=field)
+    if db.parent.is_dir() and not os.access(db.parent, os.W_OK):
+        raise SnnccError("its directory is read-only; SQLite writes a journal beside the database", file=str(db),
+                         field=field)
+
+
+@contextlib.contextmanager
+def storage_errors(url: str, field: str = "--storage") -> Iterator[None]:
+    """Turn the database's own failures (Optuna's StorageInternalError, SQLAlchemy's errors: a
+    read-only or locked database, a lost server) into one line naming the storage."""
+    import optuna
+
+    try:
+        yield
+    except Exception as ex:
+        if not (isinstance(ex, optuna.exceptions.StorageInternalError)
+                or type(ex).__module__.startswith("sqlalchemy")):
+            raise
+        cause = ex.__cause__ or ex
+        first = str(cause).strip().splitlines()[0] if str(cause).strip() else type(cause).__name__
+        raise SnnccError(f"the study's database failed ({type(cause).__name__}: {first[:160]})", file=shown(url),
+                         field=field) from None
 
 
 def open_storage(url: str, heartbeat: int = 30, grace: int | None = None):

@@ -136,3 +136,65 @@ def test_hpo_alone_shows_help_and_space_lists_the_ranges_and_presets(capsys):
     assert cli(["hpo", "space", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert set(d["space"]) == set(d["paper_presets"]["1"]) and "choice" in d["note"]
+
+
+def _read_only_mount(directory) -> bool:
+    """Bind ``directory`` onto itself read-only (root only); True if it worked."""
+    import os
+    import subprocess
+
+    if os.geteuid() != 0:
+        return False
+    if subprocess.run(["mount", "--bind", str(directory), str(directory)], capture_output=True).returncode:
+        return False
+    if subprocess.run(["mount", "-o", "remount,ro,bind", str(directory)], capture_output=True).returncode:
+        subprocess.run(["umount", str(directory)], capture_output=True)
+        return False
+    return True
+
+
+def test_read_only_study_database_is_refused_in_one_line(braille_dir, tmp_path, capsys, monkeypatch):
+    """A study database hpo run cannot write: one line naming the database file, exit 2, nothing changed.
+
+    Read-only by permissions is tested as a non-root user only (root writes through a 0444 file; as
+    root the same refusal is tested on a read-only bind mount where this machine allows mounting)."""
+    import os
+    import subprocess
+
+    from snncc.cli.main import run as cli
+
+    work = tmp_path / "w"
+    work.mkdir()
+    db = work / "hpo.sqlite3"
+    optuna.create_study(study_name="other", storage=f"sqlite:///{db}")
+    before = db.read_bytes()
+    args = ["hpo", "run", "s", "--trials", "1", "--epochs", "1", "--step", "anneal", *tiny_args(braille_dir, work)]
+
+    def refused(extra, needle):
+        capsys.readouterr()
+        code = cli(args + extra)
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1 and needle in err, err
+        assert f": {db}: " in err, err          # the database file, not a sqlite:/// URL
+        assert db.read_bytes() == before
+
+    # opened read-only through SQLite's URI form: refused before anything is opened
+    refused(["--storage", f"sqlite:///file:{db}?mode=ro&uri=true"], "--storage: is opened read-only")
+    # the same database failing while the study is created (the up-front check bypassed): still one line
+    monkeypatch.setattr("snncc.hpo.run.check_writable", lambda url, field: None)
+    refused(["--storage", f"sqlite:///file:{db}?mode=ro&uri=true"], "--storage: the study's database failed (")
+    monkeypatch.undo()
+    if os.geteuid() != 0:
+        os.chmod(db, 0o444)
+        refused([], "--dir: is read-only")
+        os.chmod(db, 0o644)
+        os.chmod(work, 0o555)
+        refused([], "--dir: its directory is read-only")
+        os.chmod(work, 0o755)
+    elif _read_only_mount(work):
+        try:
+            refused([], "--dir: is read-only")
+        finally:
+            subprocess.run(["umount", str(work)], capture_output=True)
+    else:
+        pytest.skip("read-only by permissions needs a non-root user, and mounting was refused here")
