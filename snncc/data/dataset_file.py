@@ -60,6 +60,13 @@ def _validate(inputs: np.ndarray, labels: np.ndarray, meta: dict, f: str | None)
                          file=f, field="labels")
     if labels.size and (labels.min() < 0 or labels.max() >= N_CLASSES):
         raise SnnccError(f"labels must be in 0..{N_CLASSES - 1}", file=f, field="labels")
+    classes = meta.get("classes")
+    if not isinstance(classes, list) or not classes or not all(isinstance(c, str) for c in classes):
+        raise SnnccError("must be a non-empty list of class names (label i names classes[i])", file=f,
+                         field="meta.classes")
+    if labels.size and labels.max() >= len(classes):
+        raise SnnccError(f"names {len(classes)} classes but the labels reach {int(labels.max())}; every label "
+                         "must name one of the classes", file=f, field="meta.classes")
     if meta.get("n_steps") != t:
         raise SnnccError(f"n_steps {meta.get('n_steps')} does not match inputs' T = {t}", file=f,
                          field="meta.n_steps")

@@ -146,7 +146,8 @@ def _new_model(req: TrainRequest, hp: PaperParams, data: TrainingData) -> torch.
     n_classes = int(data.labels.max()) + 1
     if req.kind in ("rsnn", "ffsnn"):
         if n_classes > N_SNN_OUTPUTS:
-            raise SnnccError(f"labels reach {n_classes - 1}; the SNN has {N_SNN_OUTPUTS} outputs", field="labels")
+            raise SnnccError(f"labels reach {n_classes - 1}; the SNN has {N_SNN_OUTPUTS} outputs", file=data.source,
+                             field="labels")
         size = {} if req.n_hidden is None else {"n_hidden": int(req.n_hidden)}
         check_snn_size(channels, hp.nb_input_copies, size.get("n_hidden", SNNConfig.n_hidden), N_SNN_OUTPUTS,
                        req.kind == "rsnn", min(batch_size_of(req), int(data.labels.shape[0])), int(data.inputs.shape[1]))
@@ -254,6 +255,19 @@ def train(req: TrainRequest, progress: VerbProgress | None = None, data: Trainin
                        device=str(device))
 
 
+def _check_fits(model: SpikingClassifier, data: TrainingData, checkpoint: str) -> None:
+    """The data must fit the checkpoint's model: its input channels, and labels below its outputs."""
+    cfg = model.config
+    channels = int(data.inputs.shape[-1])
+    if channels != cfg.n_inputs:
+        raise SnnccError(f"has {channels} input channels; the model in {checkpoint} takes {cfg.n_inputs}",
+                         file=data.source, field="inputs")
+    top = int(data.labels.max()) if data.labels.numel() else -1
+    if top >= cfg.n_outputs:
+        raise SnnccError(f"labels reach {top}; the model in {checkpoint} has {cfg.n_outputs} outputs (classes "
+                         f"0..{cfg.n_outputs - 1})", file=data.source, field="labels")
+
+
 def finetune(req: TrainRequest, progress: VerbProgress | None = None, data: TrainingData | None = None,
              on_epoch: Callable[[EpochRecord], None] | None = None) -> TrainResult:
     """Quantization-aware fine-tuning of a trained spiking checkpoint, on its own split
@@ -281,6 +295,7 @@ def finetune(req: TrainRequest, progress: VerbProgress | None = None, data: Trai
     req.val_fraction = float(src.get("split", {}).get("val_fraction", req.val_fraction))
     if data is None:
         data = load_training_data(req.data, req.kind, req.threshold, hp.time_bin_size)
+    _check_fits(model, data, req.qat_from)
     split, train_set, test_set, val_set = _prepare(req, data, src.get("split_assignment"))
     arithmetic = target_arithmetic(req.qat_target)
 

@@ -317,3 +317,44 @@ def test_training_sizes_are_checked_before_torch_allocates(monkeypatch):
     monkeypatch.setenv("SNNCC_MAX_MEMORY", str(10**6))
     with pytest.raises(SnnccError, match="--batch-size: 450 hidden neurons: one batch's hidden spikes"):
         check_snn_size(24, 2, 450, 28, True, 128, 270)
+
+
+# -- data sets that do not fit their own classes or the model ---------------------------------------
+def _event_set(path: Path, labels, classes) -> Path:
+    """An encoded event set written without snncc's checks (as a hostile file would be)."""
+    import json
+
+    labels = np.asarray(labels, np.int64)
+    x = (np.random.default_rng(0).random((labels.size, 12, 24)) < 0.1).astype(np.uint8)
+    meta = {"kind": "events", "threshold": 1, "time_bin_size_ms": 5, "dt_s": 0.005, "n_steps": 12,
+            "classes": classes, "synthetic": True, "source": "test", "seed": 0}
+    np.savez(path, inputs=x, labels=labels, meta=np.array(json.dumps(meta)))
+    return path
+
+
+@pytest.mark.parametrize("classes, needle", [
+    (["a", "b"], "meta.classes: names 2 classes but the labels reach 26"),
+    ([], "meta.classes: must be a non-empty list"),
+    ("abc", "meta.classes: must be a non-empty list"),
+])
+def test_data_set_classes_must_name_every_label(files, tmp_path, capsys, classes, needle):
+    data = _event_set(tmp_path / "d.npz", np.arange(162) % 27, classes)
+    out = tmp_path / "o.pt"
+    refused(capsys, ["train", "ffsnn", "--data", data, "--epochs", "1", "-o", out], needle=needle, out=out,
+            inputs=[data])
+    refused(capsys, ["bench", files / "jet", "--data", data], needle=needle, inputs=[data])
+
+
+def test_qat_refuses_data_with_more_classes_than_the_model(tmp_path, capsys):
+    torch.manual_seed(0)
+    model = SpikingClassifier(SNNConfig(n_inputs=24, n_hidden=8, n_outputs=4, input_copies=1))
+    save_checkpoint(model, tmp_path / "m4.pt", {"dt": 0.005})
+    data = _event_set(tmp_path / "d.npz", np.arange(162) % 27, [str(i) for i in range(27)])
+    out = tmp_path / "q.pt"
+    refused(capsys, ["train", "rsnn", "--data", data, "--qat-from", tmp_path / "m4.pt", "--qat-epochs", "1",
+                     "-o", out], needle="labels: labels reach 26; the model in", out=out,
+            inputs=[data, tmp_path / "m4.pt"])
+    small = SpikingClassifier(SNNConfig(n_inputs=3, n_hidden=8, n_outputs=28, input_copies=1))
+    save_checkpoint(small, tmp_path / "m3.pt", {"dt": 0.005})
+    refused(capsys, ["train", "rsnn", "--data", data, "--qat-from", tmp_path / "m3.pt", "--qat-epochs", "1",
+                     "-o", out], needle="inputs: has 24 input channels; the model in", out=out)
