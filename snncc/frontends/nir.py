@@ -177,12 +177,16 @@ def infer_dt(flat: _Flat) -> float:
         node = flat.nodes[name]
         if kind in ("CubaLIF", "CubaLI"):
             tau_mem = _arr(node, "tau_mem", name)
-            taus += [tau_mem, _arr(node, "tau_syn", name)]
+            named = {"tau_mem": tau_mem, "tau_syn": _arr(node, "tau_syn", name)}
         elif kind in ("LIF", "LI"):
             tau_mem = _arr(node, "tau", name)
-            taus.append(tau_mem)
+            named = {"tau": tau_mem}
         else:
             continue
+        for label, tau in named.items():   # before any division by them
+            if np.any(tau <= 0):
+                raise SnnccError("time constants must be positive", field=f"node '{name}'.{label}")
+        taus += list(named.values())
         r = _arr(node, "r", name)
         with np.errstate(divide="ignore", invalid="ignore"):
             candidates.append((name, tau_mem / r))
@@ -239,20 +243,21 @@ def _neuron(name: str, kind: str, node: Any, dt: float, reset: str, check_step: 
     else:
         threshold = np.full(n, np.inf)
     v_leak = np.zeros(n)
-    if kind in ("CubaLIF", "CubaLI"):
-        tau_syn, tau_mem = _arr(node, "tau_syn", name), _arr(node, "tau_mem", name)
-        w_in = _arr(node, "w_in", name) if getattr(node, "w_in", None) is not None else np.ones(n)
-        gain = (w_in * dt / tau_syn) * (r * dt / tau_mem)
-        v_leak = _arr(node, "v_leak", name)
-    elif kind in ("LIF", "LI"):
-        tau_mem = _arr(node, "tau", name)
-        tau_syn = np.full(n, dt)
-        gain = r * dt / tau_mem
-        v_leak = _arr(node, "v_leak", name)
-    else:  # IF, I
-        tau_syn, tau_mem = np.full(n, dt), np.full(n, NO_LEAK_TAU)
-        gain = r * dt
-    for label, tau in (("tau_syn", tau_syn), ("tau_mem", tau_mem)):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):   # a zero tau is refused just below
+        if kind in ("CubaLIF", "CubaLI"):
+            tau_syn, tau_mem = _arr(node, "tau_syn", name), _arr(node, "tau_mem", name)
+            w_in = _arr(node, "w_in", name) if getattr(node, "w_in", None) is not None else np.ones(n)
+            gain = (w_in * dt / tau_syn) * (r * dt / tau_mem)
+            v_leak = _arr(node, "v_leak", name)
+        elif kind in ("LIF", "LI"):
+            tau_mem = _arr(node, "tau", name)
+            tau_syn = np.full(n, dt)
+            gain = r * dt / tau_mem
+            v_leak = _arr(node, "v_leak", name)
+        else:  # IF, I
+            tau_syn, tau_mem = np.full(n, dt), np.full(n, NO_LEAK_TAU)
+            gain = r * dt
+    for label, tau in (("tau_syn", tau_syn), ("tau" if kind in ("LIF", "LI") else "tau_mem", tau_mem)):
         if np.any(tau <= 0):
             raise SnnccError("time constants must be positive", field=f"node '{name}'.{label}")
         if check_step and np.any(dt > tau):
@@ -581,6 +586,10 @@ def check_declared_sizes(path: Path) -> None:
         return   # nir.read reports what the file is not
     with f:
         check_self_contained(f, str(path))   # no link or dataset may lead to another file
+        try:
+            nir_conv.check_raw_fields(f)     # a stride of 0 would divide by zero inside nir.read
+        except SnnccError as err:
+            raise err.with_file(str(path)) from None
         sizes: list[tuple[str, int]] = []
         f.visititems(lambda key, obj: sizes.append((key, int(obj.size) * obj.dtype.itemsize))
                      if isinstance(obj, h5py.Dataset) else None)

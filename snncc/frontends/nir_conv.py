@@ -21,6 +21,7 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.nodes import Conv
+from snncc.limits import check_real
 
 CONV_KINDS = ("Conv1d", "Conv2d")
 POOL_KINDS = ("SumPool2d", "AvgPool2d")
@@ -29,13 +30,47 @@ NON_LEAKY = ("IF", "I", "Threshold")        # neuron kinds whose equations have 
 LEAKY = ("LIF", "CubaLIF", "LI", "CubaLI")
 
 
+MINIMUM = {"stride": 1, "dilation": 1, "kernel_size": 1, "input_shape": 1, "padding": 0, "groups": 1}
+
+
 def _ints(value: Any, dims: int, name: str, field: str) -> tuple[int, ...]:
+    """``value`` as ``dims`` integers, each at least ``MINIMUM[field]`` (a stride of 0 would divide by zero)."""
     arr = np.asarray(value).reshape(-1)
     if arr.size == 1:
         arr = np.repeat(arr, dims)
-    if arr.size != dims or not np.all(np.equal(np.mod(arr.astype(np.float64), 1), 0)):
+    if arr.size != dims or arr.dtype.kind not in "biuf" or not np.all(np.isfinite(arr.astype(np.float64))) \
+            or not np.all(np.equal(np.mod(arr.astype(np.float64), 1), 0)):
         raise SnnccError(f"must be {dims} integer(s), got {np.asarray(value).tolist()}", field=f"node '{name}'.{field}")
+    low = MINIMUM.get(field, 0)
+    if np.any(arr < low):
+        raise SnnccError(f"must be >= {low}, got {np.asarray(value).tolist()}", field=f"node '{name}'.{field}")
     return tuple(int(a) for a in arr)
+
+
+def check_raw_fields(f: Any, where: str = "") -> None:
+    """Check the integer fields of every convolution and pooling node in an open NIR HDF5 file
+    (``node/nodes/...``) before ``nir.read`` builds the nodes (it divides by the stride)."""
+    import h5py
+
+    nodes = f.get("node/nodes") if not where else f
+    if not isinstance(nodes, h5py.Group):
+        return
+    for name in nodes:
+        group = nodes.get(name)
+        if not isinstance(group, h5py.Group):
+            continue
+        kind = group.get("type")
+        kind = kind[()] if isinstance(kind, h5py.Dataset) and kind.size == 1 else b""
+        kind = kind.decode("utf-8", "replace") if isinstance(kind, bytes) else str(kind)
+        path = f"{where}{name}"
+        if kind == "NIRGraph" and isinstance(group.get("nodes"), h5py.Group):
+            check_raw_fields(group["nodes"], path + ".")
+        elif kind in KINDS:
+            dims = 1 if kind == "Conv1d" else 2
+            for field in ("stride", "dilation", "kernel_size", "padding"):
+                ds = group.get(field)
+                if isinstance(ds, h5py.Dataset) and ds.size <= 16 and ds.dtype.kind in "biuf":
+                    _ints(ds[()], dims, path, field)
 
 
 def _padding(name: str, node: Any, kernel: tuple[int, ...], dilation: tuple[int, ...]) -> tuple[int, ...]:
@@ -65,6 +100,9 @@ def _spatial(name: str, node: Any, dims: int) -> tuple[int, ...]:
 
 def conv_node(name: str, kind: str, node: Any) -> Conv:
     """An IR Conv for a NIR Conv1d/Conv2d."""
+    check_real(node.weight, field=f"node '{name}'.weight")
+    if getattr(node, "bias", None) is not None:
+        check_real(node.bias, field=f"node '{name}'.bias")
     w = np.asarray(node.weight, dtype=np.float64)
     dims = 1 if kind == "Conv1d" else 2
     if w.ndim != dims + 2:

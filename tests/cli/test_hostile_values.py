@@ -158,6 +158,57 @@ def test_nir_graph_without_edges_or_nodes_is_one_line(files, tmp_path, capsys, m
     refused(capsys, ["inspect", bad], needle=missing.split("/")[1], inputs=[bad])
 
 
+def _conv_nir(path: Path) -> Path:
+    """A 1x8x8 -> Conv2d(2, 3x3) -> IF graph."""
+    import nir
+
+    conv = nir.Conv2d(input_shape=(8, 8), weight=np.ones((2, 1, 3, 3)), stride=1, padding=0, dilation=1, groups=1,
+                      bias=np.zeros(2))
+    graph = nir.NIRGraph(nodes={
+        "input": nir.Input(input_type={"input": np.array([1, 8, 8])}), "conv": conv,
+        "flat": nir.Flatten(input_type={"input": np.array([2, 6, 6])}, start_dim=0),
+        "lif": nir.IF(r=np.ones(72), v_threshold=np.ones(72)),
+        "output": nir.Output(output_type={"output": np.array([72])}),
+    }, edges=[("input", "conv"), ("conv", "flat"), ("flat", "lif"), ("lif", "output")])
+    nir.write(str(path), graph)
+    return path
+
+
+@pytest.mark.parametrize("key, spec, needle", [
+    ("conv/weight", dict(data=np.ones((2, 1, 3, 3)) * (1 + 1j)), "node 'conv'.weight: complex values"),
+    ("conv/bias", dict(data=np.zeros(2) + 1j), "node 'conv'.bias: complex values"),
+    ("conv/stride", dict(data=np.array([0, 0])), "node 'conv'.stride: must be >= 1, got [0, 0]"),
+    ("conv/dilation", dict(data=np.array([0, 1])), "node 'conv'.dilation: must be >= 1"),
+    ("conv/padding", dict(data=np.array([-1, 0])), "node 'conv'.padding: must be >= 0"),
+])
+def test_nir_convolution_fields_must_be_real_and_in_range(tmp_path, capsys, key, spec, needle):
+    good = _conv_nir(tmp_path / "c.nir")
+    bad = _edit_h5(good, tmp_path / "bad.nir", f"node/nodes/{key}", **spec)
+    out = tmp_path / "o.snnir"
+    refused(capsys, ["compile", bad, "-o", out], needle=needle, out=out, inputs=[bad])
+
+
+@pytest.mark.parametrize("dt", [[], ["--dt", "0.001"]])
+@pytest.mark.parametrize("key, needle", [
+    ("tau_mem", "node 'lif'.tau_mem: time constants must be positive"),
+    ("tau_syn", "node 'lif'.tau_syn: time constants must be positive"),
+])
+def test_nir_zero_time_constants_refused_before_any_division(files, tmp_path, capsys, dt, key, needle):
+    import warnings
+
+    bad = _edit_h5(files / "g.nir", tmp_path / "bad.nir", f"node/nodes/lif/{key}", data=np.zeros(4))
+    out = tmp_path / "o.snnir"
+    refused(capsys, ["compile", bad, "-o", out, *dt], needle=needle, out=out, inputs=[bad])
+    from snncc.errors import SnnccError
+    from snncc.frontends import LoadOptions, load_model
+
+    with warnings.catch_warnings(record=True) as caught:   # refused before any division by zero
+        warnings.simplefilter("always")
+        with pytest.raises(SnnccError, match=needle.split(": ", 1)[1]):
+            load_model(bad, LoadOptions(dt=float(dt[1]) if dt else None))
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+
+
 def test_tiny_time_bin_refused(files, tmp_path, capsys):
     params = tmp_path / "p.txt"
     params.write_text(TH1_PARAMS.replace("nb_input_copies 2", "nb_input_copies 1").replace("time_bin_size 5",
