@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from snncc.errors import SnnccError
 from snncc.hpo.annealing import evenly_spaced_restarts
 from snncc.hpo.trial import TrialObjective
@@ -98,6 +100,20 @@ def check_sizes(plan: StudyPlan, source) -> None:
                    N_SNN_OUTPUTS, plan.kind == "rsnn", min(plan.batch_size, int(source.labels.shape[0])), steps)
 
 
+def check_split(plan: StudyPlan, source) -> None:
+    """Every trial splits the same samples the same way (``--subset``, ``--seed``, ``--val-fraction``):
+    a split that cannot be made is refused before any trial, not found in each."""
+    from snncc.data.split import stratified_split
+    from snncc.training.data import subset_indices
+
+    labels = np.asarray(source.labels)
+    try:
+        chosen = subset_indices(labels, plan.subset, plan.seed)
+        stratified_split(labels[chosen], seed=plan.seed, val_fraction=plan.val_fraction if plan.select == "val" else 0.0)
+    except SnnccError as err:
+        raise err.with_file(source.path) from None
+
+
 def run_hpo(req: HpoRequest, view: StudyView | None = None) -> list:
     """Run (or resume) the requested step(s); returns one ``RunSummary`` per step run.
 
@@ -117,6 +133,7 @@ def run_hpo(req: HpoRequest, view: StudyView | None = None) -> list:
     step1 = _anneal_plan(req, source)
     step1.check()
     check_sizes(step1, source)
+    check_split(step1, source)
     worker = worker_name()
     summaries = []
 

@@ -410,4 +410,24 @@ def run_study(plan: StudyPlan, storage, objective_factory: Callable, view=None, 
     b = budget(study, plan.n_trials)
     if view is not None:
         view.study_update(b)
+    refuse_if_all_failed(study)
     return RunSummary(plan.name, plan.step, created, asdict(b) | {"spent": b.spent}, ran, notes)
+
+
+def refuse_if_all_failed(study) -> None:
+    """Raise the trials' own error if every trial of a finished study failed: the same input
+    problem in each (a subset too small to split, say) is bad input, not a result (exit 2)."""
+    from collections import Counter
+
+    from optuna.trial import TrialState
+
+    used = counted(study.get_trials(deepcopy=False))
+    if not used or any(t.state != TrialState.FAIL for t in used):
+        return
+    errors = Counter(tuple(t.user_attrs.get("error_parts") or (None, None, t.user_attrs.get("error") or "no error "
+                                                                 "recorded")) for t in used)
+    (file, field, rule), times = errors.most_common(1)[0]
+    how = (f"every one of study {study.study_name}'s {len(used)} trial(s) failed so" if len(errors) == 1 else
+           f"{times} of study {study.study_name}'s {len(used)} trials failed so, the others with "
+           f"{len(errors) - 1} other error(s); every trial failed")
+    raise SnnccError(f"{rule} ({how})", file=file, field=field or "study")

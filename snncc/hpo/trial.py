@@ -37,6 +37,7 @@ class TrialObjective:
             return self._run(trial)
         except SnnccError as err:
             trial.set_user_attr("error", err.line())
+            trial.set_user_attr("error_parts", [err.file, err.field, err.rule])
             if self.view is not None:
                 self.view.trial_error(trial.number, err.line())
             raise

@@ -198,3 +198,34 @@ def test_read_only_study_database_is_refused_in_one_line(braille_dir, tmp_path, 
             subprocess.run(["umount", str(work)], capture_output=True)
     else:
         pytest.skip("read-only by permissions needs a non-root user, and mounting was refused here")
+
+
+def test_a_split_no_trial_can_make_is_refused_before_any_trial(braille_dir, tmp_path, capsys):
+    from snncc.cli.main import run as cli
+
+    work = tmp_path / "w"
+    capsys.readouterr()
+    code = cli(["hpo", "run", "s", "--trials", "2", "--epochs", "1", "--subset", "60", "--step", "anneal",
+                *tiny_args(braille_dir, work)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"{braille_dir}: labels: cannot split 60 samples stratified by class" in err
+    assert trials(work, "s") == []
+
+
+def test_a_study_whose_every_trial_failed_for_one_input_reason_exits_2(braille_dir, tmp_path, capsys, monkeypatch):
+    """The same failure found in each trial (the up-front check bypassed here) ends the run with that reason."""
+    from snncc.cli.main import run as cli
+
+    monkeypatch.setattr("snncc.hpo.run.check_split", lambda plan, source: None, raising=False)
+    work = tmp_path / "w"
+    args = ["hpo", "run", "s", "--trials", "2", "--epochs", "1", "--subset", "60", "--step", "anneal",
+            *tiny_args(braille_dir, work)]
+    for _ in range(2):   # the run, then a rerun of the spent study: the same line
+        capsys.readouterr()
+        code = cli(args)
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1, err
+        assert "labels: cannot split 60 samples stratified by class" in err
+        assert "(every one of study s's 2 trial(s) failed so)" in err
+        assert [t.state for t in trials(work, "s")] == [FAIL, FAIL]
