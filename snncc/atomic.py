@@ -126,14 +126,42 @@ def _is_device_or_pipe(path: Path) -> bool:
     return stat.S_ISCHR(mode) or stat.S_ISBLK(mode) or stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
 
 
-def _prepare(dest: Path, directory: bool) -> None:
+def _refuse_kind(dest: Path, directory: bool) -> None:
     check_destination(dest, directory=directory)
     if not directory and dest.is_dir():
         raise SnnccError("is a directory; this output is a file, give a file name", file=str(dest), field="output")
     if directory and dest.exists() and not dest.is_dir():
         raise SnnccError("this output is a directory, and a file of that name exists", file=str(dest), field="output")
+
+
+def _prepare(dest: Path, directory: bool) -> None:
+    _refuse_kind(dest, directory)
     dest.parent.mkdir(parents=True, exist_ok=True)
     clean_leftovers(dest)
+
+
+def preflight(dest: str | os.PathLike, *, directory: bool = False) -> None:
+    """Before long work, the refusals an atomic write to ``dest`` would meet at its end: an input of
+    the command, ``.``/``..``, the wrong kind (a directory for a file), and a directory where
+    nothing can be written (read-only, no permission: probed by creating and removing a hidden
+    ``.part`` file in the nearest existing directory). A full disk shows only when writing, where
+    the atomic write keeps the old file."""
+    dest = Path(dest)
+    if _is_device_or_pipe(dest):
+        check_destination(dest)
+        return
+    _refuse_kind(dest, directory)
+    parent = dest.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise SnnccError(f"{parent} is not a directory", file=str(dest), field="output")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=f".{dest.name}.{os.getpid()}.", suffix=".part", dir=parent)
+    except OSError as ex:
+        raise OSError(ex.errno, ex.strerror, str(dest)) from None
+    os.close(fd)
+    os.unlink(probe)
 
 
 @contextlib.contextmanager

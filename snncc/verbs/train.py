@@ -38,6 +38,7 @@ def train(model: str, *, data: str | os.PathLike, output: str | os.PathLike, thr
     """
     import torch
 
+    from snncc.atomic import preflight
     from snncc.errors import SnnccError
     from snncc.training.pipeline import TrainRequest, finetune, train as train_model
 
@@ -45,6 +46,7 @@ def train(model: str, *, data: str | os.PathLike, output: str | os.PathLike, thr
         raise SnnccError("must be >= 1", field="--threads")
     if batch_size is not None and batch_size < 1:
         raise SnnccError("must be >= 1", field="--batch-size")
+    preflight(output)   # an output that cannot be written is refused now, not after the training
     req = TrainRequest(kind=str(model), data=str(data), output=str(output), threshold=threshold, epochs=epochs,
                        subset=subset, seed=seed, order=str(order), val_fraction=val_fraction, batch_size=batch_size,
                        overrides=_overrides(overrides), params_file=str(params) if params else None,

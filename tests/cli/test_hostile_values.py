@@ -409,3 +409,34 @@ def test_qat_refuses_data_with_more_classes_than_the_model(tmp_path, capsys):
     save_checkpoint(small, tmp_path / "m3.pt", {"dt": 0.005})
     refused(capsys, ["train", "rsnn", "--data", data, "--qat-from", tmp_path / "m3.pt", "--qat-epochs", "1",
                      "-o", out], needle="inputs: has 24 input channels; the model in", out=out)
+
+
+def test_train_output_is_checked_before_training(tmp_path, capsys, monkeypatch):
+    """-o naming the data, a directory, or a place nothing can be written is refused before any epoch."""
+    import os
+    import subprocess
+
+    import snncc.training.pipeline as pipeline
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("training started before the output was checked")
+
+    monkeypatch.setattr(pipeline, "train_model", no_training)
+    data = _event_set(tmp_path / "d.npz", np.arange(162) % 27, [str(i) for i in range(27)])
+    (tmp_path / "dir").mkdir()
+    args = ["train", "ffsnn", "--data", data, "--epochs", "1", "-o"]
+    refused(capsys, args + [data], needle="is an input of this command", inputs=[data])
+    refused(capsys, args + [tmp_path / "dir"], needle="is a directory")
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    if os.geteuid() != 0:
+        locked.chmod(0o555)
+        refused(capsys, args + [locked / "m.pt"], needle="EACCES", out=locked / "m.pt")
+    elif subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=16k", "tmpfs", str(locked)],
+                        capture_output=True).returncode == 0:
+        try:
+            refused(capsys, args + [locked / "sub" / "m.pt"], needle="EROFS", out=locked / "sub" / "m.pt")
+        finally:
+            subprocess.run(["umount", str(locked)], capture_output=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.npz", "dir", "locked"]
+    assert list((tmp_path / "dir").iterdir()) == [] and list(locked.iterdir()) == []
