@@ -33,7 +33,7 @@ def synthetic_info(path: Path) -> dict | None:
     try:
         info = json.loads(marker.read_text())
     except (OSError, json.JSONDecodeError):
-        raise SnnccError("unreadable synthetic-data marker (JSON expected)", file=str(marker)) from None
+        raise SnnccError("unreadable synthetic-data marker (JSON expected)", file=str(marker), field="format") from None
     return info if isinstance(info, dict) else None
 
 
@@ -54,8 +54,8 @@ def events_file(src: Path, threshold: float) -> Path | None:
 
 def require_exists(src: Path) -> Path:
     if not src.exists():
-        raise SnnccError("no such file or directory", file=str(src))
+        raise SnnccError("no such file or directory", file=str(src), field="path")
     if src.is_dir() and not (src / RAW_NAME).is_file() and not any(src.glob("data_braille_letters_th_*.pkl")):
         raise SnnccError(f"no published Braille files here (expected {RAW_NAME} or "
-                         "data_braille_letters_th_<th>.pkl)", file=str(src))
+                         "data_braille_letters_th_<th>.pkl)", file=str(src), field="path")
     return src

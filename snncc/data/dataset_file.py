@@ -97,7 +97,7 @@ def load_dataset(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, dict[
     f = str(path)
     p = Path(path)
     if not p.is_file():
-        raise SnnccError("file not found", file=f)
+        raise SnnccError("file not found", file=f, field="path")
     try:
         with np.load(p, allow_pickle=False) as z:
             keys = set(z.files)
@@ -111,7 +111,7 @@ def load_dataset(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, dict[
     except SnnccError:
         raise
     except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as ex:
-        raise SnnccError(f"not a readable .npz data set ({type(ex).__name__})", file=f) from None
+        raise SnnccError(f"not a readable .npz data set ({type(ex).__name__})", file=f, field="format") from None
     if meta_arr.ndim != 0 or meta_arr.dtype.kind != "U":
         raise SnnccError("meta must be a JSON string", file=f, field="meta")
     try:

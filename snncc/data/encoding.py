@@ -49,14 +49,14 @@ def _events_source(src: Path, threshold: float | None, prefer: str):
         if ev_path is not None:
             return ev_path, None, threshold
         if prefer == "events":
-            raise SnnccError(f"no {formats.events_name(threshold)} here", file=str(src))
+            raise SnnccError(f"no {formats.events_name(threshold)} here", file=str(src), field="path")
         raw_path = braille_files.raw_file(src)
         if raw_path is None:
-            raise SnnccError(f"neither {formats.events_name(threshold)} nor {formats.RAW_NAME} here", file=str(src))
+            raise SnnccError(f"neither {formats.events_name(threshold)} nor {formats.RAW_NAME} here", file=str(src), field="path")
         return None, raw_path, threshold
     if formats.sniff(src) == "events":
         if prefer == "raw":
-            raise SnnccError("--from raw needs a raw-frame file", file=str(src))
+            raise SnnccError("needs a raw-frame file", file=str(src), field="--from")
         from_name = braille_files.threshold_from_name(src)
         if threshold is None:
             threshold = from_name
@@ -144,7 +144,7 @@ def load_raw_frames(src: str | Path, missing: str | None = None):
     braille_files.require_exists(src)
     raw_path = braille_files.raw_file(src)
     if raw_path is None:
-        raise SnnccError(missing or f"no {formats.RAW_NAME} here", file=str(src))
+        raise SnnccError(missing or f"no {formats.RAW_NAME} here", file=str(src), field="path")
     return raw_path, formats.load_raw(raw_path)
 
 

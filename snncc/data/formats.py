@@ -104,7 +104,7 @@ def _records(obj: Any, path: Path, needed: str) -> tuple[list, list, int]:
             payload.append(rec[needed])
         return letters, payload, 1
     raise SnnccError(
-        f"expected a list of dicts or a pandas DataFrame, got {type(obj).__name__}", file=f
+        f"expected a list of dicts or a pandas DataFrame, got {type(obj).__name__}", file=f, field="format"
     )
 
 
@@ -210,7 +210,7 @@ def sniff(path: str | os.PathLike) -> str:
     elif isinstance(obj, (list, tuple)) and obj and isinstance(obj[0], dict):
         cols = set(map(str, obj[0]))
     else:
-        raise SnnccError("expected a list of dicts or a pandas DataFrame", file=str(path))
+        raise SnnccError("expected a list of dicts or a pandas DataFrame", file=str(path), field="format")
     if "taxel_data" in cols:
         return "raw"
     if "events" in cols:

@@ -78,10 +78,10 @@ def load_published_pickle(path: str | Path) -> Any:
     """The object a published Braille ``.pkl`` holds, read without executing anything from it."""
     path = Path(path)
     if not path.exists():
-        raise SnnccError("file not found", file=str(path))
+        raise SnnccError("file not found", file=str(path), field="path")
     if path.is_dir():
-        raise SnnccError("expected a .pkl file, got a directory", file=str(path))
+        raise SnnccError("expected a .pkl file, got a directory", file=str(path), field="path")
     if not path.is_file():
-        raise SnnccError("is not a regular file (a device or pipe); give a .pkl file", file=str(path))
+        raise SnnccError("is not a regular file (a device or pipe); give a .pkl file", file=str(path), field="path")
     check_memory(2 * path.stat().st_size, "reading this pickle", file=str(path), field="size")
     return restricted_loads(path.read_bytes(), str(path))

@@ -16,7 +16,7 @@ def load_network(source: Path, timing: str | None = None, scale: str | None = No
 
     source = Path(source)
     if not source.is_file():
-        raise SnnccError("file does not exist", file=str(source))
+        raise SnnccError("file does not exist", file=str(source), field="path")
     if h5py.is_hdf5(str(source)):
         from snncc.targets.loihi.bundle.hdf5 import read_bundle
 
@@ -27,7 +27,7 @@ def load_network(source: Path, timing: str | None = None, scale: str | None = No
         return read_bundle(source)
     if source.suffix.lower() not in MODEL_SUFFIXES:
         raise SnnccError(f"expected a Loihi bundle (HDF5) or a model file ({', '.join(MODEL_SUFFIXES)})",
-                         file=str(source))
+                         file=str(source), field="format")
     from snncc.frontends import load_model
     from snncc.targets.loihi.lowering.lower import lower_artefact
 
