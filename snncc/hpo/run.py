@@ -104,7 +104,7 @@ def check_split(plan: StudyPlan, source) -> None:
     """Every trial splits the same samples the same way (``--subset``, ``--seed``, ``--val-fraction``):
     a split that cannot be made is refused before any trial, not found in each."""
     from snncc.data.split import stratified_split
-    from snncc.training.data import subset_indices
+    from snncc.training.training_set import subset_indices
 
     labels = np.asarray(source.labels)
     try:
