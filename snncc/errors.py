@@ -2,6 +2,24 @@
 
 from __future__ import annotations
 
+import unicodedata
+
+
+def one_line(text: str, *, name: bool = False) -> str:
+    """``text`` printable on one line: control and format characters (a newline, ESC, a bidi
+    override, an undecodable byte of a file name) as backslash escapes (``\\n``, ``\\x1b``,
+    ``\\u202e``, ``\\udcff``); for a ``name`` (a file or field part of an error line) also ``": "`` as
+    ``":\\x20"``, so that the line splits into exactly three parts at ``": "``."""
+    out = []
+    for ch in str(text):
+        if unicodedata.category(ch) in ("Cc", "Cf", "Cs", "Zl", "Zp"):
+            out.append({"\n": "\\n", "\r": "\\r", "\t": "\\t"}.get(ch) or
+                       (f"\\x{ord(ch):02x}" if ord(ch) < 0x100 else f"\\u{ord(ch):04x}"))
+        else:
+            out.append(ch)
+    text = "".join(out)
+    return text.replace(": ", ":\\x20") if name else text
+
 
 class SnnccError(Exception):
     """A user-facing error rendered as one line: ``file: field: rule``.
@@ -17,8 +35,9 @@ class SnnccError(Exception):
         super().__init__(self.line())
 
     def line(self) -> str:
-        parts = [p for p in (self.file, self.field) if p]
-        return ": ".join(parts + [self.rule])
+        """``file: field: rule`` (the parts given), each on one line (``one_line``)."""
+        parts = [one_line(p, name=True) for p in (self.file, self.field) if p]
+        return ": ".join(parts + [one_line(self.rule)])
 
     def with_file(self, file: str) -> "SnnccError":
         """The same error, attributed to ``file`` if it names none yet."""

@@ -3,6 +3,9 @@
 Exit status: 0 success, 2 bad input, bad usage or an operating-system refusal (one line
 ``snncc: error: <file>: <field>: <rule>``), 1 internal error (a bug: one line, ``--debug`` for the
 traceback), 130 interrupted. ``--debug`` anywhere on the command line shows tracebacks instead.
+The line has exactly three parts (README, "errors"): a refusal without a file names the command
+(``command_path``: ``snncc compile``), file and field are escaped onto one line
+(``snncc.errors.one_line``); libraries' warnings are silenced unless ``--debug``.
 
 Every existing path named on the command line, except the value of ``-o``/``--output``, is an
 input of the command: no output may be written over it (``snncc.atomic.protecting``).
@@ -12,8 +15,10 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import signal
 import sys
+import warnings
 
 # Each module registers its verb(s) on the typer app when imported; they import only typer,
 # rich and the standard library at module level, so ``snncc --help`` starts at once.
@@ -63,21 +68,61 @@ def named_inputs(args: list[str]) -> list[str]:
     return inputs
 
 
-def _usage_line(ex) -> str:
-    """``<command>: <option>: <message>`` from a (typer-bundled or real) click usage error."""
+def command_path(args: list[str]) -> str:
+    """The command ``args`` invoke, as typed up to its last verb: ``snncc compile``, ``snncc hpo
+    run``; ``snncc`` when the first word is no verb. It is the ``<file>`` part of a refusal that
+    concerns the command line itself (an option's value, an unknown verb), not a file."""
+    try:
+        import typer
+
+        from snncc.cli.app import app
+
+        command = typer.main.get_command(app)
+    except Exception:  # the app itself failed to build: name the program
+        return "snncc"
+    words = ["snncc"]
+    for arg in args:
+        if arg.startswith("-"):
+            continue
+        verbs = getattr(command, "commands", None) or {}
+        if arg not in verbs:
+            break
+        words.append(arg)
+        command = verbs[arg]
+    return " ".join(words)
+
+
+def _refusal(rule: str, *, file: str | None, field: str | None, args: list[str]) -> str:
+    """One ``<file>: <field>: <rule>`` line; a refusal without a file names the command."""
+    from snncc.errors import SnnccError
+
+    file = file if file else command_path(args)
+    return SnnccError(rule, file=file, field=field or ("usage" if file.startswith("snncc") else "contents")).line()
+
+
+def _usage_line(ex, args: list[str]) -> str:
+    """``<command>: <option or argument>: <message>`` from a (typer-bundled or real) click usage error."""
     ctx = getattr(ex, "ctx", None)
-    where = ctx.command_path if ctx is not None and getattr(ctx, "command_path", None) else "snncc"
+    where = ctx.command_path if ctx is not None and getattr(ctx, "command_path", None) else None
     param = getattr(ex, "param", None)
-    opts = getattr(param, "opts", None) or ([getattr(param, "name", None)] if param is not None else [])
     message = " ".join(ex.format_message().split())
-    return ": ".join([where] + [o for o in opts[:1] if o] + [message or "bad usage (see --help)"])
+    field = None
+    if param is not None:
+        opts = getattr(param, "opts", None) or []
+        field = (opts[0] if opts and opts[0].startswith("-") else
+                 (getattr(param, "human_readable_name", None) or getattr(param, "name", None)))
+    field = field or getattr(ex, "option_name", None)
+    unknown = re.match(r"No such command '(.*)'", message)
+    if field is None and unknown:
+        field = unknown.group(1)
+    return _refusal(message or "bad usage (see --help)", file=where, field=field, args=args)
 
 
-def _os_error_line(ex: OSError) -> str:
+def _os_error_line(ex: OSError, args: list[str]) -> str:
     code = errno.errorcode.get(ex.errno or 0, "OSError")
-    target = ex.filename if ex.filename is not None else "snncc"
     reason = (ex.strerror or str(ex)).rstrip(".")
-    return f"{target}: {code}: {reason.lower()}"
+    return _refusal(reason.lower(), file=None if ex.filename is None else os.fsdecode(ex.filename), field=code,
+                    args=args)
 
 
 def _caused_by_interrupt(ex: BaseException) -> bool:
@@ -102,7 +147,9 @@ def _dispatch(args: list[str], debug: bool) -> int:
     click_exception = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
     try:
         app = build_app(args)
-        with protecting(named_inputs(args)):
+        with protecting(named_inputs(args)), warnings.catch_warnings():
+            if not debug:   # libraries' warnings never reach stderr (bad input they signal is refused)
+                warnings.simplefilter("ignore")
             result = app(args=args, prog_name="snncc", standalone_mode=False)
         code = result if isinstance(result, int) else 0
         if code == 130:  # typer >= 0.29 turns Ctrl-C inside a command into a silent Exit(130)
@@ -111,7 +158,7 @@ def _dispatch(args: list[str], debug: bool) -> int:
     except SnnccError as err:
         if debug:
             raise
-        _say(f"snncc: error: {err.line()}")
+        _say(f"snncc: error: {_refusal(err.rule, file=err.file, field=err.field, args=args)}")
         return 2
     except typer.Exit as ex:
         if ex.exit_code == 130:
@@ -126,12 +173,12 @@ def _dispatch(args: list[str], debug: bool) -> int:
         if type(ex).__name__ == "NoArgsIsHelpError":  # bare ``snncc`` or ``snncc data``: the help
             _say(ex.format_message())
             return 2
-        _say(f"snncc: error: {_usage_line(ex)}")
+        _say(f"snncc: error: {_usage_line(ex, args)}")
         return 2
     except OSError as ex:
         if debug:
             raise
-        _say(f"snncc: error: {_os_error_line(ex)}")
+        _say(f"snncc: error: {_os_error_line(ex, args)}")
         return 2
     except InternalError as ex:   # a check of snncc's own work failed: a bug, not the input's fault
         if debug:
@@ -141,7 +188,8 @@ def _dispatch(args: list[str], debug: bool) -> int:
     except MemoryError:
         if debug:
             raise
-        _say("snncc: error: memory: this input needs more memory than the machine has; use a smaller batch or input")
+        _say("snncc: error: " + _refusal("this input needs more memory than the machine has; use a smaller batch or "
+                                         "input", file=None, field="memory", args=args))
         return 2
     except Exception as ex:  # the last line of defence: never a traceback without --debug
         if _caused_by_interrupt(ex):   # a library turned Ctrl-C into its own error (e.g. an ImportError)

@@ -11,9 +11,11 @@ if TYPE_CHECKING:
 
 
 def print_notes(notes: list[str]) -> None:
-    """One ``snncc: note: <line>`` per note, on stderr."""
+    """One ``snncc: note: <line>`` per note, on stderr (control characters escaped: one line each)."""
+    from snncc.errors import one_line
+
     for note in notes:
-        err_console.print(f"snncc: note: {note}", markup=False, soft_wrap=True)
+        err_console.print(f"snncc: note: {one_line(note)}", markup=False, soft_wrap=True)
 
 
 def print_warnings(warnings: list[str]) -> None:

@@ -26,7 +26,7 @@ def report_energy(bundle: str | Path, *, target: str = "loihi", energy: bool = F
     from snncc.targets import capability, get_target
 
     if not energy:
-        raise SnnccError("nothing to report: pass --energy", field="snncc report")
+        raise SnnccError("nothing to report without it: pass --energy", field="--energy")
     if data is not None and input is not None:
         raise SnnccError("give --data or --input, not both", field="--input")
     if limit is not None and limit < 1:
