@@ -57,7 +57,7 @@ def bin_events(events: Events, bin_ms: float, n_bins: int) -> np.ndarray:
         raise SnnccError(
             f"event at {events.times[i]:.6g} s falls in bin {b[i]}, outside 0..{n_bins - 1} "
             f"(record too short for these events? set the record length)",
-            field=f"sample {int(events.sample[i])}: events",
+            field=f"sample {int(events.sample[i])}.events",
         )
     ch = 2 * events.taxel + events.polarity.astype(np.int64)
     out[events.sample, b, ch] = 1

@@ -99,7 +99,7 @@ def _records(obj: Any, path: Path, needed: str) -> tuple[list, list, int]:
                                  field=f"sample {i}")
             for col in ("letter", needed):
                 if col not in rec:
-                    raise SnnccError("missing key", file=f, field=f"sample {i}: {col}")
+                    raise SnnccError("missing key", file=f, field=f"sample {i}.{col}")
             letters.append(rec["letter"])
             payload.append(rec[needed])
         return letters, payload, 1
@@ -109,7 +109,7 @@ def _records(obj: Any, path: Path, needed: str) -> tuple[list, list, int]:
 
 
 def _labels(letters: Sequence, f: str) -> np.ndarray:
-    return np.array([label_of(l, file=f, field=f"sample {i}: letter") for i, l in enumerate(letters)],
+    return np.array([label_of(l, file=f, field=f"sample {i}.letter") for i, l in enumerate(letters)],
                     dtype=np.int64)
 
 
@@ -129,7 +129,7 @@ def load_raw(path: str | os.PathLike) -> RawSet:
     frames = []
     n_frames = None
     for i, td in enumerate(payload):
-        fld = f"sample {i}: taxel_data"
+        fld = f"sample {i}.taxel_data"
         try:
             a = np.asarray(td, dtype=np.float64)
         except (TypeError, ValueError):
@@ -175,7 +175,7 @@ def load_events(path: str | os.PathLike) -> EventSet:
     labels, payload, release = _samples(path, "events")
     s_l, tx_l, p_l, t_l = [], [], [], []
     for i, ev in enumerate(payload):
-        fld = f"sample {i}: events"
+        fld = f"sample {i}.events"
         if not isinstance(ev, (list, tuple, np.ndarray)) or len(ev) != N_TAXELS:
             n = len(ev) if hasattr(ev, "__len__") else type(ev).__name__
             raise SnnccError(f"expected {N_TAXELS} taxels, got {n}", file=f, field=fld)

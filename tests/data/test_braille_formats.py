@@ -137,12 +137,12 @@ def _write(p, obj):
 
 
 @pytest.mark.parametrize("obj, field, rule", [
-    ([{"letter": "A"}], "sample 0: taxel_data", "missing key"),
-    ([{"letter": "A", "taxel_data": np.zeros((54, 11))}], "sample 0: taxel_data", "expected 12 taxels, got 11"),
-    ([{"letter": "AA", "taxel_data": np.zeros((54, 12))}], "sample 0: letter", "unknown letter"),
-    ([{"letter": "A", "taxel_data": np.full((54, 12), 300)}], "sample 0: taxel_data", "0..255"),
+    ([{"letter": "A"}], "sample 0.taxel_data", "missing key"),
+    ([{"letter": "A", "taxel_data": np.zeros((54, 11))}], "sample 0.taxel_data", "expected 12 taxels, got 11"),
+    ([{"letter": "AA", "taxel_data": np.zeros((54, 12))}], "sample 0.letter", "unknown letter"),
+    ([{"letter": "A", "taxel_data": np.full((54, 12), 300)}], "sample 0.taxel_data", "0..255"),
     ([{"letter": "A", "taxel_data": np.zeros((54, 12))}, {"letter": "B", "taxel_data": np.zeros((50, 12))}],
-     "sample 1: taxel_data", "all must match"),
+     "sample 1.taxel_data", "all must match"),
     ({"foo": 1}, "letter", "missing column"),
     (42, None, "expected a list of dicts or a pandas DataFrame"),
 ])
@@ -168,11 +168,11 @@ def test_missing_dataframe_column(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("events, field, rule", [
-    ([[[], []]] * 11, "sample 0: events", "expected 12 taxels, got 11"),
-    ([[[], []]] * 11 + [[[0.1]]], "sample 0: events[11]", "expected [ON_times, OFF_times]"),
-    ([[[], []]] * 11 + [[[0.2, 0.1], []]], "sample 0: events[11][0] (ON)", "not chronological"),
-    ([[[], []]] * 11 + [[[float("nan")], []]], "sample 0: events[11][0] (ON)", "NaN"),
-    ([[[], []]] * 11 + [[[], ["x"]]], "sample 0: events[11][1] (OFF)", "list of numbers"),
+    ([[[], []]] * 11, "sample 0.events", "expected 12 taxels, got 11"),
+    ([[[], []]] * 11 + [[[0.1]]], "sample 0.events[11]", "expected [ON_times, OFF_times]"),
+    ([[[], []]] * 11 + [[[0.2, 0.1], []]], "sample 0.events[11][0] (ON)", "not chronological"),
+    ([[[], []]] * 11 + [[[float("nan")], []]], "sample 0.events[11][0] (ON)", "NaN"),
+    ([[[], []]] * 11 + [[[], ["x"]]], "sample 0.events[11][1] (OFF)", "list of numbers"),
 ])
 def test_bad_event_files_through_the_cli(tmp_path, capsys, events, field, rule):
     p = _write(tmp_path / "data_braille_letters_th_1.pkl", [{"letter": "B", "events": events}])
@@ -194,6 +194,6 @@ def test_event_beyond_record_names_the_sample(tmp_path, capsys):
     ev = [[[], []]] * 11 + [[[1.5], []]]
     p = _write(tmp_path / "data_braille_letters_th_1.pkl", [{"letter": "B", "events": ev}])
     code, _, err = cli(["data", "encode", p, "-o", tmp_path / "o.npz"], capsys)
-    assert code == 2 and "sample 0: events" in err and "outside" in err
+    assert code == 2 and "sample 0.events" in err and "outside" in err
     code, _, _ = cli(["data", "encode", p, "-o", tmp_path / "o.npz", "--record-ms", "1600"], capsys)
     assert code == 0
