@@ -84,7 +84,7 @@ def cases(tmp_path_factory):
     odd = d / "we\nird: name.pt"
     shutil.copy(d / "m.pt", odd)
     (d / "plain.txt").write_text("a file, not a directory")
-    o = str(d / "o.out")
+    o = str(d / "o.snnir")
     s = str
     return [
         (["frobnicate"], "snncc", "frobnicate"),
@@ -94,7 +94,7 @@ def cases(tmp_path_factory):
         (["train", "rsnn", "--data", s(d), "-o", o, "--epochs", "many"], "snncc train", "--epochs"),
         (["train", "rsnn", "--data", s(d), "-o", o, "--threads", "0"], "snncc train", "--threads"),
         (["compile", s(d / "m.pt"), "-t", "ir", "-o", o, "--scale", "global"], "snncc compile", "--scale"),
-        (["compile", s(d / "m.pt"), "-t", "loihi", "-o", o, "--scale", "bogus"], "snncc compile", "--scale"),
+        (["compile", s(d / "m.pt"), "-t", "loihi", "-o", s(d / "o.net"), "--scale", "bogus"], "snncc compile", "--scale"),
         (["hpo", "run", "s", "--data", s(d), "--threads", "0", "--dir", s(d / "w")], "snncc hpo run", "--threads"),
         (["hpo", "run", "s", "--data", s(d), "--step", "both", "--trials", "0", "--dir", s(d / "w")],
          "snncc hpo run", "--trials"),
