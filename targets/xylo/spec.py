@@ -357,11 +357,12 @@ def load_npz(path) -> XyloSpec:
     try:
         npz = np.load(path, allow_pickle=False)
     except FileNotFoundError:
-        raise SnnccError("no such file", file=shown) from None
+        raise SnnccError("no such file", file=shown, field="path") from None
     except _READ_ERRORS as ex:
-        raise SnnccError(f"not a readable .npz archive ({type(ex).__name__}: {ex})", file=shown) from None
+        raise SnnccError(f"not a readable .npz archive ({type(ex).__name__}: {ex})", file=shown,
+                         field="format") from None
     if not isinstance(npz, np.lib.npyio.NpzFile):
-        raise SnnccError("is a single .npy array, not a spec .npz archive", file=shown)
+        raise SnnccError("is a single .npy array, not a spec .npz archive", file=shown, field="format")
     with npz:
         members = set(npz.files)
         missing = [k for k in NPZ_KEYS if k not in members]
