@@ -77,11 +77,14 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
     target's own (``scale="split"``, ``jetpack="6.1"``, ...; ``snncc.targets.offered_options(["lower"])``
     lists them); one the target does not take is refused. ``progress(done, total, phase)`` as the target
     lowers and validates."""
+    from snncc.atomic import preflight
     from snncc.frontends import LoadOptions
     from snncc.frontends.buffered import BufferedModel, load_compilable
     from snncc.targets import capability, get_target, takers, verb_options
 
     name, target_rule = resolve_target(output, target)
+    # an output that cannot be written is refused now, not after the compilation and its checks
+    preflight(output, directory=getattr(get_target(name), "output_kind", "file") == "directory")
     model = Path(model)
     loaded = load_compilable(model, LoadOptions(params=None if params is None else Path(params), dt=dt, reset=reset))
     tgt = get_target(name)

@@ -111,7 +111,9 @@ def cases(tmp_path_factory):
         (["compile", s(d / "complex.nir"), "-o", o], s(d / "complex.nir"), "node 'conv'.weight"),
         (["compile", s(d / "no\nsuch.pt"), "-o", o], s(d / "no\\nsuch.pt"), "path"),
         (["compile", s(odd), "-t", "ir", "-o", o, "--dt", "0.001"], s(d / "we\\nird:\\x20name.pt"), "--dt"),
-        (["compile", s(d / "m.pt"), "-o", s(d / "plain.txt" / "o.snnir")], s(d / "plain.txt"), "EEXIST"),
+        (["compile", s(d / "m.pt"), "-o", s(d / "plain.txt" / "o.snnir")], s(d / "plain.txt" / "o.snnir"), "output"),
+        (["emulate", s(d / "m.net"), "-i", s(d / "x.npy"), "-o", s(d / "plain.txt" / "o.npz")], s(d / "plain.txt"),
+         "EEXIST"),
     ]
 
 

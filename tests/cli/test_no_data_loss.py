@@ -241,3 +241,23 @@ def test_hpo_report_never_writes_its_figure_over_the_study_storage(tmp_path, cap
         code, _, err = run_cli(["hpo", "report", "s", *args], capsys)
         assert "is an input of this command" in one_error_line(code, err)
         assert snapshot(tmp_path) == before
+
+
+def test_compile_checks_its_output_before_compiling(tmp_path, small_rsnn_checkpoint, capsys, monkeypatch):
+    """-o onto the input, '.', a directory for a file, a file for a directory: refused before the model is read."""
+    import snncc.frontends.buffered
+
+    def no_loading(*args, **kwargs):
+        raise AssertionError("the model was loaded before the output was checked")
+
+    monkeypatch.setattr(snncc.frontends.buffered, "load_compilable", no_loading)
+    (tmp_path / "d").mkdir()
+    (tmp_path / "f.txt").write_text("mine")
+    monkeypatch.chdir(tmp_path)
+    before = snapshot(tmp_path)
+    for target, out, says in (("loihi", small_rsnn_checkpoint, "is an input of this command"),
+                              ("jetson", ".", "names a directory"), ("loihi", tmp_path / "d", "is a directory"),
+                              ("jetson", tmp_path / "f.txt", "a file of that name exists")):
+        code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", target, "-o", out], capsys)
+        assert says in one_error_line(code, err)
+    assert snapshot(tmp_path) == before
