@@ -184,13 +184,14 @@ def test_check_refuses_agreement_options_with_labelled_data(small_rsnn_checkpoin
     np.savez(data, inputs=np.zeros((2, 30, 48), np.uint8), labels=np.array([0, 1]))
     code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "--data", data, "--density", "0.2"], capsys)
     assert (code, stdout) == (2, "")
-    assert err == ("snncc: error: --density: applies only to check without labels (agreement), not to check with "
-                   "labelled data\n")
+    assert err == ("snncc: error: snncc check: --density: applies only to check without labels (agreement), not "
+                   "to check with labelled data\n")
     code, _, err = run_cli(["check", small_rsnn_checkpoint, "--samples", "3", "--limit", "3"], capsys)
-    assert code == 2 and err == "snncc: error: --samples: give --samples or --limit, not both\n"
+    assert code == 2 and err == "snncc: error: snncc check: --samples: give --samples or --limit, not both\n"
     code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "loihi", "-o", tmp_path / "m.net", "--scale", "x"],
                            capsys)
-    assert code == 2 and err == "snncc: error: --scale: scale must be one of global, per-layer, split, fine, auto\n"
+    assert code == 2 and err == ("snncc: error: snncc compile: --scale: scale must be one of global, per-layer, split, "
+                                 "fine, auto\n")
 
 
 def test_a_verb_calling_two_capabilities_takes_the_options_of_both():

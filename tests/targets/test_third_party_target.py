@@ -149,11 +149,11 @@ def test_the_toy_option_is_validated_by_the_toy_and_reaches_lower_and_check(toy,
     code, stdout, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "toy", "-o", bad, "--toy-precision", "1"],
                                 capsys)
     assert (code, stdout) == (2, "") and not bad.exists()
-    assert err == "snncc: error: --toy-precision: precision must be a whole number in [2, 16], got 1\n"
+    assert err == "snncc: error: snncc compile: --toy-precision: precision must be a whole number in [2, 16], got 1\n"
     code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "loihi", "-o", tmp_path / "m.net",
                             "--toy-precision", "8"], capsys)
-    assert code == 2 and err == ("snncc: error: --toy-precision: does not apply to --target loihi (it takes --timing, "
-                                 "--scale, --allow-reset-change, --time-steps)\n")
+    assert code == 2 and err == ("snncc: error: snncc compile: --toy-precision: does not apply to --target loihi (it "
+                                 "takes --timing, --scale, --allow-reset-change, --time-steps)\n")
     code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "-t", "toy", "--data", toy_data, "--toy-precision",
                                  "4", "--json"], capsys)
     assert code == 0, err
@@ -230,5 +230,5 @@ def test_a_plug_in_that_does_not_load_is_refused_when_chosen_and_hides_no_other_
     assert code == 0 and "--scale" in stdout and "--jetpack" in stdout
     code, stdout, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "broken", "-o", tmp_path / "m.x"], capsys)
     assert (code, stdout) == (2, "") and not (tmp_path / "m.x").exists()
-    assert err == ("snncc: error: --target: target 'broken' is installed but does not load (snncc_broken:target): "
-                   "ImportError: needs the vendor SDK\n")
+    assert err == ("snncc: error: snncc compile: --target: target 'broken' is installed but does not load "
+                   "(snncc_broken:target): ImportError: needs the vendor SDK\n")
