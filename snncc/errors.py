@@ -35,9 +35,17 @@ class SnnccError(Exception):
         super().__init__(self.line())
 
     def line(self) -> str:
-        """``file: field: rule`` (the parts given), each on one line (``one_line``)."""
+        """``file: field: rule`` (the parts given), each on one line (``one_line``): the line the ``snncc``
+        command prints, options spelt as on its command line (``--dt``)."""
         parts = [one_line(p, name=True) for p in (self.file, self.field) if p]
         return ": ".join(parts + [one_line(self.rule)])
+
+    def __str__(self) -> str:
+        """The same line for a caller of ``snncc.api``: options as keyword arguments (``dt=``;
+        ``snncc.spelling``). ``line()`` keeps the command line's spelling."""
+        from snncc.spelling import python_spelling
+
+        return python_spelling(self.line())
 
     def with_file(self, file: str) -> "SnnccError":
         """The same error, attributed to ``file`` if it names none yet."""

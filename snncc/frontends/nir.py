@@ -170,6 +170,32 @@ def _record(nir_graph: Any) -> dict[str, Any] | None:
 
 
 # -- dt ------------------------------------------------------------------------------------------
+STEPS_PER_TIME_CONSTANT = 10     # forward Euler: dt/tau = 0.1 keeps the decay 1 - dt/tau close to exp(-dt/tau)
+SNNTORCH_EXPORT_DT = 1e-4        # the step snnTorch's NIR export assumes unless told otherwise
+
+
+def _nice_below(x: float) -> float:
+    """The largest 1, 2 or 5 x 10^k not above ``x``."""
+    exp = math.floor(math.log10(x))
+    return max(m * 10.0 ** exp for m in (1, 2, 5) if m * 10.0 ** exp <= x * (1 + 1e-9))
+
+
+def dt_suggestion(taus: list[np.ndarray], ratios: list[np.ndarray]) -> str:
+    """What the graph's time constants suggest for --dt: the step that makes the shortest one
+    ``STEPS_PER_TIME_CONSTANT`` steps, and snnTorch's export step where r = tau_mem/dt holds with it."""
+    finite = [float(t) for arr in taus for t in np.asarray(arr, dtype=float).reshape(-1) if np.isfinite(t) and t > 0]
+    if not finite:
+        return "pass --dt (the step the graph was trained at)"
+    shortest = min(finite)
+    step = _nice_below(shortest / STEPS_PER_TIME_CONSTANT)
+    text = (f"the shortest time constant is {shortest:g} s: try --dt={step:g} (it spans {shortest / step:g} steps; "
+            "forward Euler needs dt well below every time constant), or the step the graph was trained at")
+    fits = [np.all(np.isclose(np.asarray(r, dtype=float), SNNTORCH_EXPORT_DT, rtol=1e-6, atol=0)) for r in ratios]
+    if any(fits) and SNNTORCH_EXPORT_DT < shortest:
+        text += f"; --dt={SNNTORCH_EXPORT_DT:g} (snnTorch's export step) makes r = tau_mem/dt hold for some neurons"
+    return text
+
+
 def infer_dt(flat: _Flat) -> float:
     """dt from the snnTorch convention r = tau_mem/dt, consistent over every (Cuba)LIF/LI neuron."""
     candidates, taus = [], []
@@ -192,16 +218,18 @@ def infer_dt(flat: _Flat) -> float:
             candidates.append((name, tau_mem / r))
     if not candidates:
         raise SnnccError("NIR stores no time step and this graph has no leaky neuron to infer one from "
-                         "(snnTorch convention r = tau_mem/dt); pass --dt", field="dt")
+                         "(snnTorch convention r = tau_mem/dt); pass --dt (the step the graph was trained at)",
+                         field="dt")
+    hint = dt_suggestion(taus, [values for _, values in candidates])
     ref = candidates[0][1].reshape(-1)[0]
     for name, values in candidates:
         if not (np.all(np.isfinite(values)) and np.all(values > 0) and np.allclose(values, ref, rtol=1e-6, atol=0)):
             raise SnnccError("cannot infer dt: r/tau_mem differs between neurons, so the graph does not follow "
-                             "the snnTorch convention r = tau_mem/dt; pass --dt", field=f"node '{name}'.r")
+                             f"the snnTorch convention r = tau_mem/dt; {hint}", field=f"node '{name}'.r")
     dt = float(f"{float(ref):.12g}")
     if dt >= float(np.min(np.concatenate(taus))):
         raise SnnccError(f"cannot infer dt: r = tau_mem/dt would give dt = {dt:g} s, not below every time constant "
-                         "(r = 1 is Norse's convention, not snnTorch's); pass --dt", field="dt")
+                         f"(r = 1 is Norse's convention, not snnTorch's); {hint}", field="dt")
     return dt
 
 

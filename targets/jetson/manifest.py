@@ -16,10 +16,8 @@ from typing import Any
 
 import snncc
 from snncc.ir.nodes import LIF
-from snncc.targets.jetson.export import input_name, sequence_output_names
 from snncc.targets.jetson.plan import GraphPlan
 from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK
-from snncc.targets.jetson.torch_graph import state_slots
 
 FORMAT = "snncc-jetson-artefact"
 FORMAT_VERSION = 1
@@ -54,6 +52,9 @@ def _downstream(g, start: str) -> set[str]:
 
 def build_manifest(plan: GraphPlan, steps: int, opset: int, jetpack: str, validation: dict,
                    source: str | None) -> dict:
+    from snncc.targets.jetson.export import input_name, sequence_output_names   # torch: only when building
+    from snncc.targets.jetson.torch_graph import state_slots
+
     g, meta = plan.graph, plan.graph.metadata
     x = input_name(plan)
     outs = sequence_output_names(plan)

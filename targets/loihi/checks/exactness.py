@@ -21,7 +21,6 @@ import numpy as np
 from snncc.errors import InternalError
 from snncc.threads import one_thread
 from snncc.ir.graph import Graph
-from snncc.ir.simulate import simulate
 from snncc.targets.loihi.emulation.emulator import EmulationResult, emulate, lead_steps, pad, reference_run  # noqa: F401
 from snncc.targets.loihi.lowering.registers import ChainLayer, float_twin
 from snncc.targets.loihi.network import LoihiNetwork
@@ -32,6 +31,8 @@ def random_spikes(batch: int, steps: int, width: int, rate: float, seed: int) ->
 
 
 def ir_spikes(graph: Graph, x: np.ndarray, names: list[str]) -> dict[str, np.ndarray]:
+    from snncc.ir.simulate import simulate   # torch: imported where the reference runs, not by lowering
+
     with one_thread():
         res = simulate(graph, x, record="spikes")
     return {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
