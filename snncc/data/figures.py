@@ -54,12 +54,14 @@ def reconstruction(path: str | os.PathLike, original: np.ndarray, curves: dict[f
 
 
 def events_vs_bin_size(path: str | os.PathLike, data: dict[float, dict]) -> Path:
+    from snncc.log_axis import readable_log_axis
+
     plt = _plt()
     fig, (a, b) = plt.subplots(2, 1, figsize=(6, 6), sharex=True)
     for th, d in sorted(data.items()):
         a.plot(d["bin_ms"], d["events"], marker="o", label=f"th {th:g}")
         b.plot(d["bin_ms"], [100 * r for r in d["relative"]], marker="o", label=f"th {th:g}")
-    a.set_yscale("log")
+    readable_log_axis(a, "y")
     a.set_ylabel("events after binning")
     b.set_ylabel("% of events at 1 ms")
     b.set_xlabel("time_bin_size (ms)")

@@ -107,15 +107,15 @@ class HpoReport:
                       _g(r.params.get("time_bin_size")), _g(r.params.get("nb_input_copies")))
         return t
 
-    def plot(self, path: str | Path) -> Path:
-        """Accuracy vs energy and vs cores; the front highlighted; written atomically (PNG)."""
+    def figure(self):
+        """Accuracy vs energy (log axis) and vs cores, the front highlighted: a matplotlib Figure (Agg)."""
         import matplotlib
 
         matplotlib.use("Agg", force=True)
         import matplotlib.pyplot as plt
 
-        from snncc.atomic import atomic_path
         from snncc.hpo.hardware import hardware_costs
+        from snncc.log_axis import readable_log_axis
 
         published = hardware_costs().published     # a measurement to show beside the trials, if any
 
@@ -138,13 +138,22 @@ class HpoReport:
                 ax.scatter([published[axis]], [published["accuracy"]], marker="D", s=40, c="k",
                            label=str(published.get("label", "published measurement")))
             if attr == "energy_uj":
-                ax.set_xscale("log")
+                readable_log_axis(ax, "x")
             ax.set_xlabel(label)
             ax.set_ylabel(f"accuracy % ({self.plan.get('select', 'val')} split)")
             ax.grid(alpha=0.3)
         axes[0].legend(fontsize=7, loc="lower right")
         fig.suptitle(f"snncc hpo: study {self.study}" + (" -- SYNTHETIC data" if self.synthetic_data else ""),
                      fontsize=10)
+        return fig
+
+    def plot(self, path: str | Path) -> Path:
+        """``figure()`` written atomically to ``path`` (PNG)."""
+        import matplotlib.pyplot as plt
+
+        from snncc.atomic import atomic_path
+
+        fig = self.figure()
         path = Path(path)
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as fh:

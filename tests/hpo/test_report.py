@@ -40,3 +40,60 @@ def test_front_best_and_labels(tmp_path):
     assert rep.row(4).error == "d: x: too big"
     path = rep.plot(tmp_path / "f.png")
     assert path.read_bytes()[:4] == b"\x89PNG" and not list(tmp_path.glob(".*part"))
+
+
+def _report_with_energies(energies):
+    storage = optuna.storages.InMemoryStorage()
+    plan = StudyPlan(name="e", step="anneal", data="d", threshold=1, objectives=("accuracy", "energy", "cores"),
+                     n_trials=len(energies), space=space_as_dict(SEARCH_SPACE), select="test")
+    study = optuna.create_study(study_name="e", storage=storage, directions=plan.directions)
+    study.set_user_attr(PLAN_ATTR, plan.as_dict())
+    for i, energy in enumerate(energies):
+        acc, cores = 0.5 + 0.04 * i, 2 + i
+        study.add_trial(optuna.create_trial(values=[acc, energy, cores], user_attrs={"outcome": _outcome(acc, energy, cores)}))
+    return study_report(storage, "e", "memory")
+
+
+import pytest  # noqa: E402
+
+
+@pytest.mark.parametrize("energies", [(5.0, 10.0, 11.0, 12.0),          # with the paper's 71 uJ: ~1 decade
+                                      (60.0, 65.0, 80.0),               # a fraction of a decade
+                                      (0.3, 4.0, 900.0, 20000.0)])      # five decades
+def test_front_plot_energy_axis_labels_do_not_overlap(energies):
+    """The log axis's tick labels are plain numbers and no two labels' rendered boxes overlap."""
+    import matplotlib.pyplot as plt
+
+    from snncc.log_axis import overlapping_labels
+
+    fig = _report_with_energies(energies).figure()
+    try:
+        energy_axis = fig.axes[0]
+        assert energy_axis.get_xscale() == "log"
+        assert overlapping_labels(energy_axis, "x") == []
+        low, high = energy_axis.get_xlim()
+        shown = [t.get_text() for t, x in zip(energy_axis.get_xticklabels(), energy_axis.get_xticks())
+                 if t.get_text() and low <= x <= high]
+        assert len(shown) >= 2 and all("times" not in t and "^" not in t for t in shown), shown
+        for text in shown:
+            float(text)                      # plain numbers
+    finally:
+        plt.close(fig)
+
+
+def test_overlap_detector_sees_matplotlibs_default_log_labels_collide():
+    """The check above can fail: matplotlib's own log labels over ~1 decade on a narrow axis collide."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    from snncc.log_axis import overlapping_labels
+
+    fig, ax = plt.subplots(figsize=(2.0, 3.0))
+    ax.scatter([5, 10, 12, 71], [1, 2, 3, 4])
+    ax.set_xscale("log")
+    try:
+        assert overlapping_labels(ax, "x")
+    finally:
+        plt.close(fig)
