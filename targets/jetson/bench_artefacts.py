@@ -21,7 +21,7 @@ def synthetic_inputs(manifest: dict, samples: int, seed: int) -> np.ndarray:
 
 
 def _data_label(data: Path, meta: dict, n: int) -> str:
-    return f"{data} ({'synthetic' if meta.get('synthetic') else 'recorded'} data, {n} samples)"
+    return f"{data} ({'SYNTHETIC' if meta.get('synthetic') else 'recorded'} data, {n} samples)"
 
 
 def bench_one(artefact: Path, *, data: Path | None = None, samples: int = 64, power: bool = False,
@@ -43,7 +43,7 @@ def bench_one(artefact: Path, *, data: Path | None = None, samples: int = 64, po
         label = _data_label(data, meta, len(labels))
     else:
         inputs = synthetic_inputs(runner.manifest, samples, seed=0)
-        label = f"synthetic random inputs ({samples} samples, seed 0): latency only, no accuracy"
+        label = f"SYNTHETIC inputs (seeded random, {samples} samples, seed 0): latency only, no accuracy"
     sampler = PowerSampler(root=str(power_root), rail_name=rail) if power else None
     n = len(inputs)
     total = warmup_passes * n + timed_passes * n * repeats
@@ -69,8 +69,8 @@ def bench_many(artefacts: list[Path], *, data: Path | None = None, samples: int 
                warmup_passes: int = 6, timed_passes: int = 6, stream: bool = False, backend: str = "auto",
                progress: Callable[[int, int, str], None] | None = None):
     """``LatencyComparison`` of several artefacts with the same protocol; each takes ``data`` when its
-    channels (and, for a fixed time axis, its steps) fit, else seeded synthetic inputs;
-    ``progress(samples_done, total, phase)`` over all of them."""
+    channels (and, for a fixed time axis, its steps) fit, else seeded SYNTHETIC inputs.
+    ``progress(samples_done, total, "<artefact>: <phase>")`` over every artefact's protocol."""
     from snncc.targets.jetson.bench_protocol import compare_protocol
     from snncc.targets.jetson.run_artefact import open_runner
     from snncc.targets.jetson.standalone_runner import RunnerError
@@ -90,7 +90,7 @@ def bench_many(artefacts: list[Path], *, data: Path | None = None, samples: int 
             label = _data_label(data, loaded[2], len(labels))
         else:
             inputs, labels = synthetic_inputs(runner.manifest, samples, seed=0), None
-            label = f"synthetic random inputs ({samples} samples, seed 0): latency only"
+            label = f"SYNTHETIC inputs (seeded random, {samples} samples, seed 0): latency only"
         entries.append((runner, inputs, labels, label))
     total = sum((warmup_passes + timed_passes * repeats) * len(inputs) for _, inputs, _, _ in entries)
     done = [0]

@@ -13,6 +13,7 @@ from __future__ import annotations
 import statistics
 import time
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -130,24 +131,38 @@ class LatencyComparison:
                            for k, q, r in zip(self.kinds, self.ratios(), self.records)]}
 
     def table(self) -> str:
-        lines = ["| artefact | kind | variant | backend | input (T x C) | median ms / sample | spread ms | x first |",
-                 "|---|---|---|---|---|---|---|---|"]
+        """A markdown table; its ``inputs`` column says which inputs were SYNTHETIC (seeded random)."""
+        lines = ["| artefact | kind | variant | backend | input (T x C) | inputs | median ms / sample | spread ms | x first |",
+                 "|---|---|---|---|---|---|---|---|---|"]
         for k, q, r in zip(self.kinds, self.ratios(), self.records):
             lines.append(f"| {r.artefact} | {k} | {r.variant} | {r.backend} | {r.time_steps} x {r.protocol.get('channels')} | "
-                         f"{r.median_ms:.3f} | {r.spread_ms:.3f} | {q:.2f} |")
+                         f"{inputs_kind(r.data)} | {r.median_ms:.3f} | {r.spread_ms:.3f} | {q:.2f} |")
         return "\n".join(lines) + "\n"
 
     def render_text(self, console) -> None:
         console.print(self.table(), markup=False, soft_wrap=True)
         console.print("note: batch-1 latency, the paper's protocol; ratios are to the first artefact; power not sampled",
                       soft_wrap=True)
+        if any(r.data.startswith("SYNTHETIC") for r in self.records):
+            console.print("note: inputs SYNTHETIC (random): seeded random inputs of the artefact's shape (no --data, "
+                          "or a data set that does not fit it); the latency is measured, there is no accuracy",
+                          soft_wrap=True)
+
+
+def inputs_kind(data_label: str) -> str:
+    """A bench record's inputs in one word or two: SYNTHETIC (seeded random), or the data set's kind."""
+    if data_label.startswith("SYNTHETIC inputs"):
+        return "SYNTHETIC (random)"
+    return "data set (SYNTHETIC)" if "synthetic data" in data_label.lower() else "data set (recorded)"
 
 
 def compare_protocol(entries: list, progress: Callable[[str, int], None] | None = None, **protocol) -> LatencyComparison:
     """``entries``: (runner, inputs, labels, data_label) per artefact; each is run with ``run_protocol``."""
     out = LatencyComparison()
     for runner, inputs, labels, label in entries:
-        record = run_protocol(runner, inputs, labels, data_label=label, progress=progress, **protocol)
+        name = Path(runner.directory).name
+        tick = None if progress is None else (lambda phase, k, name=name: progress(f"{name}: {phase}", k))
+        record = run_protocol(runner, inputs, labels, data_label=label, progress=tick, **protocol)
         record.protocol["channels"] = int(np.asarray(inputs).shape[2])
         out.records.append(record)
         out.kinds.append(runner.manifest["model"]["kind"])

@@ -207,7 +207,7 @@ def test_bench_through_the_cli_with_fake_power(compiled, capsys, tmp_path):
                                "repeats": 2}
     assert rec["power_summary"]["rail"] == "VDD_IN"
     assert 4000 <= rec["power_summary"]["avg_mw"] <= 4200
-    assert "synthetic" in rec["data"]
+    assert "SYNTHETIC" in rec["data"]
 
 
 def test_check_through_the_cli(compiled, capsys, tmp_path):
