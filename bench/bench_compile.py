@@ -3,7 +3,7 @@
     python bench/bench_compile.py [--repeats 3] [--out bench/results/compile.json]
 
 The weights are a SYNTHETIC weight list of the authors' shape (48 -> 450 recurrent -> 28) with their
-initialisation; the parameters are the paper's th1 preset. quality.md's goal: < 2 s after import.
+initialisation; the parameters are the paper's th1 preset. The goal: < 2 s after import.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Calibration figures of the SYNTHETIC Braille generator in one go (issue 15), written as JSON.
+"""Calibration figures of the SYNTHETIC Braille generator in one go (docs/braille_synthetic.md), written as JSON.
 
     python bench/calibrate_synth.py                       # default set: 200 repetitions per letter
     python bench/calibrate_synth.py --reps 20 --set force_sigma=0.3 --no-svm   # quick tuning loop

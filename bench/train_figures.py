@@ -1,4 +1,4 @@
-"""The training-based figures of the SYNTHETIC Braille set (issue 15), written as JSON. Long: not a test.
+"""The training-based figures of the SYNTHETIC Braille set (docs/braille_synthetic.md), written as JSON. Long: not a test.
 
     python bench/train_figures.py --out bench/results/train_figures.json            # the full run (GPU)
     python bench/train_figures.py --reps 20 --rsnn-epochs 3 --lstm-epochs 5 --out /tmp/short.json  # smoke

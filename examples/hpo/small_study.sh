@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# A small real study that fits in ~15 minutes of a shared CPU (the run reported in the closing
-# note of issue 16): SYNTHETIC Braille data (threshold 1), a 64-neuron RSNN, 5 epochs per trial,
-# a stratified subset of 810 samples, 12 annealing trials (re-initialisations at 4 and 8) then
-# the 3 x 3 grid, three objectives (accuracy, ESTIMATED energy, cores), emulated accuracy on 32
-# held-out samples. Stopped with Ctrl-C after LIMIT seconds (default 1080); rerun to continue.
-# On a GPU drop --hidden/--subset/--epochs for the paper's network and budget, and add --device cuda.
+# A small real study that fits in ~15 minutes of a shared CPU: SYNTHETIC Braille data (threshold 1),
+# a 64-neuron RSNN, 5 epochs per trial, a stratified subset of 810 samples, 12 annealing trials
+# (re-initialisations at 4 and 8) then the 3 x 3 grid, three objectives (accuracy, ESTIMATED energy,
+# cores), emulated accuracy on 32 held-out samples. Stopped with Ctrl-C after LIMIT seconds (default
+# 1080); rerun to continue. On a GPU drop --hidden/--subset/--epochs for the paper's network and
+# budget, and add --device cuda.
 set -euo pipefail
 OUT=${1:-hpo-small}
 LIMIT=${LIMIT:-1080}

@@ -51,7 +51,7 @@ def synth_cmd(
                                      "2 = pandas DataFrame (Zenodo 7050094)."),
     thresholds: str = typer.Option("1,2,5,10", "--thresholds", help="Event files to write (sigma-delta thresholds)."),
     generator_version: int = typer.Option(2, "--generator-version", min=1, max=2,
-                                          help="2 = calibrated to task difficulty (issue 15, default); "
+                                          help="2 = calibrated to task difficulty (default; docs/braille_synthetic.md); "
                                                "1 = the earlier, much easier generator."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:

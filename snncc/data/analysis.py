@@ -1,4 +1,4 @@
-"""The paper's encoding analysis and linear-SVM analyses (spec: braille.md; paper sections 3.1, 3.2.1).
+"""The paper's encoding analysis and linear-SVM analyses (docs/braille.md; paper sections 3.1, 3.2.1).
 
 Encoding table, per threshold th (events are counted per taxel and sample):
 

@@ -1,6 +1,6 @@
 """Time binning of events into the binary tensors the models eat, and input copies.
 
-Rule (spec: braille.md, "Time binning and inputs"): with ``time_bin_size`` = ``bin_ms``::
+Rule (docs/braille.md, "Time bins and input channels"): with ``time_bin_size`` = ``bin_ms``::
 
     n_bins  = ceil(T_record_ms / bin_ms)            # T_record_ms = n_frames * 25 ms (1350 -> 270 at 5 ms)
     bin     = numpy.round(1000 * t / bin_ms)        # float64, round half to even (ties are common)
@@ -37,7 +37,7 @@ def n_bins_for(record_length_ms: float | Fraction, bin_ms: float) -> int:
 
 
 def bin_index(times: np.ndarray, bin_ms: float) -> np.ndarray:
-    """``numpy.round(1000 * t / bin_ms)`` as int64 (exactly the spec's float64 pipeline)."""
+    """``numpy.round(1000 * t / bin_ms)`` as int64 (exactly the authors' float64 pipeline, docs/braille.md)."""
     t = np.asarray(times, dtype=np.float64)
     return np.round(1000 * t / bin_ms).astype(np.int64)
 

@@ -1,7 +1,7 @@
 """The paper's data-level figures, each computed under a named protocol, beside the paper's value.
 
 One call, :func:`calibration_figures`, computes every figure the synthetic generator is calibrated
-to (issue 15) from inverted frames ``(N, T, 12)`` and labels:
+to (docs/braille_synthetic.md) from inverted frames ``(N, T, 12)`` and labels:
 
 * linear SVM, one-vs-rest (``OneVsRestClassifier(LinearSVC)``), 5-fold stratified CV (shuffled,
   seeded) on **raw frames** (all T x 12 values) and **time collapsed** (mean over time per taxel),
@@ -12,7 +12,7 @@ to (issue 15) from inverted frames ``(N, T, 12)`` and labels:
   (paper: 87.6 / 38 / 10.5 / 3.4), the share of th-1 events **lost to 5 ms binning** (34 %) and of
   th-1 **inter-event intervals below 1 ms** (8.22 %).
 
-Tolerances are the issue's: SVMs +-5 points under the primary protocol and +-7 points (same
+Tolerances (docs/braille_synthetic.md): SVMs +-5 points under the primary protocol and +-7 points (same
 ordering raw > collapsed) under the others, event SVMs +-7 points, event counts +-25 % relative;
 binning loss and short intervals have no stated tolerance ("near"): +-25 % relative is used.
 SVM accuracies depend on the training-set size (targets refer to 200 repetitions per letter).

@@ -1,6 +1,6 @@
 """Loaders and writers of the published Braille files (Zenodo 6556273 = release 1, 7050094 = 2).
 
-Layouts (spec: braille.md, "Published file formats"):
+Layouts (docs/braille.md, "The published files"):
 
 * raw frames ``data_braille_letters_raw.pkl``: release 1 a pickled ``list`` of ``dict``, release 2
   a pickled ``pandas.DataFrame``; each record has ``letter`` (``'Space'``, ``'A'``..``'Z'``) and

@@ -1,4 +1,4 @@
-"""Sigma-delta event encoding exactly as the authors implemented it (spec: braille.md).
+"""Sigma-delta event encoding exactly as the authors implemented it (docs/braille.md).
 
 Per taxel, inverted integer frames ``x[0..T-1]`` at 40 Hz, no resampling. The reference starts at
 ``r = x[0]``. For each step ``n -> n+1``::
@@ -27,7 +27,7 @@ import numpy as np
 from snncc.data.letters import FRAME_RATE_HZ, N_TAXELS
 from snncc.errors import SnnccError
 
-DT_S = 1.0 / FRAME_RATE_HZ  # the spec's factor ``(1/40)``
+DT_S = 1.0 / FRAME_RATE_HZ  # the factor ``(1/40)`` of the authors' time formula
 
 
 @dataclass

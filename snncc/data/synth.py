@@ -5,7 +5,7 @@ This module holds generator version 1 and the version switch (:func:`generate`, 
 ``snncc.data.fingertip``. Version 1:
 
 The real Zenodo recordings cannot be fetched on these machines, so ``snncc data synth`` builds a
-stand-in from the recording's physics (spec: braille.md, "Synthetic generator"):
+stand-in from the recording's physics (docs/braille.md: the recording; docs/braille_synthetic.md: the model):
 
 * **Geometry.** The iCub fingertip's 12 taxel centres (``TAXELS``, mm; x along the finger, y the
   pad normal, z across). The letter lies in the plate; its six-dot cell has its columns across
@@ -116,8 +116,8 @@ def generate(
     progress: Callable[[int], None] | None = None,
     version: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Raw frames and labels from generator ``version`` (2: calibrated to task difficulty, issue 15;
-    1: calibrated to summary statistics only, issue 7). Without ``version``: the version of
+    """Raw frames and labels from generator ``version`` (2: calibrated to task difficulty;
+    1: calibrated to summary statistics only; docs/braille_synthetic.md). Without ``version``: the version of
     ``params`` (a ``SynthParams`` is version 1), else :data:`GENERATOR_VERSION`. ``params`` default
     to the version's own."""
     if version is None:

@@ -1,4 +1,4 @@
-"""Generator version 2 of the SYNTHETIC Braille set: calibrated to task difficulty (issue 15).
+"""Generator version 2 of the SYNTHETIC Braille set: calibrated to task difficulty (docs/braille_synthetic.md).
 
 Same geometry as version 1 (``snncc.data.synth``: the iCub fingertip's 12 taxels, a six-dot cell
 in the plate, dots as Gaussian bumps seen through Gaussian receptive fields), plus the sources of

@@ -51,11 +51,10 @@ def load_model(path: str | Path, options: LoadOptions | None = None) -> Graph:
     """Load ``path`` with the frontend for its format, validate the graph and stamp its source hash."""
     path = Path(path)
     options = options or LoadOptions()
-    if not path.exists():
-        raise SnnccError("file does not exist", file=str(path), field="path")
     if not path.is_file():
-        raise SnnccError("is not a regular file (a directory, device or pipe); give a model file", file=str(path),
-                         field="path")
+        from snncc.artefact_paths import wrong_path
+
+        raise wrong_path(path, "a model file (a regular file)")
     suffix = path.suffix.lower()
     spec = _LOADERS.get(suffix, _LOADERS[".pt"])
     try:

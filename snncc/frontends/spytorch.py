@@ -64,6 +64,6 @@ def weight_list_to_graph(weights: list, params: PaperParams, source: str = "<wei
 
 def load_weight_list(obj: Any, path: Path, params_path: str | Path | None) -> Graph:
     if params_path is None:
-        raise SnnccError("a SpyTorch weight list needs its parameters file: pass --params parameters_thN.txt",
+        raise SnnccError("a SpyTorch weight list needs its parameters file: pass --params=parameters_thN.txt",
                          file=str(path), field="--params")
     return weight_list_to_graph(list(obj), load_params(params_path), source=str(path))

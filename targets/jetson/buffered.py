@@ -1,7 +1,9 @@
 """Jetson artefacts of the buffered classifiers (FCN, ResNet, Encoder, Time-CNN, Inception).
 
-These networks have no IR graph (the IR has no convolutions), so their reference is the PyTorch
-module of the checkpoint itself: ``model.onnx`` (legacy exporter, the JetPack's opset, dynamic
+These networks have no IR graph: the IR's networks advance one time step at a time (its Conv is
+a convolution over a spatial map within one step), while these classifiers convolve over the time
+axis of the whole buffered sample, with batch normalisation, residual sums and global pooling. So
+their reference is the PyTorch module of the checkpoint itself: ``model.onnx`` (legacy exporter, the JetPack's opset, dynamic
 batch, T fixed: the whole buffered sample) must pass ``onnx.checker`` and the TensorRT operator
 rules, run at two batch sizes, and agree with PyTorch in ONNX Runtime on seeded N(0, 1) frames:
 max |delta score| <= 1e-3 x max(1, max |score|) and the same predictions, else SnnccError.
@@ -45,7 +47,7 @@ def validate_buffered(module: BufferedClassifier, data: bytes, seed: int = 0) ->
     cfg = module.config
     ops = check_structure(ExportedModel(data, ["frames"], ["scores"], {}), "model.onnx")
     sess = session(data)
-    record: dict[str, Any] = {"reference": "the checkpoint's PyTorch module (float32; the IR has no convolutions)",
+    record: dict[str, Any] = {"reference": "the checkpoint's PyTorch module (float32; a buffered classifier has no IR graph)",
                               "seed": seed, "operators": ops}
     worst, agree, total = 0.0, 0, 0
     for batch, s in ((MAIN_BATCH, seed), (SECOND_BATCH, seed + 1)):

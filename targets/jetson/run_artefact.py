@@ -17,9 +17,13 @@ from snncc.errors import SnnccError
 
 def open_runner(artefact: Path, backend: str, variant: str | None = None):
     """An ``ArtefactRunner`` on the artefact directory, with ``variant``'s model already loaded (so
-    that a damaged model file is named as part of the artefact), or a one-line error."""
+    that a damaged model file is named as part of the artefact), or a one-line error (another kind of
+    artefact, a Loihi bundle say, is named with the command that reads it)."""
+    from snncc.artefact_paths import JETSON_ARTEFACT, wrong_path
     from snncc.targets.jetson.standalone_runner import ArtefactRunner, RunnerError
 
+    if not Path(artefact).is_dir():
+        raise wrong_path(artefact, JETSON_ARTEFACT)
     try:
         runner = ArtefactRunner(str(artefact), backend)
         if variant is not None:

@@ -1,4 +1,4 @@
-"""Loihi 1's number formats and limits, stated once (spec loihi.md sections 1, 3 and 4).
+"""Loihi 1's number formats and limits, stated once (docs/loihi.md explains them).
 
 Every Loihi module (quantizer, timing pass, bundle reader and checker, emulator, mapper, fan-in
 relays, lowering) reads these names from here, as ``chip.NAME`` at call time where a run can

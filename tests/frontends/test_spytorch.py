@@ -105,5 +105,5 @@ def test_bad_weight_lists(tmp_path, th1_params, bad, match):
 
 def test_weight_list_without_params_says_how(tmp_path):
     torch.save(weight_list(), tmp_path / "w.pt")
-    with pytest.raises(SnnccError, match="--params"):
+    with pytest.raises(SnnccError, match=r"pass params=.parameters_thN\.txt."):
         load_model(tmp_path / "w.pt")

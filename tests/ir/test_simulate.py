@@ -1,4 +1,4 @@
-"""The reference simulator against traces computed by hand from ir.md's equations."""
+"""The reference simulator against traces computed by hand from the node equations (snncc/ir/nodes.py)."""
 
 import math
 

@@ -75,7 +75,7 @@ def test_forty_neuron_linear_subtract_subgraph_and_flat_same_ir():
 def test_norse_style_needs_dt_and_then_matches_continuous_euler():
     rng = np.random.default_rng(2)
     graph = norse_graph(rng)
-    with pytest.raises(SnnccError, match="pass --dt"):
+    with pytest.raises(SnnccError, match=r"try dt=0\.0005 "):
         graph_from_nir(graph)
     dt = 1e-3
     g = _import(graph, dt=dt)

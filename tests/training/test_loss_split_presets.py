@@ -108,5 +108,5 @@ def test_subset_is_seeded_and_keeps_the_class_proportions():
     assert np.array_equal(a, subset_indices(labels, 150, seed=0))
     assert not np.array_equal(a, subset_indices(labels, 150, seed=1))
     assert subset_indices(labels, None, 0).size == 162 and subset_indices(labels, 500, 0).size == 162
-    with pytest.raises(SnnccError, match="--subset"):
+    with pytest.raises(SnnccError, match="^subset: a subset needs"):
         subset_indices(labels, 20, 0)

@@ -69,8 +69,10 @@ def netx_compat(network: LoihiNetwork) -> list[str]:
             notes.append(f"/layer/{i}/neuron/refDelay = {lay.ref_delay} (netx's LIF has no refractory period)")
         for key, exp in (("wgtExp", lay.wgt_exp), ("wgtExpRec", lay.wgt_exp_rec if lay.weight_rec is not None else 0)):
             if np.ndim(exp):
-                notes.append(f"/layer/{i}/neuron/{key}: one exponent per synapse, {sorted(set(np.unique(exp).tolist()))} "
-                             "(two synapse formats; snncc extension, netx has one exponent per layer)")
+                used = sorted(set(np.unique(exp).tolist()))
+                formats = f"{len(used)} synapse format{'s' if len(used) != 1 else ''}, one per exponent"
+                notes.append(f"/layer/{i}/neuron/{key}: one exponent per synapse, {used} "
+                             f"({formats}; snncc extension, netx has one exponent per layer)")
             elif exp != 0:
                 notes.append(f"/layer/{i}/neuron/{key} = {exp} ("
                              + ("netx ignores weight exponents)" if key == "wgtExp" else "snncc extension)"))
@@ -329,7 +331,9 @@ def read_bundle(path: str | Path) -> LoihiNetwork:
     """Read and validate a bundle written by snncc, lava-dl netx or SLAYER v1."""
     path = str(path)
     if not Path(path).is_file():
-        _fail(path, "path", "file does not exist")
+        from snncc.artefact_paths import LOIHI_BUNDLE, wrong_path
+
+        raise wrong_path(path, LOIHI_BUNDLE)
     try:
         f = h5py.File(path, "r")
     except (OSError, RuntimeError, ValueError):

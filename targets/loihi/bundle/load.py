@@ -16,7 +16,9 @@ def load_network(source: Path, timing: str | None = None, scale: str | None = No
 
     source = Path(source)
     if not source.is_file():
-        raise SnnccError("file does not exist", file=str(source), field="path")
+        from snncc.artefact_paths import LOIHI_BUNDLE, wrong_path
+
+        raise wrong_path(source, f"{LOIHI_BUNDLE} or a model file")
     if h5py.is_hdf5(str(source)):
         from snncc.targets.loihi.bundle.hdf5 import read_bundle
 

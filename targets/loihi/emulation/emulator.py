@@ -1,4 +1,4 @@
-"""Bit-exact emulation of Loihi 1 CUBA compartments (spec loihi.md section 3).
+"""Bit-exact emulation of Loihi 1 CUBA compartments (docs/loihi.md, "One time step of a compartment").
 
 The chip's arithmetic, per compartment and step t (integers throughout):
 
