@@ -23,6 +23,8 @@ RESULTS = HERE / "results"
 def benches(quick: bool) -> list[tuple[str, list[str], Path | None]]:
     """(name, argv, JSON file it writes or None when it prints JSON on stdout)."""
     return [
+        ("startup", ["bench_startup.py", "--out", str(RESULTS / "startup.json")]
+         + (["--repeats", "3"] if quick else []), RESULTS / "startup.json"),
         ("compile", ["bench_compile.py", "--out", str(RESULTS / "compile.json")], RESULTS / "compile.json"),
         ("emulator", ["bench_emulator.py", "--out", str(RESULTS / "emulator.json")]
          + (["--batch", "256", "--single", "16"] if quick else []), RESULTS / "emulator.json"),
