@@ -8,8 +8,12 @@
 Steps: generate (snncc.api.data_synth) -> encode (events th 1 at 5 ms, frames: data_encode,
 data_frames) -> train RSNN th1, LSTM, eLSTM (snncc.api.train) -> quantization-aware fine-tuning of the
 RSNN -> compile for Loihi and Jetson (snncc.api.compile) -> measure what each target loses (check)
--> a results table beside the paper's numbers (results.md and results.json in the output
-directory). ``--baselines`` adds the time-series classifiers (train, compile for Jetson), time to
+-> the RSNN's core map (snncc.api.map) and its energy and delay ESTIMATE (snncc.api.report) -> a
+results table beside the paper's numbers (results.md and results.json in the output directory)
+and figures (figures/*.png, linked from results.md: training curves, accuracy per model and
+deployment, the core map, energy and delay beside the paper's measurement). Long steps print
+progress: a line per training epoch, and while a step runs a live count on a terminal (a line
+every PROGRESS_EVERY_S seconds when stdout is not one). ``--baselines`` adds the time-series classifiers (train, compile for Jetson), time to
 classification of every model (snncc.api.analyse_ttc, ttc.png) and their batch-1 Jetson-artefact
 latency in one bench run. Every step runs in this process through ``snncc.api`` (each record is
 the ``--json`` output of the same ``snncc`` command; docs/api.md shows the pairs).
@@ -22,11 +26,15 @@ labelled so.
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import sys
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))   # pipeline_figures.py beside this file
+import pipeline_figures  # noqa: E402
 
 PAPER = {  # real data, the paper's figures (accuracy, %)
     "rsnn_th1_pytorch": 79.90,
@@ -34,6 +42,7 @@ PAPER = {  # real data, the paper's figures (accuracy, %)
     "lstm_frames": 96.92,
     "elstm_events": 82.31,
 }
+PAPER_LOIHI = {"cores": 8, "power_mw": 31.0, "energy_uj_per_sample": 71.0, "delay_ms_per_sample": 2.3}  # measured
 PAPER_BASELINES = {  # kind -> (label, test accuracy %, trainable parameters as the paper states them)
     "resnet": ("ResNet", 98.2, "516k"),
     "inception": ("Inception", 97.8, "452k"),
@@ -46,6 +55,52 @@ SMALL = {"repetitions": 40, "rsnn_epochs": 3, "lstm_epochs": 15, "elstm_epochs":
 FULL = {"repetitions": 200, "rsnn_epochs": 300, "lstm_epochs": 300, "elstm_epochs": 300, "qat_epochs": 10}
 BASELINE_SMALL = {"baseline_epochs": 5}
 BASELINE_FULL = {"baseline_epochs": 300}
+ENERGY_SAMPLES = 64            # test samples emulated for the energy and delay ESTIMATE
+PROGRESS_EVERY_S = 15.0        # stdout not a terminal: at most one progress line per step this often
+FIGURES = "figures"            # the figures' folder inside --out
+
+
+class StepProgress:
+    """What a long step shows while it runs. ``on_epoch(record)``: one line per training epoch, as
+    ``snncc train`` prints it. ``progress(done, total, phase)``: on a terminal a count rewritten in
+    place; otherwise a line at most every ``PROGRESS_EVERY_S`` seconds."""
+
+    def __init__(self, name: str, stream=None, every_s: float | None = None):
+        self.name, self.stream = name, stream or sys.stdout
+        self.every_s = PROGRESS_EVERY_S if every_s is None else every_s
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.last_line = time.monotonic()
+        self.live = False
+
+    def _line(self, text: str) -> None:
+        if self.live:
+            self.stream.write("\r\033[K")
+            self.live = False
+        self.stream.write(f"       {self.name}: {text}\n")
+        self.stream.flush()
+
+    def progress(self, done: int, total: int, phase: str = "") -> None:
+        text = f"{phase} {done}/{total}".strip()
+        if self.tty:
+            self.stream.write(f"\r\033[K       {self.name}: {text}")
+            self.stream.flush()
+            self.live = True
+        elif time.monotonic() - self.last_line >= self.every_s:
+            self._line(text)
+            self.last_line = time.monotonic()
+
+    def on_epoch(self, record) -> None:
+        val = record.val_accuracy
+        self._line(f"epoch {record.epoch}: loss {record.loss:.4f}  train {100 * record.train_accuracy:.2f} %  "
+                   f"test {100 * record.test_accuracy:.2f} %" + (f"  val {100 * val:.2f} %" if val is not None else "")
+                   + f"  ({record.seconds:.1f} s)")
+        self.last_line = time.monotonic()
+
+    def close(self) -> None:
+        if self.live:
+            self.stream.write("\r\033[K")
+            self.stream.flush()
+            self.live = False
 
 
 @dataclass
@@ -93,15 +148,21 @@ class Pipeline:
         if self.skipped(step, needs):
             return step
         print(f"[run ] {name}: snncc.api.{verb}({', '.join(shown)})", flush=True)
+        function = getattr(snncc.api, verb)
+        accepts = inspect.signature(function).parameters
+        shows = StepProgress(name)
+        hooks = {k: v for k, v in (("progress", shows.progress), ("on_epoch", shows.on_epoch)) if k in accepts}
         started = time.perf_counter()
         try:
-            step.record = to_jsonable(getattr(snncc.api, verb)(*args, **options).as_dict())
+            step.record = to_jsonable(function(*args, **options, **hooks).as_dict())
             step.status = "ok"
         except SnnccError as err:
             step.message = f"snncc: error: {err.line()}"
             step.status = "failed"
         except Exception as ex:  # reported in the table, never hidden
             step.status, step.message = "failed", f"{type(ex).__name__}: {ex}"
+        finally:
+            shows.close()
         step.seconds = round(time.perf_counter() - started, 1)
         print(f"[{step.status:>4}] {name} ({step.seconds} s){': ' + step.message if step.message else ''}", flush=True)
         return step
@@ -211,6 +272,9 @@ def results(p: Pipeline) -> dict:
                             for m in bench["models"]]
     return {
         **extra,
+        "accuracy_by_model": accuracy_by_model(p),
+        "training_curves": training_curves(p),
+        "loihi": loihi_figures(p),
         "learning": learning(p.record("train RSNN th1"), p.settings),
         "data": "SYNTHETIC Braille set (snncc data synth), NOT the paper's recordings: compare trends, not values",
         "settings": p.settings,
@@ -222,6 +286,67 @@ def results(p: Pipeline) -> dict:
 
 
 CHANCE_PERCENT = 100.0 / 27
+TRAINED = (("train RSNN th1", "RSNN th1"), ("train RSNN QAT", "RSNN th1 QAT"), ("train LSTM", "LSTM"),
+           ("train eLSTM", "eLSTM"))
+
+
+def accuracy_by_model(p: Pipeline) -> list[dict]:
+    """Per model, test accuracy (%) in float, quantized (Loihi weights in float), on the bit-exact Loihi
+    emulator and as the Jetson artefact in ONNX Runtime, beside the paper's figures (real data)."""
+    def acc(step, *keys):
+        r = p.record(step)
+        for key in keys:
+            r = None if r is None else r.get(key)
+        return percent(r)
+
+    def row(model, float_, quantized=None, emulated=None, jetson=None, paper_float=None, paper_loihi=None):
+        return {"model": model, "float": float_, "quantized": quantized, "loihi_emulated": emulated,
+                "jetson": jetson, "paper_float": paper_float, "paper_loihi": paper_loihi}
+
+    rows = [
+        row("RSNN th1", acc("check RSNN Loihi", "accuracy", "float_trained") or acc("train RSNN th1", "history",
+                                                                                     "test_accuracy"),
+            acc("check RSNN Loihi", "accuracy", "ir_quantized"), acc("check RSNN Loihi", "accuracy", "emulator"),
+            acc("check RSNN Jetson", "accuracy_artefact"), PAPER["rsnn_th1_pytorch"], PAPER["rsnn_th1_loihi"]),
+        row("RSNN th1 after QAT", acc("check RSNN QAT Loihi", "accuracy", "float_trained"),
+            acc("check RSNN QAT Loihi", "accuracy", "ir_quantized"), acc("check RSNN QAT Loihi", "accuracy", "emulator")),
+        row("LSTM (frames)", acc("train LSTM", "history", "test_accuracy"), jetson=acc("check LSTM Jetson", "accuracy_artefact"),
+            paper_float=PAPER["lstm_frames"]),
+        row("eLSTM (events th1)", acc("train eLSTM", "history", "test_accuracy"), paper_float=PAPER["elstm_events"]),
+    ]
+    for kind, (label, paper_acc, _) in PAPER_BASELINES.items():
+        if p.status(f"train {kind}") != "missing":
+            rows.append(row(label, acc(f"train {kind}", "history", "test_accuracy"), paper_float=paper_acc))
+    return rows
+
+
+def training_curves(p: Pipeline) -> list[dict]:
+    """Per model trained in this run: loss and accuracies per epoch (the train records' ``epochs``)."""
+    names = TRAINED + tuple((f"train {k}", label) for k, (label, _, _) in PAPER_BASELINES.items())
+    curves = []
+    for step, label in names:
+        r = p.record(step)
+        if r and r.get("epochs"):
+            curves.append({"model": label, "epochs": [{k: e.get(k) for k in ("epoch", "loss", "train_accuracy",
+                                                                             "test_accuracy")} for e in r["epochs"]]})
+    return curves
+
+
+def loihi_figures(p: Pipeline) -> dict:
+    """The RSNN's core map (cores, chips) and its energy and delay per sample: an ESTIMATE beside the
+    paper's measurement."""
+    mapped, energy = p.record("map RSNN Loihi"), p.record("energy RSNN Loihi")
+    out: dict = {}
+    if mapped:
+        out["core_map"] = {"cores": mapped["n_cores"], "chips": mapped["n_chips"], "lower_bound": mapped["lower_bound"],
+                           "paper_cores": PAPER_LOIHI["cores"]}
+    if energy:
+        est = energy["estimate"]
+        out["estimate"] = {"label": est["label"], "inputs": est["inputs"], "samples": est["samples"],
+                           "cores": est["n_cores"], "energy_uj_per_sample": est["energy_uj_per_sample"]["total"],
+                           "delay_ms_per_sample": est["delay_ms_per_sample"],
+                           "dynamic_power_mw": est["dynamic_power_mw"], "paper_measurement": est["paper_measurement"]}
+    return out
 
 
 def trained_on(p: Pipeline) -> str:
@@ -243,6 +368,69 @@ def learning(record: dict | None, settings: dict) -> dict:
                  f"{' -> '.join(f'{a:.1f} %' for a in accs)} (chance {CHANCE_PERCENT:.1f} %); {verdict}. "
                  "Far from converged at these settings; the paper's schedule is --full.")
     return {"rsnn_test_percent_per_epoch": accs, "chance_percent": round(CHANCE_PERCENT, 2), "statement": statement}
+
+
+def figures_markdown(res: dict) -> list[str]:
+    """The accuracy-per-deployment table, the Loihi ESTIMATE beside the paper's measurement, and the figures."""
+    lines = []
+    by_model = [m for m in res.get("accuracy_by_model", []) if any(m[k] is not None for k in
+                                                                  ("float", "quantized", "loihi_emulated", "jetson"))]
+    if by_model:
+        lines += ["", "Test accuracy per model and deployment (this run: SYNTHETIC data; paper: real recordings):", "",
+                  "| model | float | quantized | Loihi emulated | Jetson (ONNX Runtime) | paper, PyTorch | paper, Loihi |",
+                  "|---|---|---|---|---|---|---|"]
+        for m in by_model:
+            lines.append(f"| {m['model']} | " + " | ".join(pct(m[k]) for k in ("float", "quantized", "loihi_emulated",
+                                                                          "jetson", "paper_float", "paper_loihi")) + " |")
+    loihi = res.get("loihi", {})
+    est, cmap = loihi.get("estimate"), loihi.get("core_map")
+    if est or cmap:
+        paper = PAPER_LOIHI
+        lines += ["", "Loihi 1, RSNN th1 per sample: snncc's ESTIMATE (Davies 2018 Table 2, dynamic energy only; not a "
+                  "measurement) beside the paper's MEASUREMENT on the chip:", "",
+                  "| | snncc ESTIMATE (this bundle) | paper, measured |", "|---|---|---|"]
+        if cmap:
+            lines.append(f"| cores | {cmap['cores']} (lower bound {cmap['lower_bound']}) | {paper['cores']} |")
+        if est:
+            lines += [f"| energy per sample | {est['energy_uj_per_sample']:.1f} uJ | {paper['energy_uj_per_sample']:g} uJ |",
+                      f"| delay per sample | {est['delay_ms_per_sample']:.2f} ms | {paper['delay_ms_per_sample']:g} ms |",
+                      f"| power | {est['dynamic_power_mw']:.1f} mW (dynamic only) | {paper['power_mw']:g} mW (total) |",
+                      "", f"ESTIMATE inputs: {est['inputs']}, {est['samples']} samples (SYNTHETIC data)."]
+    if res.get("figures"):
+        lines += ["", "## Figures", ""]
+        for name, (path, caption) in res["figures"].items():
+            lines += [f"![{caption}]({path})", "", f"*{caption}* (`{path}`)", ""]
+    return lines
+
+
+def write_figures(p: Pipeline, res: dict) -> dict[str, tuple[str, str]]:
+    """Draw the figures into ``<out>/figures`` (a failed figure is a failed step, never hidden); name ->
+    (path relative to ``out``, caption) of those written, the core map included when its step ran."""
+    folder = p.out / FIGURES
+    drawn: dict[str, tuple[str, str]] = {}
+    captions = {
+        "training_curves": "Training curves: loss and accuracy per epoch of every model trained (SYNTHETIC data)",
+        "accuracy": "Accuracy per model: float, quantized, Loihi emulated, Jetson, beside the paper's figures (paper: "
+                    "real data; this run: SYNTHETIC)",
+        "core_map": "Core map of the RSNN th1 bundle: utilisation of each Loihi core",
+        "energy_delay": "Loihi energy and delay per sample and cores: snncc's ESTIMATE beside the paper's measurement",
+    }
+
+    def figure(name: str, func, *args) -> None:
+        def draw() -> None:
+            path = func(*args, folder / f"{name}.png")
+            if path is not None:
+                drawn[name] = (f"{FIGURES}/{path.name}", captions[name])
+
+        draw.__name__ = f"pipeline_figures.{func.__name__}"
+        p.python(f"figure {name}", draw)
+
+    figure("training_curves", pipeline_figures.training_curves, res["training_curves"], CHANCE_PERCENT)
+    figure("accuracy", pipeline_figures.accuracy, res["accuracy_by_model"])
+    if p.status("map RSNN Loihi") == "ok" and (folder / "core_map.png").is_file():   # drawn by snncc.api.map
+        drawn["core_map"] = (f"{FIGURES}/core_map.png", captions["core_map"])
+    figure("energy_delay", pipeline_figures.energy_delay, res["loihi"].get("estimate"))
+    return dict(sorted(drawn.items(), key=lambda kv: list(captions).index(kv[0])))
 
 
 def markdown(res: dict) -> str:
@@ -268,6 +456,7 @@ def markdown(res: dict) -> str:
         for m in res["latency"]:
             lines.append(f"| {Path(m['artefact']).name} | {m['kind']} | {m['median_ms']:.3f} | {m['spread_ms']:.3f} | "
                          f"{m['ratio_to_reference']:.2f} |")
+    lines += figures_markdown(res)
     lines += ["", "| step | status | seconds | message |", "|---|---|---|---|"]
     for s in res["steps"]:
         lines.append(f"| {s['name']} | {s['status']} | {s['seconds']} | {s['message'].replace('|', '/')} |")
@@ -342,16 +531,24 @@ def main(argv: list[str] | None = None) -> int:
         scale = {"scale": "global"} if target == "loihi" else {}
         p.api(name, "check", out / model, target=target, data=out / test, **scale, needs=(needs, f"test split {test}"))
 
+    (out / FIGURES).mkdir(exist_ok=True)
+    p.api("map RSNN Loihi", "map", out / "rsnn_th1.net", plot=out / FIGURES / "core_map.png",
+          needs=("compile RSNN Loihi",))
+    p.api("energy RSNN Loihi", "report", out / "rsnn_th1.net", energy=True, data=out / "rsnn_test.npz",
+          limit=ENERGY_SAMPLES, needs=("compile RSNN Loihi", "test split rsnn_test.npz"))
+
     if args.baselines:
         baselines(p, out, frames, events, seed)
-    res = results(p)
+    figures = write_figures(p, results(p))
+    res = results(p) | {"figures": figures}
     from snncc.atomic import write_text_atomic
 
     write_text_atomic(out / "results.json", json.dumps(res, indent=2) + "\n")
     write_text_atomic(out / "results.md", markdown(res))
     print()
     print(markdown(res))
-    print(f"wrote {out / 'results.md'} and {out / 'results.json'}")
+    print(f"wrote {out / 'results.md'} and {out / 'results.json'}"
+          + (f"; figures in {out / FIGURES}: {', '.join(Path(f).name for f, _ in figures.values())}" if figures else ""))
     return 1 if any(st.status == "failed" for st in p.steps) else 0
 
 

@@ -90,3 +90,139 @@ def test_a_bad_device_stops_the_pipeline_before_any_step(tmp_path, capsys):
         rp.main(["--out", str(tmp_path / "run"), "--device", "tpu"])
     assert ex.value.code == 2 and "--device: 'tpu' is not a device" in capsys.readouterr().err
     assert not (tmp_path / "run").exists()
+
+
+def _epochs(*accs):
+    return [{"epoch": i + 1, "loss": 30.0 / (i + 1), "nll": 3.0, "train_accuracy": a * 0.9, "test_accuracy": a,
+             "val_accuracy": None, "hidden_spikes_per_sample": 1.0, "seconds": 1.0} for i, a in enumerate(accs)]
+
+
+def _reader_pipeline(rp, tmp_path, small_rsnn_checkpoint):
+    """A pipeline whose training and check steps are records as the verbs write them, and whose map and
+    energy steps really run on a small bundle."""
+    import snncc.api
+
+    p = rp.Pipeline(tmp_path, {"repetitions": 40, "rsnn_epochs": 3}, 0)
+    for name, accs in (("train RSNN th1", (0.05, 0.1, 0.2)), ("train RSNN QAT", (0.22,)), ("train LSTM", (0.3, 0.5)),
+                       ("train eLSTM", (0.06,))):
+        p.steps.append(rp.Step(name, [], "ok", 1.0, "", {"epochs": _epochs(*accs), "device": "cpu",
+                                                        "history": {"test_accuracy": max(accs)},
+                                                        "quantization": {"after": {"quantized_test_accuracy": 0.21}}}))
+    p.steps.append(rp.Step("check RSNN Loihi", [], "ok", 1.0, "", {"accuracy": {
+        "float_trained": 0.2, "ir_reset_changed": 0.2, "ir_loihi_order": 0.2, "ir_quantized": 0.18, "emulator": 0.17}}))
+    p.steps.append(rp.Step("check RSNN Jetson", [], "ok", 1.0, "", {"accuracy_artefact": 0.2}))
+    p.steps.append(rp.Step("check LSTM Jetson", [], "ok", 1.0, "", {"accuracy_artefact": 0.5}))
+    bundle = tmp_path / "rsnn_th1.net"
+    snncc.api.compile(small_rsnn_checkpoint, target="loihi", output=bundle)
+    (tmp_path / rp.FIGURES).mkdir()
+    assert p.api("map RSNN Loihi", "map", bundle, plot=tmp_path / rp.FIGURES / "core_map.png").status == "ok"
+    assert p.api("energy RSNN Loihi", "report", bundle, energy=True, samples=2).status == "ok"
+    return p
+
+
+def test_results_hold_the_papers_figures_and_draw_them(tmp_path, small_rsnn_checkpoint, capsys):
+    """Training curves, accuracy per model and deployment beside the paper, the core map, energy and delay
+    (ESTIMATE beside the paper's MEASUREMENT): in results.json/results.md and as PNGs linked from results.md."""
+    rp = _module()
+    p = _reader_pipeline(rp, tmp_path, small_rsnn_checkpoint)
+    res = rp.results(p)
+    rows = {r["model"]: r for r in res["accuracy_by_model"]}
+    assert rows["RSNN th1"] == {"model": "RSNN th1", "float": 20.0, "quantized": 18.0, "loihi_emulated": 17.0,
+                                "jetson": 20.0, "paper_float": 79.90, "paper_loihi": 78.32}
+    assert rows["LSTM (frames)"]["jetson"] == 50.0 and rows["LSTM (frames)"]["paper_float"] == 96.92
+    assert [c["model"] for c in res["training_curves"]] == ["RSNN th1", "RSNN th1 QAT", "LSTM", "eLSTM"]
+    assert [e["test_accuracy"] for e in res["training_curves"][0]["epochs"]] == [0.05, 0.1, 0.2]
+    loihi = res["loihi"]
+    assert loihi["core_map"]["cores"] >= 1 and loihi["core_map"]["paper_cores"] == 8
+    assert loihi["estimate"]["energy_uj_per_sample"] > 0 and "ESTIMATE" in loihi["estimate"]["label"]
+    assert loihi["estimate"]["paper_measurement"]["energy_uj_per_sample"] == 71.0
+
+    figures = rp.write_figures(p, res)
+    assert list(figures) == ["training_curves", "accuracy", "core_map", "energy_delay"]
+    for path, _ in figures.values():
+        assert (tmp_path / path).read_bytes()[:4] == b"\x89PNG", path
+    assert all(p.status(f"figure {n}") == "ok" for n in ("training_curves", "accuracy", "energy_delay"))
+    text = rp.markdown(rp.results(p) | {"figures": figures})
+    for path, _ in figures.values():
+        assert f"]({path})" in text
+    assert "| RSNN th1 | 20.00 % | 18.00 % | 17.00 % | 20.00 % | 79.90 % | 78.32 % |" in text
+    assert "snncc ESTIMATE" in text and "paper, measured" in text and "| energy per sample |" in text
+    assert "| delay per sample |" in text and "71 uJ" in text and "2.3 ms" in text
+
+
+def test_figures_are_labelled_and_their_tick_labels_readable(tmp_path, small_rsnn_checkpoint):
+    import matplotlib.pyplot as plt
+
+    from snncc.log_axis import overlapping_labels
+
+    rp = _module()
+    figs = rp.pipeline_figures
+    res = rp.results(_reader_pipeline(rp, tmp_path, small_rsnn_checkpoint))
+    built = {"training": figs.training_curves_figure(res["training_curves"], rp.CHANCE_PERCENT),
+             "accuracy": figs.accuracy_figure(res["accuracy_by_model"]),
+             "energy": figs.energy_delay_figure(res["loihi"]["estimate"])}
+    try:
+        for name, fig in built.items():
+            title = fig._suptitle.get_text() if fig._suptitle else fig.axes[0].get_title()
+            assert "SYNTHETIC" in title, name
+            for ax in fig.axes:
+                assert overlapping_labels(ax, "x") == [] and overlapping_labels(ax, "y") == [], name
+        assert "ESTIMATE" in built["energy"]._suptitle.get_text() and "MEASUREMENT" in built["energy"]._suptitle.get_text()
+        assert [t.get_text() for t in built["energy"].axes[0].get_xticklabels()] == ["snncc\nESTIMATE", "paper\nMEASURED"]
+    finally:
+        for fig in built.values():
+            plt.close(fig)
+    assert figs.training_curves_figure([], 3.7) is None and figs.energy_delay_figure(None) is None
+
+
+def test_long_steps_print_progress_lines(tmp_path, monkeypatch, capsys):
+    """A verb that takes progress / on_epoch gets them: one line per epoch as `snncc train` prints it, and when
+    stdout is not a terminal a progress line at most every PROGRESS_EVERY_S seconds."""
+    import types
+
+    import snncc.api
+
+    rp = _module()
+    calls = {}
+
+    def fake_train(model, *, data, progress=None, on_epoch=None):
+        calls["train"] = (progress is not None, on_epoch is not None)
+        for e in (1, 2):
+            progress(e, 2, f"epoch {e}/2")
+            on_epoch(types.SimpleNamespace(epoch=e, loss=1.5 / e, train_accuracy=0.1 * e, test_accuracy=0.2 * e,
+                                           val_accuracy=None, seconds=0.5))
+        return types.SimpleNamespace(as_dict=lambda: {"ok": True})
+
+    def fake_generate(*, out):
+        calls["generate"] = True
+        return types.SimpleNamespace(as_dict=lambda: {"out": out})
+
+    monkeypatch.setattr(snncc.api, "train", fake_train, raising=False)
+    monkeypatch.setattr(snncc.api, "data_synth", fake_generate, raising=False)
+    monkeypatch.setattr(rp, "PROGRESS_EVERY_S", 0.0)
+    p = rp.Pipeline(tmp_path, {}, 0)
+    assert p.api("train RSNN th1", "train", "rsnn", data="d.npz").status == "ok"
+    assert p.api("generate", "data_synth", out="x").status == "ok"      # takes neither: called without them
+    out = capsys.readouterr().out
+    assert calls == {"train": (True, True), "generate": True}
+    assert "       train RSNN th1: epoch 1: loss 1.5000  train 10.00 %  test 20.00 %  (0.5 s)\n" in out
+    assert "       train RSNN th1: epoch 2: loss 0.7500  train 20.00 %  test 40.00 %  (0.5 s)\n" in out
+    assert "       train RSNN th1: epoch 1/2 1/2\n" in out and "\r" not in out      # not a terminal: whole lines
+
+
+def test_progress_on_a_terminal_is_rewritten_in_place():
+    import io
+
+    rp = _module()
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    term = Terminal()
+    shows = rp.StepProgress("check RSNN Jetson", stream=term)
+    shows.progress(1, 4, "checking")
+    shows.progress(2, 4, "checking")
+    shows.close()
+    assert term.getvalue() == ("\r\033[K       check RSNN Jetson: checking 1/4\r\033[K       check RSNN Jetson: checking 2/4"
+                               "\r\033[K")
