@@ -224,6 +224,13 @@ def baselines(p: Pipeline, out: Path, frames: Path, events: Path, seed: str) -> 
               warmup_passes=1, timed_passes=2, needs=tuple(n for n, _ in compiled))
 
 
+def inputs_kind(data_label: str) -> str:
+    """What a bench record timed: SYNTHETIC random inputs (no data set fitted) or a data set."""
+    if data_label.upper().startswith("SYNTHETIC"):
+        return "SYNTHETIC (random)"
+    return "data set (SYNTHETIC)" if "synthetic" in data_label.lower() else "data set"
+
+
 def pct(x) -> str:
     return "—" if x is None else f"{x:.2f} %"
 
@@ -268,8 +275,8 @@ def results(p: Pipeline) -> dict:
                                           "never_correct_share", "samples")} for m in ttc["models"]]
     bench = p.record("bench Jetson artefacts")
     if bench is not None:
-        extra["latency"] = [{k: m[k] for k in ("artefact", "kind", "median_ms", "spread_ms", "ratio_to_reference")}
-                            for m in bench["models"]]
+        extra["latency"] = [{**{k: m[k] for k in ("artefact", "kind", "median_ms", "spread_ms", "ratio_to_reference")},
+                             "inputs": inputs_kind(m.get("data", ""))} for m in bench["models"]]
     return {
         **extra,
         "accuracy_by_model": accuracy_by_model(p),
@@ -452,10 +459,10 @@ def markdown(res: dict) -> str:
     if res.get("latency"):
         lines += ["", "Jetson artefacts, batch-1 latency in ONNX Runtime on THIS machine's CPU (not a Jetson; "
                   "noisy on a shared machine), ratios to the first:", "",
-                  "| artefact | kind | median ms | spread ms | x first |", "|---|---|---|---|---|"]
+                  "| artefact | kind | inputs | median ms | spread ms | x first |", "|---|---|---|---|---|---|"]
         for m in res["latency"]:
-            lines.append(f"| {Path(m['artefact']).name} | {m['kind']} | {m['median_ms']:.3f} | {m['spread_ms']:.3f} | "
-                         f"{m['ratio_to_reference']:.2f} |")
+            lines.append(f"| {Path(m['artefact']).name} | {m['kind']} | {m.get('inputs', '?')} | {m['median_ms']:.3f} | "
+                         f"{m['spread_ms']:.3f} | {m['ratio_to_reference']:.2f} |")
     lines += figures_markdown(res)
     lines += ["", "| step | status | seconds | message |", "|---|---|---|---|"]
     for s in res["steps"]:

@@ -45,7 +45,7 @@ def test_baseline_rows_ttc_and_latency_are_reported_beside_the_paper(tmp_path):
          "median_ttc": 0.9, "never_correct_share": 0.5, "samples": 10}]}))
     p.steps.append(rp.Step("bench Jetson artefacts", [], "ok", 1.0, "", {"models": [
         {"artefact": str(tmp_path / "fcn_jetson"), "kind": "fcn", "median_ms": 2.0, "spread_ms": 0.1,
-         "ratio_to_reference": 1.0}]}))
+         "ratio_to_reference": 1.0, "data": "SYNTHETIC inputs (seeded random, 32 samples, seed 0): latency only"}]}))
     res = rp.results(p)
     rows = {r["model"]: r for r in res["rows"]}
     assert rows["FCN on frames (279,451 params; paper 280k)"]["ours_percent"] == 50.0
@@ -54,7 +54,7 @@ def test_baseline_rows_ttc_and_latency_are_reported_beside_the_paper(tmp_path):
     assert not any(r["model"].startswith("ResNet") for r in res["rows"])   # not run: no row
     text = rp.markdown(res)
     assert "| fcn.pt | fcn | 50.0 % | 0.800 | 0.900 | 50.0 % |" in text
-    assert "| fcn_jetson | fcn | 2.000 | 0.100 | 1.00 |" in text and "SYNTHETIC" in text
+    assert "| fcn_jetson | fcn | SYNTHETIC (random) | 2.000 | 0.100 | 1.00 |" in text and "SYNTHETIC" in text
 
 
 def test_results_state_what_the_small_rsnn_reaches(tmp_path):

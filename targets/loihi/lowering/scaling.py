@@ -124,7 +124,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
                                   f"max|W| <= {OUTLIER_RATIO:.0f}x its median, every projection uses >= 1/8 of the "
                                   "8-bit range)")
         except SnnccError as ex:   # e.g. a threshold mantissa beyond 17 bits: measure the other rules
-            refused["global"] = str(ex)
+            refused["global"] = ex.line()
             sc.flagged["graph"] = Flag(FlagKind.GLOBAL_REFUSED, "the paper's global rule cannot be lowered")
             sc.global_possible = False
     candidates: list[tuple[str, Graph, QuantizationRecord, float]] = []
@@ -137,7 +137,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
             g, r = make()
             candidates.append((name, g, r, measure(g, r)))
         except SnnccError as ex:
-            refused[name] = str(ex)
+            refused[name] = ex.line()
         considered[0] += 1
         if progress is not None:
             progress(considered[0], planned, MEASURING)
@@ -152,7 +152,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
         try:
             split = quantize_graph(graph, "per-layer", split=outliers)
         except SnnccError as ex:
-            refused["split"] = str(ex)
+            refused["split"] = ex.line()
         else:
             if split_projections(split[1]):
                 consider(f"per-layer, split exponents on {split_projections(split[1])}", lambda: split)
