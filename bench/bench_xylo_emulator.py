@@ -23,7 +23,7 @@ Figures (wall time, best of ``--repeat``, and CPU time where one thread runs):
     ``run_prepared`` at batch 1 and at batch ``--batch`` (1,024) on 1 thread and on all cores;
     per-sample time; also ``emulate()`` end to end (input checks and preparation included);
   * ``identical``: snncc's output spikes equal XyloSim's on the samples XyloSim ran;
-  * ``ratio_*``: XyloSim's time per sample over snncc's (issue 25's goal: >= 20 at batch 1,024).
+  * ``ratio_*``: XyloSim's time per sample over snncc's (the goal: >= 20 at batch 1,024).
 
 Other work shares the machine: ``machine`` records the load before and after and the cores; a
 load above the core count inflates wall times (CPU times and the ratios in one run drift less).
@@ -184,7 +184,7 @@ def main(argv=None) -> int:
     uptime_before = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     result = {
         "what": "snncc Xylo emulator vs XyloSim (xylosim 0.1.3), per sample, same inputs, one process",
-        "goal": "issue 25: at batch 1,024, >= 20x XyloSim's time per sample (XyloSim built once, recording off)",
+        "goal": "at batch 1,024, >= 20x XyloSim's time per sample (XyloSim built once, recording off)",
         "workloads": {},
     }
     for name, spec in (("braille", braille_spec()), ("large", large_spec())):
