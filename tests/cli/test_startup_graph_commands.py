@@ -11,9 +11,27 @@ from pathlib import Path
 import numpy as np
 
 from snncc_test_helpers import run_cli
-from test_startup_imports import run_in_fresh_interpreter
 
 NIR = Path(__file__).resolve().parents[1] / "data" / "nir"
+
+HEAVY_SEEN = """
+import contextlib, io, json, sys
+from snncc.cli.main import run
+seen = []
+for args in {calls!r}:
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        code = run(args)
+    seen.append({{"args": args, "code": code, "heavy": sorted({{m.split('.')[0] for m in sys.modules}} & {{"torch"}})}})
+print(json.dumps(seen))
+"""
+
+
+def run_in_fresh_interpreter(calls: list[list[str]]) -> list[dict]:
+    """Run each ``snncc`` call in one fresh interpreter; per call its exit status and whether torch was loaded."""
+    out = subprocess.run([sys.executable, "-c", HEAVY_SEEN.format(calls=calls)], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 FIRST_TORCH_IMPORT = """
 import contextlib, io, json, sys, traceback
