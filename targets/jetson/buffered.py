@@ -3,10 +3,11 @@
 These networks have no IR graph: the IR's networks advance one time step at a time (its Conv is
 a convolution over a spatial map within one step), while these classifiers convolve over the time
 axis of the whole buffered sample, with batch normalisation, residual sums and global pooling. So
-their reference is the PyTorch module of the checkpoint itself: ``model.onnx`` (legacy exporter, the JetPack's opset, dynamic
-batch, T fixed: the whole buffered sample) must pass ``onnx.checker`` and the TensorRT operator
-rules, run at two batch sizes, and agree with PyTorch in ONNX Runtime on seeded N(0, 1) frames:
-max |delta score| <= 1e-3 x max(1, max |score|) and the same predictions, else SnnccError.
+their reference is the PyTorch module of the checkpoint itself: ``model.onnx`` (legacy exporter,
+the JetPack's opset, dynamic batch, T fixed: the whole buffered sample) must pass ``onnx.checker``
+and the TensorRT operator rules, run at two batch sizes, and agree with PyTorch in ONNX Runtime on
+seeded N(0, 1) frames: max |delta score| <= 1e-3 x max(1, max |score|) and the same predictions,
+else SnnccError.
 There is no step model: a buffered classifier needs the whole sample before it can answer.
 
 Files: model.onnx, manifest.json (the same format the runner and ``snncc bench`` read),
