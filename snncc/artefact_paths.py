@@ -70,4 +70,4 @@ def wrong_path(path: str | Path, wanted: str, field: str | None = "path") -> Snn
         return SnnccError("file does not exist" if "file" in wanted else "does not exist", file=str(p), field=field)
     if p.is_dir():
         return SnnccError(f"is a directory, not {wanted}", file=str(p), field=field)
-    return SnnccError(f"is not {wanted}", file=str(p), field=field)
+    return SnnccError(f"is not a regular file (a device or pipe), not {wanted}", file=str(p), field=field)

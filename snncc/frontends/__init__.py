@@ -54,7 +54,7 @@ def load_model(path: str | Path, options: LoadOptions | None = None) -> Graph:
     if not path.is_file():
         from snncc.artefact_paths import wrong_path
 
-        raise wrong_path(path, "a model file (a regular file)")
+        raise wrong_path(path, "a model file")
     suffix = path.suffix.lower()
     spec = _LOADERS.get(suffix, _LOADERS[".pt"])
     try:

@@ -28,6 +28,7 @@ def test_emulate_map_report_inspect_of_a_jetson_artefact_say_what_it_is(artefact
         (line,) = err.strip().splitlines()
         assert line.startswith(f"snncc: error: {jetson_dir}: ") and "does not exist" not in line, line
         assert "is a Jetson artefact (a directory)" in line and "`snncc run` runs it" in line, line
+        assert ", not a model file" in line or ", not a Loihi bundle" in line, line
     assert not (tmp_path / "o.npz").exists() and not (tmp_path / "c.net").exists()
 
 

@@ -72,7 +72,7 @@ def test_missing_dt_that_cannot_be_inferred(tmp_path, capsys):
     out = tmp_path / "n.snnir"
     code, _, err = run_cli(["compile", src, "-o", out], capsys)
     assert code == 2 and len(err.strip().splitlines()) == 1
-    assert "cannot infer dt" in err and "pass --dt" in err and not out.exists()
+    assert "cannot infer dt" in err and "try --dt=" in err and not out.exists()
     code, _, err = run_cli(["compile", src, "-o", out, "--dt", "1e-3"], capsys)
     assert code == 0 and out.exists()
 

@@ -166,4 +166,5 @@ def test_bench_times_baselines_beside_an_lstm_in_one_run(tmp_path, capsys):
     calls = []
     api.bench([tmp_path / "lstm", tmp_path / "tcnn"], samples=3, repeats=1, warmup_passes=1, timed_passes=1,
               progress=lambda *c: calls.append(c))
-    assert calls[-1] == (12, 12, "timing") and {c[2] for c in calls} == {"warm-up", "timing"}   # 2 x (3 + 3)
+    assert calls[-1] == (12, 12, "tcnn: timing")   # 2 x (3 + 3); each phase names its artefact
+    assert {c[2] for c in calls} == {"lstm: warm-up", "lstm: timing", "tcnn: warm-up", "tcnn: timing"}
