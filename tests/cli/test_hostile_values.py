@@ -360,13 +360,13 @@ def test_training_sizes_are_checked_before_torch_allocates(monkeypatch):
 
     monkeypatch.setenv("SNNCC_MAX_MEMORY", str(2**30))        # the same bound on every machine
     check_snn_size(24, 2, 450, 28, True, 128, 270)          # the paper's RSNN: fine
-    with pytest.raises(SnnccError, match="--hidden: 1,000,000,000 hidden neurons: the input weights"):
+    with pytest.raises(SnnccError, match="hidden: 1,000,000,000 hidden neurons: the input weights"):
         check_snn_size(24, 2, 10**9, 28, True, 128, 270)
-    with pytest.raises(SnnccError, match="--hidden: 100,000 hidden neurons: the recurrent weights"):
+    with pytest.raises(SnnccError, match="hidden: 100,000 hidden neurons: the recurrent weights"):
         check_snn_size(24, 2, 10**5, 28, True, 1, 1)
     check_snn_size(24, 2, 10**5, 28, False, 1, 1)            # an FFSNN has no (H, H) matrix
     monkeypatch.setenv("SNNCC_MAX_MEMORY", str(10**6))
-    with pytest.raises(SnnccError, match="--batch-size: 450 hidden neurons: one batch's hidden spikes"):
+    with pytest.raises(SnnccError, match="batch_size: 450 hidden neurons: one batch's hidden spikes"):
         check_snn_size(24, 2, 450, 28, True, 128, 270)
 
 
