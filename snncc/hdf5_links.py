@@ -16,7 +16,17 @@ MAX_OBJECTS = 1_000_000     # a walk over more links than this is refused (hard-
 
 def check_self_contained(f, path: str) -> None:
     """Raise SnnccError (file ``path``, field the HDF5 path) unless every link in the open h5py file
-    ``f`` is a hard link and no dataset keeps its data outside the file."""
+    ``f`` is a hard link and no dataset keeps its data outside the file. A file whose structure
+    h5py cannot walk (damaged object headers, say) is refused as damaged."""
+    try:
+        _walk(f, path)
+    except SnnccError:
+        raise
+    except (KeyError, OSError, RuntimeError, ValueError, TypeError) as err:
+        raise SnnccError(f"damaged HDF5 structure ({type(err).__name__}: {err})", file=path, field="format") from None
+
+
+def _walk(f, path: str) -> None:
     import h5py
 
     seen: set = set()

@@ -619,8 +619,12 @@ def check_declared_sizes(path: Path) -> None:
         except SnnccError as err:
             raise err.with_file(str(path)) from None
         sizes: list[tuple[str, int]] = []
-        f.visititems(lambda key, obj: sizes.append((key, int(obj.size) * obj.dtype.itemsize))
-                     if isinstance(obj, h5py.Dataset) else None)
+        try:
+            f.visititems(lambda key, obj: sizes.append((key, int(obj.size) * obj.dtype.itemsize))
+                         if isinstance(obj, h5py.Dataset) else None)
+        except (KeyError, OSError, RuntimeError, ValueError, TypeError) as err:   # damaged object headers
+            raise SnnccError(f"damaged HDF5 structure ({type(err).__name__}: {err})", file=str(path),
+                             field="format") from None
     for key, n_bytes in sizes:
         check_memory(n_bytes, f"the declared dataset /{key}", file=str(path), field=f"/{key}")
     check_memory(sum(n for _, n in sizes), "the file's declared datasets together", file=str(path), field="/")

@@ -3,7 +3,7 @@
 import nir
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from nir_graphs import BrailleRSNN, norse_graph, run_cli
@@ -97,6 +97,8 @@ def test_not_a_nir_file(tmp_path, capsys):
 
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(cut=st.floats(0, 1), flips=st.lists(st.tuples(st.floats(0, 1), st.integers(0, 255)), min_size=1, max_size=6))
+@example(cut=1.0, flips=[(0.3111849359765669, 0)])   # damaged object header: h5py raised inside the link walk
+@example(cut=1.0, flips=[(0.30859375, 0)])            # ... and inside the size walk
 def test_mutated_nir_files_give_snncc_errors_only(tmp_path, cut, flips):
     src = tmp_path / "m.nir"
     nir.write(str(src), BrailleRSNN.random(np.random.default_rng(0), n_hidden=6).to_nir())
