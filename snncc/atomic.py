@@ -7,7 +7,9 @@ Rules every snncc writer follows (files through :func:`atomic_path`, directories
   only once complete, so a crash, an error, a full disk or Ctrl-C never leaves a half-written
   output at the destination;
 * a destination that resolves (after symlinks) to an input of the running command, or a directory
-  that contains one, is refused (:func:`protecting` declares the inputs);
+  that contains one, is refused (:func:`protecting` declares the inputs; a file the command reads
+  from inside an input directory, such as a data set's pickles, becomes one as it is read:
+  :func:`record_input`);
 * ``.``/``..``, the current directory or one of its parents, and an existing directory named as a
   file output are refused; an existing device or pipe (``-o /dev/null``) is written through, never
   replaced;
@@ -37,6 +39,8 @@ from typing import Callable, Iterable, Iterator
 from snncc.errors import SnnccError
 
 _PROTECTED: contextvars.ContextVar[tuple[Path, ...]] = contextvars.ContextVar("snncc_protected", default=())
+# files read so far by the command inside its outermost ``protecting`` block (None: outside any)
+_READ: contextvars.ContextVar[list[Path] | None] = contextvars.ContextVar("snncc_read", default=None)
 _LEFTOVER = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.[^.]*\.(?P<kind>part|old)$")
 
 
@@ -49,13 +53,30 @@ def _default_mode(base: int) -> int:
 
 @contextlib.contextmanager
 def protecting(paths: Iterable[str | os.PathLike]) -> Iterator[None]:
-    """Within the block, no atomic write may replace any of ``paths`` (the command's inputs)."""
+    """Within the block, no atomic write may replace any of ``paths`` (the command's inputs), nor any
+    file :func:`record_input` reports as read within it."""
     resolved = tuple(Path(p).resolve() for p in paths)
     token = _PROTECTED.set(_PROTECTED.get() + resolved)
+    read_token = _READ.set([]) if _READ.get() is None else None
     try:
         yield
     finally:
+        if read_token is not None:
+            _READ.reset(read_token)
         _PROTECTED.reset(token)
+
+
+def record_input(path: str | os.PathLike) -> None:
+    """``path`` was read by the running command (found inside an input it was given, e.g. a data
+    set's files in a directory): until its outermost ``protecting`` block ends, no output may replace
+    it. Outside any such block (a library call) nothing is recorded."""
+    read = _READ.get()
+    if read is not None:
+        read.append(Path(path).resolve())
+
+
+def _inputs() -> tuple[Path, ...]:
+    return _PROTECTED.get() + tuple(_READ.get() or ())
 
 
 def check_destination(dest: str | os.PathLike, *, directory: bool = False) -> Path:
@@ -69,7 +90,7 @@ def check_destination(dest: str | os.PathLike, *, directory: bool = False) -> Pa
     if resolved == cwd or resolved in cwd.parents:
         raise SnnccError("is the current directory or one of its parents; give a new output name", file=shown,
                          field="output")
-    for protected in _PROTECTED.get():
+    for protected in _inputs():
         if resolved == protected:
             raise SnnccError("is an input of this command; writing the output there would destroy it",
                              file=shown, field="output")

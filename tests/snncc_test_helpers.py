@@ -40,3 +40,39 @@ def authors_loop(x, w_in, w_out, v_rec, alpha, beta, spike=heaviside, detach_res
 
     hidden = layer(torch.einsum("btc,cd->btd", x, w_in), w_in.shape[1], v_rec)
     return layer(torch.einsum("btc,cd->btd", hidden, w_out), w_out.shape[1], None), hidden
+
+
+def small_rsnn(path) -> None:
+    """A small seeded RSNN checkpoint (24 channels x 2 input copies, 32 hidden, 28 outputs, dt 5 ms)."""
+    import torch
+
+    from snncc.frontends.checkpoint import save_checkpoint
+    from snncc.models import SNNConfig, SpikingClassifier
+
+    torch.manual_seed(0)
+    model = SpikingClassifier(SNNConfig(n_hidden=32, n_outputs=28))
+    model.reset_parameters(fwd_weight_scale=3.0, weight_scale_factor=0.2)
+    save_checkpoint(model, path, {"dt": 0.005, "note": "test model"})
+
+
+def build_workspace(directory) -> None:
+    """Small files every command can take, in ``directory``: ``br/`` (SYNTHETIC Braille, 5 x 27
+    letters, threshold-1 events and raw frames), ``ev.npz`` (its events, th 1 at 5 ms), ``m.pt`` (a
+    small RSNN), ``b.net`` (its Loihi bundle), ``jet/`` (its Jetson artefact, 20 steps),
+    ``spikes.npy`` (2 x 20 x 48 spikes: the bundle's input) and ``x.npy`` (2 x 20 x 24: the data's
+    channels, which the Jetson artefact copies itself)."""
+    from pathlib import Path
+
+    import numpy as np
+
+    import snncc.api as api
+
+    d = Path(directory)
+    api.data_synth(out=d / "br", repetitions=5, seed=0, thresholds="1")
+    api.data_encode(d / "br", out=d / "ev.npz", threshold=1, bin_ms=5)
+    small_rsnn(d / "m.pt")
+    api.compile(d / "m.pt", target="loihi", output=d / "b.net")
+    api.compile(d / "m.pt", target="jetson", output=d / "jet", time_steps=20)
+    rng = np.random.default_rng(0)
+    np.save(d / "spikes.npy", (rng.random((2, 20, 48)) < 0.1).astype(np.uint8))
+    np.save(d / "x.npy", (rng.random((2, 20, 24)) < 0.1).astype(np.uint8))

@@ -8,6 +8,7 @@ from typing import List, Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import console, print_json
 
 analyse_app = typer.Typer(help="Analyse trained models (time to classification).", no_args_is_help=True)
@@ -15,6 +16,7 @@ app.add_typer(analyse_app, name="analyse")
 
 
 @analyse_app.command("ttc")
+@declares_paths(inputs=("models", "data"), outputs=("output", "figure"))
 def ttc_command(
     models: List[Path] = typer.Argument(..., help="snncc checkpoints (any kind: rsnn, ffsnn, lstm, elstm, fcn, resnet, encoder, tcnn, inception)."),
     data: List[Path] = typer.Option(..., "--data", help="Data set(s): each model takes the first of its encoding (events or frames); repeatable."),

@@ -14,10 +14,12 @@ import typer
 from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import print_record, progress_bar
 
 
 @app.command("bench")
+@declares_paths(inputs=("artefacts", "data", "power_root"))
 def bench_command(
     artefacts: List[Path] = typer.Argument(..., help="Jetson artefact directory; several are timed in one run, side by side (ratios to the first)."),
     data: Optional[Path] = typer.Option(None, "--data", help="Data set .npz (inputs, labels, meta); without it, seeded synthetic inputs (labelled so)."),

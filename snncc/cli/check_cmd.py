@@ -13,12 +13,14 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import print_record, progress_bar
 from snncc.cli.target_flags import with_target_flags
 
 
 @app.command("check")
 @with_target_flags("check", "agree")
+@declares_paths(inputs=("model", "data", "params"))
 def check_command(
     model: Path = typer.Argument(..., help="Model file (as for snncc compile)."),
     target: str = typer.Option("loihi", "--target", "-t", help="Target whose losses to measure."),

@@ -8,6 +8,7 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import bar_columns, print_record, progress_bar
 from snncc.cli.target_flags import with_target_flags
 from snncc.targets import available_targets
@@ -15,6 +16,7 @@ from snncc.targets import available_targets
 
 @app.command("compile")
 @with_target_flags("lower")
+@declares_paths(inputs=("model", "params"), outputs=("output",))
 def compile_command(
     model: Path = typer.Argument(..., help="Model file: snncc checkpoint (.pt), SpyTorch weight list (.pt, needs --params), NIR graph (.nir) or snncc IR (.snnir)."),
     target: Optional[str] = typer.Option(None, "--target", "-t", help=f"Target to compile for ({', '.join(available_targets())}). Default: the one -o's suffix names (.net -> loihi, .snnir -> ir); a Jetson directory or any other name needs --target, and a suffix that names another target is refused."),

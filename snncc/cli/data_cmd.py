@@ -8,6 +8,7 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import bar_columns, console, print_json, progress_bar
 
 data_app = typer.Typer(
@@ -42,6 +43,7 @@ def _show(record, json_out: bool) -> None:
 
 
 @data_app.command("synth")
+@declares_paths(outputs=("out",))
 def synth_cmd(
     out: Path = typer.Option(..., "--out", "-o", help="Directory to write the data set into (created)."),
     repetitions: int = typer.Option(200, "--repetitions", "-n", min=1, help="Repetitions per letter (27 letters)."),
@@ -71,6 +73,7 @@ def synth_cmd(
 
 
 @data_app.command("encode")
+@declares_paths(inputs=("src",), outputs=("out",))
 def encode_cmd(
     src: Path = typer.Argument(..., help="A directory with the published files, or one .pkl (raw frames or events)."),
     out: Path = typer.Option(..., "--out", "-o", help="Output data set (.npz): inputs (N, T, 24) uint8, labels, meta."),
@@ -107,6 +110,7 @@ def encode_cmd(
 
 
 @data_app.command("frames")
+@declares_paths(inputs=("src",), outputs=("out",))
 def frames_cmd(
     src: Path = typer.Argument(..., help="A directory with data_braille_letters_raw.pkl, or that .pkl."),
     out: Path = typer.Option(..., "--out", "-o", help="Output data set (.npz): inputs (N, T, 12) float32."),
@@ -122,6 +126,7 @@ def frames_cmd(
 
 
 @data_app.command("analyse")
+@declares_paths(inputs=("src",), outputs=("figures",))
 def analyse_cmd(
     src: Path = typer.Argument(..., help="A directory with the published files (raw frames required)."),
     json_out: bool = typer.Option(False, "--json", help="Print the full report as JSON."),

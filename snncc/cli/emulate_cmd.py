@@ -17,10 +17,12 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import err_console, print_record, progress_bar
 
 
 @app.command("emulate")
+@declares_paths(inputs=("bundle", "input"), outputs=("output",))
 def emulate_command(
     bundle: Path = typer.Argument(..., help="Loihi bundle (.net/.h5) written by snncc, lava-dl netx or SLAYER v1."),
     input: Path = typer.Option(..., "--input", "-i", help="Input spikes .npy: (T, C) or (B, T, C), values 0/1."),

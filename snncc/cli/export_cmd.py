@@ -8,10 +8,12 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import console, print_json
 
 
 @app.command("export")
+@declares_paths(inputs=("model", "params"), outputs=("output",))
 def export_command(
     model: Path = typer.Argument(..., help="Model file: snncc checkpoint (.pt), SpyTorch weight list (.pt, needs --params), NIR (.nir) or snncc IR (.snnir)."),
     to: str = typer.Option("nir", "--to", help="Format to write (nir)."),

@@ -8,6 +8,7 @@ from typing import List, Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 
 hpo_app = typer.Typer(
     help=(
@@ -32,6 +33,7 @@ def _hpo_group(ctx: typer.Context) -> None:
 
 
 @hpo_app.command("run")
+@declares_paths(inputs=("data",), outputs=("workdir",), study_storage=("storage", "workdir"))
 def run_command(
     name: str = typer.Argument(..., help="Study name (step 2's study is NAME-grid). Rerun to resume."),
     data: Path = typer.Option(..., "--data", help="Directory of published Braille files (snncc data synth or Zenodo); an encoded .npz pins time_bin_size."),
@@ -84,6 +86,7 @@ def run_command(
 
 
 @hpo_app.command("report")
+@declares_paths(outputs=("plot",), study_storage=("storage", "workdir"))
 def report_command(
     study: str = typer.Argument(..., help="Study name."),
     storage: Optional[str] = typer.Option(None, "--storage", help="Optuna storage URL (default: the SQLite file in --dir)."),

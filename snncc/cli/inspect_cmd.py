@@ -8,10 +8,12 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import console, print_json
 
 
 @app.command("inspect")
+@declares_paths(inputs=("model", "params"))
 def inspect_command(
     model: Path = typer.Argument(..., help="Model file (.pt, .nir, .snnir)."),
     params: Optional[Path] = typer.Option(None, "--params", help="Parameters file for a SpyTorch weight list."),

@@ -7,8 +7,9 @@ The line has exactly three parts (README, "errors"): a refusal without a file na
 (``command_path``: ``snncc compile``), file and field are escaped onto one line
 (``snncc.errors.one_line``); libraries' warnings are silenced unless ``--debug``.
 
-Every existing path named on the command line, except the value of ``-o``/``--output``, is an
-input of the command: no output may be written over it (``snncc.atomic.protecting``).
+Each command declares which of its parameters are inputs and which outputs
+(``snncc.cli.paths.declares_paths``); while it runs, no output may be written over one of its inputs
+(``snncc.atomic.protecting``).
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ VERB_MODULES = (
     "compile_cmd", "inspect_cmd", "emulate_cmd", "check_cmd", "map_cmd", "report_cmd", "export_cmd",
     "run_cmd", "data_cmd", "train_cmd", "bench_cmd", "analyse_cmd", "hpo_cmd",
 )
-OUTPUT_OPTIONS = ("-o", "--output")
 INTERRUPTED = "snncc: interrupted; no partial output was left behind"
 
 
@@ -46,26 +46,6 @@ def build_app(args: list[str] | None = None):
     for name in (module,) if module in VERB_MODULES else VERB_MODULES:
         importlib.import_module(f"snncc.cli.{name}")
     return app
-
-
-def named_inputs(args: list[str]) -> list[str]:
-    """Existing paths on the command line other than the output's value (the command's inputs)."""
-    inputs, skip = [], False
-    for arg in args:
-        if skip:
-            skip = False
-            continue
-        if arg in OUTPUT_OPTIONS:
-            skip = True
-            continue
-        if arg.startswith("-"):
-            name, eq, value = arg.partition("=")
-            if not eq or name in OUTPUT_OPTIONS or name.startswith("-o"):
-                continue
-            arg = value
-        if arg and os.path.exists(arg):
-            inputs.append(arg)
-    return inputs
 
 
 def command_path(args: list[str]) -> str:
@@ -139,7 +119,6 @@ def _caused_by_interrupt(ex: BaseException) -> bool:
 def _dispatch(args: list[str], debug: bool) -> int:
     import typer
 
-    from snncc.atomic import protecting
     from snncc.errors import InternalError, SnnccError
 
     # typer >= 0.29 bundles its own click, older typer re-exports the real one; either way usage
@@ -147,7 +126,7 @@ def _dispatch(args: list[str], debug: bool) -> int:
     click_exception = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
     try:
         app = build_app(args)
-        with protecting(named_inputs(args)), warnings.catch_warnings():
+        with warnings.catch_warnings():
             if not debug:   # libraries' warnings never reach stderr (bad input they signal is refused)
                 warnings.simplefilter("ignore")
             result = app(args=args, prog_name="snncc", standalone_mode=False)

@@ -9,12 +9,14 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import print_record
 from snncc.cli.target_flags import with_target_flags
 
 
 @app.command("map")
 @with_target_flags("map")
+@declares_paths(inputs=("source",), outputs=("plot",))
 def map_command(
     source: Path = typer.Argument(..., help="Loihi bundle (HDF5) or a model file (.pt/.pth/.ckpt/.snnir/.nir), lowered with the Loihi target first."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw utilisation per core as a PNG (written atomically)."),

@@ -1,4 +1,8 @@
-"""Printing reports: rich text for people, JSON for tools (same record, two renderings)."""
+"""Printing reports: rich text for people, JSON for tools (same record, two renderings).
+
+On a terminal, text wraps and tables fit its width. Anywhere else (a pipe, a file) output is meant
+to be read by programs: no line is wrapped and no table cell is cut or wrapped (``WholeLines``).
+"""
 
 from __future__ import annotations
 
@@ -6,10 +10,31 @@ import contextlib
 import json
 from typing import Any
 
-from rich.console import Console
+from rich.console import Console, ConsoleDimensions
 
-console = Console(highlight=False)
-err_console = Console(stderr=True, highlight=False)
+UNBOUNDED_WIDTH = 1_000_000   # columns offered when not a terminal: wider than any line snncc prints
+
+
+class WholeLines(Console):
+    """A rich console that fits a terminal, and elsewhere offers ``UNBOUNDED_WIDTH`` columns: text is
+    never wrapped and tables are as wide as their cells (rich otherwise assumes 80 columns, or the
+    width of whichever standard stream is a terminal). Whether its stream is a terminal is asked at
+    each print, so a stream replaced later (a test's capture) is honoured."""
+
+    def _on_terminal(self) -> bool:
+        try:
+            return bool(self.file.isatty())
+        except (AttributeError, ValueError, OSError):
+            return False
+
+    @property
+    def size(self) -> ConsoleDimensions:
+        real = super().size
+        return real if self._on_terminal() else ConsoleDimensions(UNBOUNDED_WIDTH, real.height)
+
+
+console = WholeLines(highlight=False)
+err_console = WholeLines(stderr=True, highlight=False)
 
 
 def print_json(record: Any) -> None:

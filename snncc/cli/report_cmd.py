@@ -9,10 +9,12 @@ import typer
 from rich.progress import BarColumn, TaskProgressColumn, TextColumn, TimeRemainingColumn
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import print_record, progress_bar
 
 
 @app.command("report")
+@declares_paths(inputs=("bundle", "data", "input_file"))
 def report_command(
     bundle: Path = typer.Argument(..., help="Loihi bundle (HDF5) to estimate."),
     energy: bool = typer.Option(False, "--energy", help="Estimate energy and delay per sample (Davies 2018 Table 2)."),

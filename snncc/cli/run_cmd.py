@@ -12,10 +12,12 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import print_record
 
 
 @app.command("run")
+@declares_paths(inputs=("artefact", "input"), outputs=("output",))
 def run_command(
     artefact: Path = typer.Argument(..., help="Jetson artefact directory (snncc compile --target jetson -o DIR)."),
     input: Path = typer.Option(..., "--input", "-i", help=".npy of shape (T, C) or (B, T, C) (C = the data's channels, copies are applied inside), or a data-set .npz."),

@@ -9,6 +9,7 @@ from typing import List, Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.paths import declares_paths
 from snncc.cli.output import bar_columns, console, err_console, print_json, progress_bar
 
 
@@ -38,6 +39,7 @@ def _epoch_line(record) -> None:
 
 
 @app.command("train")
+@declares_paths(inputs=("data", "qat_from", "params"), outputs=("output",))
 def train_command(
     model: ModelKind = typer.Argument(..., help="rsnn | ffsnn | lstm (frames) | elstm (events) | fcn | resnet | encoder | tcnn | inception (frames, buffered)."),
     data: Path = typer.Option(..., "--data", help="Encoded data set (.npz from snncc data encode) or a directory of published-format pickles (encoded on the fly)."),

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from snncc.errors import one_line
+
 
 def _encoding_table(r: dict):
     from rich.table import Table
@@ -75,4 +77,4 @@ def render_analysis(r: dict, console) -> None:
         if r.get("calibration_note"):
             console.print(f"note: {r['calibration_note']}")
     for f in r["figures"]:
-        console.print(f"figure: {f}")
+        console.print(f"figure: {one_line(f)}", markup=False)

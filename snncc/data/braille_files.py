@@ -12,6 +12,7 @@ import json
 import re
 from pathlib import Path
 
+from snncc.atomic import record_input
 from snncc.data.formats import RAW_NAME, events_name
 from snncc.errors import SnnccError
 
@@ -30,6 +31,7 @@ def synthetic_info(path: Path) -> dict | None:
     marker = d / MARKER
     if not marker.is_file():
         return None
+    record_input(marker)
     try:
         info = json.loads(marker.read_text())
     except (OSError, json.JSONDecodeError):

@@ -16,6 +16,7 @@ import pickle
 from pathlib import Path
 from typing import Any
 
+from snncc.atomic import record_input
 from snncc.errors import SnnccError
 from snncc.limits import check_memory
 
@@ -84,4 +85,5 @@ def load_published_pickle(path: str | Path) -> Any:
     if not path.is_file():
         raise SnnccError("is not a regular file (a device or pipe); give a .pkl file", file=str(path), field="path")
     check_memory(2 * path.stat().st_size, "reading this pickle", file=str(path), field="size")
+    record_input(path)   # no output of this command may replace it (it may sit in an input directory)
     return restricted_loads(path.read_bytes(), str(path))

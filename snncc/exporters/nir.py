@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from snncc.atomic import write_bytes_atomic
-from snncc.errors import SnnccError
+from snncc.errors import SnnccError, one_line
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
 from snncc.ir.validate import validate
@@ -50,7 +50,7 @@ class ExportReport:
     not_honoured: list[str] = field(default_factory=list)
 
     def lines(self) -> list[str]:
-        out = [f"wrote {self.output} (NIR, {self.nodes} nodes, {self.delay_nodes} Delay nodes)", self.convention]
+        out = [f"wrote {one_line(self.output)} (NIR, {self.nodes} nodes, {self.delay_nodes} Delay nodes)", self.convention]
         if self.not_honoured:
             out.append("other frameworks will NOT honour:")
             out += [f"  - {item}" for item in self.not_honoured]

@@ -16,7 +16,33 @@ import torch
 from snncc.errors import SnnccError
 
 
+LOIHI_BUNDLE = ("is a Loihi bundle (.net, an HDF5 file), not a model file: `snncc emulate` runs it, `snncc map` and "
+                "`snncc report` read it")
+
+
+def _hdf5_kind(path: Path) -> str | None:
+    """What an HDF5 file given as a model is: a Loihi bundle (netx's /layer group), a NIR graph
+    under another suffix (/node), another HDF5 file; None if it is not HDF5. Reads only the root's names."""
+    import h5py
+
+    if not h5py.is_hdf5(str(path)):
+        return None
+    try:
+        with h5py.File(path, "r") as f:
+            names = set(f.keys())
+    except (OSError, ValueError):
+        return "a damaged HDF5 file, not a model file"
+    if "layer" in names:
+        return LOIHI_BUNDLE
+    if "node" in names:
+        return "is a NIR graph (an HDF5 file) under another suffix: name it .nir"
+    return "an HDF5 file that is neither a model file, a NIR graph nor a Loihi bundle"
+
+
 def _classify(path: Path) -> str:
+    hdf5 = _hdf5_kind(path)
+    if hdf5 is not None:
+        return hdf5
     head = path.read_bytes()[:4]
     if head.startswith(b"PK"):
         try:

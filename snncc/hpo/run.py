@@ -16,7 +16,7 @@ from snncc.errors import SnnccError
 from snncc.hpo.annealing import evenly_spaced_restarts
 from snncc.hpo.trial import TrialObjective
 from snncc.hpo.space import search_space, space_as_dict
-from snncc.hpo.storage import check_writable, default_url, open_storage, storage_errors
+from snncc.hpo.storage import check_url, check_writable, default_url, open_storage, storage_errors
 from snncc.hpo.study import StudyPlan, best_params, grid_plan, load_study, run_study, worker_name
 
 if TYPE_CHECKING:
@@ -81,6 +81,8 @@ def check_request(req: HpoRequest) -> None:
         raise SnnccError("must be >= 0", field="--grid-span")
     if req.threshold not in (1, 2, 5, 10):
         raise SnnccError("must be 1, 2, 5 or 10 (the paper's presets)", field="--threshold")
+    if req.heartbeat < 1:
+        raise SnnccError("must be >= 1 (seconds)", field="--heartbeat")
 
 
 def check_sizes(plan: StudyPlan, source) -> None:
@@ -125,15 +127,18 @@ def run_hpo(req: HpoRequest, view: StudyView | None = None) -> list:
     _anneal_plan(req, None).check()   # bad settings and ranges fail before anything is opened or loaded
     url = req.storage or default_url(req.workdir)
     where = "--storage" if req.storage else "--dir"
-    if req.storage is None:
-        Path(req.workdir).mkdir(parents=True, exist_ok=True)
     check_writable(url, where)
-    storage = open_storage(url, req.heartbeat)
+    if req.storage is not None:
+        check_url(url, req.heartbeat)
     source = load_source(req.data, req.threshold)
     step1 = _anneal_plan(req, source)
     step1.check()
     check_sizes(step1, source)
     check_split(step1, source)
+    # only now, with everything checked, is anything created: the --dir and its SQLite file
+    if req.storage is None:
+        Path(req.workdir).mkdir(parents=True, exist_ok=True)
+    storage = open_storage(url, req.heartbeat)
     worker = worker_name()
     summaries = []
 

@@ -103,26 +103,32 @@ def storage_errors(url: str, field: str = "--storage") -> Iterator[None]:
                          field=field) from None
 
 
-def open_storage(url: str, heartbeat: int = 30, grace: int | None = None):
-    """An Optuna RDBStorage for ``url`` with heartbeats and the retry of stale trials."""
-    import optuna
-    from optuna.exceptions import ExperimentalWarning
-
+def check_url(url: str, heartbeat: int = 30) -> str:
+    """Refuse, without opening or creating anything, a storage ``open_storage`` could not open: a
+    URL without a scheme, an SQLite file whose directory does not exist, a heartbeat below 1 s.
+    Returns the URL's scheme."""
     if heartbeat < 1:
         raise SnnccError("must be >= 1 (seconds)", field="--heartbeat")
-    grace = grace if grace is not None else 2 * heartbeat + 1
     scheme = url.split("://", 1)[0] if "://" in url else ""
     if not scheme or not re.fullmatch(r"[a-z0-9+]+", scheme):
         raise SnnccError("expected an Optuna storage URL such as sqlite:///path.db or "
                          "postgresql://user:pass@host/db", file=shown(url), field="--storage")
-    kwargs = {}
+    path = sqlite_file(url) if scheme == "sqlite" else None
+    if path is not None and not path.parent.is_dir():
+        raise SnnccError("the SQLite file's directory does not exist", file=shown(url), field="--storage")
+    return scheme
+
+
+def open_storage(url: str, heartbeat: int = 30, grace: int | None = None):
+    """An Optuna RDBStorage for ``url`` with heartbeats and the retry of stale trials (an SQLite
+    file is created when missing: call it only once everything else was checked)."""
+    import optuna
+    from optuna.exceptions import ExperimentalWarning
+
+    scheme = check_url(url, heartbeat)
+    grace = grace if grace is not None else 2 * heartbeat + 1
     if scheme == "sqlite":
-        path = sqlite_file(url)
-        if path is not None:
-            parent = path.parent
-            if not parent.is_dir():
-                raise SnnccError("the SQLite file's directory does not exist", file=shown(url), field="--storage")
-        kwargs = {"connect_args": {"timeout": SQLITE_TIMEOUT_S}}
+        kwargs: dict = {"connect_args": {"timeout": SQLITE_TIMEOUT_S}}
     else:
         kwargs = {"pool_pre_ping": True}
     for attempt in range(CREATE_RETRIES):

@@ -11,7 +11,7 @@ from typing import Callable
 import numpy as np
 import torch
 
-from snncc.errors import SnnccError
+from snncc.errors import SnnccError, one_line
 from snncc.frontends.checkpoint import is_checkpoint, module_from_checkpoint, save_checkpoint
 from snncc.frontends.params import PaperParams, load_params
 from snncc.frontends.torchfile import load_torch_file
@@ -94,7 +94,7 @@ class TrainResult:
                           f"{q['loss_before_points']:.2f} points), {100 * q['after']['quantized_test_accuracy']:.2f} % "
                           f"after (loss {q['loss_after_points']:.2f} points vs the original float model)")
             console.print(f"note: {q['note']}")
-        console.print(f"wrote {self.output}")
+        console.print(f"wrote {one_line(self.output)}", markup=False)
 
 
 def hyper_parameters(req: TrainRequest) -> PaperParams:

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
 
+from snncc.errors import one_line
+
 if TYPE_CHECKING:
     from rich.console import Console
 
@@ -38,7 +40,7 @@ class TTCResult:
             console.print(f"{r.model}: {r.method}; {'; '.join(r.notes)}; data {r.data}", markup=False, soft_wrap=True)
         for path in (self.output, self.figure):
             if path is not None:
-                console.print(f"wrote {path}")
+                console.print(f"wrote {one_line(path)}", markup=False)
 
 
 def analyse_ttc(models: Sequence[str | os.PathLike], *, data: Sequence[str | os.PathLike], split: str = "test",

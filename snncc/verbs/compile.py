@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from snncc.errors import SnnccError
+from snncc.errors import SnnccError, one_line
 from snncc.progress import Progress
 
 if TYPE_CHECKING:
@@ -45,7 +45,7 @@ class CompileRecord:
             self.artefact.render_text(console)
         else:
             console.print(self.artefact.summary())
-        console.print(f"wrote {self.output}")
+        console.print(f"wrote {one_line(self.output)}", markup=False)
 
 
 def resolve_target(output: str | Path, target: str | None) -> tuple[str, str]:

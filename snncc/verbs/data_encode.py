@@ -6,6 +6,7 @@ import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from snncc.errors import one_line
 from snncc.verbs import VerbProgress
 
 if TYPE_CHECKING:
@@ -32,7 +33,7 @@ class EncodeResult:
     def render_text(self, console: Console) -> None:
         inputs, meta = self.encoded.inputs, self.encoded.meta
         console.print(f"{inputs.shape[0]} samples x {inputs.shape[1]} bins x 24 channels (th {meta['threshold']:g}, "
-                      f"bin {self.bin_ms:g} ms) -> {', '.join(self.written)}")
+                      f"bin {self.bin_ms:g} ms) -> {', '.join(map(one_line, self.written))}", markup=False)
         before, after = meta["events_before_binning"], meta["events_after_binning"]
         lost = 100.0 * (1 - after / before) if before else 0.0
         console.print(f"events: {before} before binning, {after} after ({lost:.1f} % merged)"

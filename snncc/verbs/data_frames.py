@@ -6,6 +6,8 @@ import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from snncc.errors import one_line
+
 if TYPE_CHECKING:
     from rich.console import Console
 
@@ -28,7 +30,8 @@ class FramesResult:
 
     def render_text(self, console: Console) -> None:
         n, t = self.encoded.inputs.shape[:2]
-        console.print(f"{n} samples x {t} frames x 12 taxels -> {', '.join(self.written)}")
+        console.print(f"{n} samples x {t} frames x 12 taxels -> {', '.join(map(one_line, self.written))}",
+                      markup=False)
 
 
 def data_frames(src: str | os.PathLike, *, out: str | os.PathLike, split_test: float | None = None,

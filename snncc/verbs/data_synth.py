@@ -6,6 +6,7 @@ import os
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Iterable
 
+from snncc.errors import one_line
 from snncc.verbs import VerbProgress
 
 if TYPE_CHECKING:
@@ -33,7 +34,7 @@ class SynthResult:
 
     def render_text(self, console: Console) -> None:
         console.print(f"wrote {self.samples} synthetic samples ({self.samples // 27} x 27 letters, seed {self.seed}) "
-                      f"to {self.out}")
+                      f"to {one_line(self.out)}", markup=False)
         console.print("mean events per taxel and sample: "
                       + ", ".join(f"th {k}: {v:.1f}" for k, v in self.mean_events_per_taxel.items()))
 

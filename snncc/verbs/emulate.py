@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from snncc.errors import SnnccError
+from snncc.errors import SnnccError, one_line
 from snncc.verbs import VerbProgress, counting
 
 if TYPE_CHECKING:
@@ -53,7 +53,7 @@ class EmulateRecord:
         console.print(f"emulated {e.samples} sample(s) x {e.steps} steps ({'stream' if self.stream else 'batch'} "
                       f"mode); overflow {e.overflow}; predictions "
                       f"{prediction[:20].tolist()}{' ...' if e.samples > 20 else ''}")
-        console.print(f"wrote {self.output}")
+        console.print(f"wrote {one_line(self.output)}", markup=False)
 
 
 def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path, target: str = "loihi",

@@ -6,6 +6,8 @@ import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
+from snncc.errors import one_line
+
 if TYPE_CHECKING:
     from rich.console import Console
 
@@ -39,7 +41,7 @@ class HpoRunResult:
                           f"{b['failed']} failed of {b['n_trials']}; {len(s.trials_run_here)} run by this worker")
             for note in s.notes:
                 console.print(f"note: {note}")
-        console.print(f"report: {self.report_command}")
+        console.print(f"report: {one_line(self.report_command)}", markup=False)
 
 
 def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str = "both", trials: int = 600,
@@ -104,7 +106,7 @@ class HpoReportResult:
     def render_text(self, console: Console) -> None:
         self.report.render_text(console)
         if self.figure:
-            console.print(f"wrote {self.figure}")
+            console.print(f"wrote {one_line(self.figure)}", markup=False)
 
 
 def hpo_report(study: str, *, storage: str | None = None, workdir: str | os.PathLike = "hpo",
@@ -115,12 +117,15 @@ def hpo_report(study: str, *, storage: str | None = None, workdir: str | os.Path
     from pathlib import Path
 
     from snncc.atomic import protecting
+    from snncc.errors import SnnccError
     from snncc.hpo.report import study_report
     from snncc.hpo.storage import open_storage, redact, sqlite_file, study_storage_url
 
     url = study_storage_url(storage, os.fspath(workdir), must_exist=True)
-    report = study_report(open_storage(url), study, redact(url))
     database = sqlite_file(url)
+    if database is not None and not database.is_file():   # reading must not create an empty database
+        raise SnnccError("no study storage here (no such SQLite file)", file=str(database), field="--storage")
+    report = study_report(open_storage(url), study, redact(url))
     with protecting([database] if database is not None else []):   # the study's storage is an input
         written = None if no_plot else report.plot(Path(output) if output else Path(workdir) / f"{study}-front.png")
     return HpoReportResult(report, str(written) if written else None)

@@ -6,6 +6,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from snncc.errors import one_line
+
 if TYPE_CHECKING:
     from rich.console import Console
 
@@ -24,7 +26,7 @@ class MapRecord:
     def render_text(self, console: Console) -> None:
         self.core_map.render_text(console)
         if self.plot is not None:
-            console.print(f"wrote {self.plot}")
+            console.print(f"wrote {one_line(self.plot)}", markup=False)
 
 
 def map_cores(source: str | Path, *, target: str = "loihi", plot: str | Path | None = None,

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
+from snncc.errors import one_line
+
 if TYPE_CHECKING:
     from rich.console import Console
 
@@ -32,7 +34,7 @@ class RunRecord:
         console.print(f"{r['variant']} on {r['backend']}: {r['samples']} sample(s) x {r['time_steps']} steps")
         console.print("predictions: " + " ".join(str(c) for c in classes[:20]) + (" ..." if len(classes) > 20 else ""))
         if self.output is not None:
-            console.print(f"wrote {self.output}")
+            console.print(f"wrote {one_line(self.output)}", markup=False)
 
 
 def run_artefact(artefact: str | Path, *, input: str | Path, target: str = "jetson", stream: bool = False,

@@ -127,6 +127,17 @@ def write_artefact(path, files: dict[str, bytes]) -> None:
                 os.chmod(tmp / name, 0o755)
 
 
+def own_names(manifest: dict) -> set[str]:
+    """The names of an artefact's own files: the manifest, the files it lists (variants, recipe,
+    runner) and the ``.plan`` engines ``build_engine.sh`` writes beside the variants."""
+    ours = set(WRITTEN_FILES)
+    for variant in manifest.get("variants") or []:
+        name = variant.get("file") if isinstance(variant, dict) else None
+        if isinstance(name, str):
+            ours |= {name, name.replace(".onnx", ".plan")}
+    return ours
+
+
 def replace_refusal(directory) -> str | None:
     """None if ``directory`` is an earlier snncc Jetson artefact holding nothing else; else why not.
 
@@ -143,11 +154,7 @@ def replace_refusal(directory) -> str | None:
         return f"it has no readable {MANIFEST} of an snncc Jetson artefact"
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
         return f"its {MANIFEST} is not an snncc Jetson manifest"
-    ours = set(WRITTEN_FILES)
-    for variant in manifest.get("variants") or []:
-        name = variant.get("file") if isinstance(variant, dict) else None
-        if isinstance(name, str):
-            ours |= {name, name.replace(".onnx", ".plan")}
+    ours = own_names(manifest)
     entries = list(directory.iterdir())
     foreign = sorted(p.name for p in entries if p.name not in ours)
     if foreign:

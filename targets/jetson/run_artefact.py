@@ -28,9 +28,19 @@ def open_runner(artefact: Path, backend: str, variant: str | None = None):
         runner = ArtefactRunner(str(artefact), backend)
         if variant is not None:
             runner.session(variant)
-        return runner
     except RunnerError as ex:
         raise SnnccError(ex.rule, file=str(artefact), field=ex.field) from None
+    _record_own_files(Path(artefact), runner.manifest)
+    return runner
+
+
+def _record_own_files(artefact: Path, manifest: dict) -> None:
+    """The artefact's own files are inputs of the running command: no output may replace them."""
+    from snncc.atomic import record_input
+    from snncc.targets.jetson.manifest import own_names
+
+    for name in own_names(manifest):
+        record_input(artefact / name)
 
 
 @dataclass

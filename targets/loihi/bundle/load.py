@@ -19,7 +19,7 @@ def load_network(source: Path, timing: str | None = None, scale: str | None = No
         from snncc.artefact_paths import LOIHI_BUNDLE, wrong_path
 
         raise wrong_path(source, f"{LOIHI_BUNDLE} or a model file")
-    if h5py.is_hdf5(str(source)):
+    if h5py.is_hdf5(str(source)) and source.suffix.lower() != ".nir":   # a NIR graph is HDF5 too
         from snncc.targets.loihi.bundle.hdf5 import read_bundle
 
         for flag, value in (("--timing", timing), ("--scale", scale)):
