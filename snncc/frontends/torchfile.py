@@ -16,10 +16,6 @@ import torch
 from snncc.errors import SnnccError
 
 
-LOIHI_BUNDLE = ("is a Loihi bundle (.net, an HDF5 file), not a model file: `snncc emulate` runs it, `snncc map` and "
-                "`snncc report` read it")
-
-
 def _hdf5_kind(path: Path) -> str | None:
     """What an HDF5 file given as a model is: a Loihi bundle (netx's /layer group), a NIR graph
     under another suffix (/node), another HDF5 file; None if it is not HDF5. Reads only the root's names."""
@@ -32,8 +28,10 @@ def _hdf5_kind(path: Path) -> str | None:
             names = set(f.keys())
     except (OSError, ValueError):
         return "a damaged HDF5 file, not a model file"
-    if "layer" in names:
-        return LOIHI_BUNDLE
+    if "layer" in names:   # netx's layout: a Loihi bundle
+        from snncc.artefact_paths import LOIHI_BUNDLE, READERS
+
+        return f"is {LOIHI_BUNDLE}, not a model file: {READERS[LOIHI_BUNDLE]}"
     if "node" in names:
         return "is a NIR graph (an HDF5 file) under another suffix: name it .nir"
     return "an HDF5 file that is neither a model file, a NIR graph nor a Loihi bundle"
