@@ -33,8 +33,9 @@ separate keyword argument, never an option.
 **Capabilities**, each a method (``capability(target, name)`` returns it or refuses in one line):
 
     lower(model, options, *, progress)                       -> Artefact        snncc compile
-    check(graph, inputs, labels, options, *, data, synthetic, progress) -> Record snncc check --data
-    agree(graph, inputs, options, agreement, *, data)        -> Record          snncc check (no labels)
+    identify(path)                                           -> ArtefactIdentity | None  is it ours?
+    check(graph, inputs, labels, options, *, artefact, data, synthetic, progress) -> Record  snncc check --data
+    agree(graph, inputs, options, agreement, *, artefact, data, progress) -> Record  snncc check (no labels)
     emulate(bundle, inputs, *, record, stream, gap, source, progress) -> Emulation  snncc emulate
     run(artefact, inputs, *, source, stream, backend)        -> RunResult       snncc run
     map(source, options)                                     -> CoreMap         snncc map
@@ -43,7 +44,10 @@ separate keyword argument, never an option.
     hardware()                                               -> HardwareCosts   snncc hpo (per trial)
     arithmetic(options)                                      -> Arithmetic      snncc train --qat-from
 
-``progress`` is ``progress(n)`` (n more samples done) for the sample loops of check, emulate and
+``check`` and ``agree`` measure the written artefact at ``artefact`` (run again, never echoed from what
+compile recorded; None: the artefact compile would write, in a temporary directory); ``identify``
+recognises the target's own artefacts (``snncc.artefacts``: ``check --artefact``, compile's hash).
+``progress`` is ``progress(n)`` (n more samples done) for the sample loops of check, agree, emulate and
 estimate; ``progress(done, total, phase)`` (``snncc.progress.Progress``) for lower and bench, whose
 work has phases (lower: measuring scale candidates, validating; bench: warm-up, timing).
 """
@@ -65,6 +69,7 @@ if TYPE_CHECKING:
     import torch
     from rich.console import Console
 
+    from snncc.artefacts import ArtefactIdentity
     from snncc.frontends.buffered import BufferedModel
     from snncc.ir.graph import Graph
 
@@ -224,8 +229,10 @@ class TargetOptions(OptionRecord):
 class AgreementOptions(OptionRecord):
     """The label-free agreement's settings (capability ``agree``): seeded random inputs and the ceiling."""
 
-    samples: int = option("Without data: seeded random input samples of the agreement (256 steps each).",
-                          default=40, minimum=1, rule="must be a whole number >= 1", capabilities=("agree",))
+    samples: int | None = option(
+        "Without data: seeded random input samples of the agreement, as long as the artefact's own sample "
+        "(default 1,000: a 95 % interval of about +-0.03; 200 for a model of more than 200,000 neuron-steps per "
+        "sample).", minimum=1, rule="must be a whole number >= 1", capabilities=("agree",))
     density: float = option("Without data: spike density of the seeded random inputs.", default=0.08, above=0,
                             maximum=1, rule="spike density must be in (0, 1]", capabilities=("agree",))
     noise: float = option("Multiplicative weight noise for the float graph's own sensitivity (the ceiling).",
@@ -378,18 +385,29 @@ class Lower(Protocol):
         express it. ``progress(done, total, phase)`` as the work goes."""
 
 
+class Identify(Protocol):
+    def __call__(self, path: Path) -> ArtefactIdentity | None:
+        """``snncc.artefacts.ArtefactIdentity`` when ``path`` is this target's written artefact, else None
+        (cheap: reads what the artefact records, runs nothing)."""
+
+
 class Check(Protocol):
     def __call__(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
-                 data: str | None = None, synthetic: bool = False, progress: Progress | None = None) -> Record:
-        """What deploying costs on a labelled data set (N, T, C) read from ``data`` (errors name it;
-        ``synthetic``: say so); ``progress(n)`` after n samples."""
+                 artefact: Path | None = None, data: str | None = None, synthetic: bool = False,
+                 progress: Progress | None = None) -> Record:
+        """What the written ``artefact`` (run again; None: the one compile would write) costs against
+        ``graph`` on a labelled data set (N, T, C) read from ``data`` (errors name it; ``synthetic``: say
+        so); ``progress(n)`` after n samples."""
 
 
 class Agree(Protocol):
     def __call__(self, graph: Graph, inputs: np.ndarray | None, options: Given = None,
-                 agreement: AgreementOptions | None = None, *, data: str | None = None) -> Record:
-        """Agreement with the float graph without labels (None inputs: ``agreement.samples`` seeded random
-        spike trains of ``agreement.density``; the float graph's own ceiling under ``agreement.noise``)."""
+                 agreement: AgreementOptions | None = None, *, artefact: Path | None = None,
+                 data: str | None = None, progress: Progress | None = None) -> Record:
+        """The written ``artefact``'s agreement (None: the one compile would write) with the float graph
+        without labels (None inputs: ``agreement.samples`` seeded random spike trains of
+        ``agreement.density``, default ``snncc.measure.agreement.default_samples``; the float graph's own
+        ceiling under ``agreement.noise``); ``progress(n)`` after n samples."""
 
 
 class Emulate(Protocol):
@@ -516,7 +534,7 @@ class TrainArithmetic(Protocol):
 
 
 CAPABILITIES: dict[str, type] = {
-    "lower": Lower, "check": Check, "agree": Agree, "emulate": Emulate, "run": Run, "map": Map,
+    "lower": Lower, "identify": Identify, "check": Check, "agree": Agree, "emulate": Emulate, "run": Run, "map": Map,
     "estimate": Estimate, "bench": Bench, "hardware": Hardware, "arithmetic": TrainArithmetic,
 }
 

@@ -1,6 +1,7 @@
 """``snncc emulate``: run a Loihi bundle in the bit-exact emulator (``snncc.api.emulate``).
 
-X.npy: 0/1 spikes (bool, uint8 or float) shaped (T, C) or (B, T, C), C = the bundle's input width.
+X.npy: 0/1 spikes (bool, uint8 or float) shaped (T, C) or (B, T, C), C = the bundle's input width, or in
+the model's own shape (the data's channels, tiled for the bundle's input copies; CNN frames (B, T, C, H, W)).
 OUT.npz: output_spikes (B, T, n_out) uint8, counts (B, n_out), prediction (B,), overflow counts;
 with --record all also layer{i}_spikes, layer{i}_voltage, layer{i}_current for every layer i
 (the model's units only: always-on bias sources are left out).
@@ -25,7 +26,7 @@ from snncc.cli.output import err_console, print_record, progress_bar
 @declares_paths(inputs=("bundle", "input"), outputs=("output",))
 def emulate_command(
     bundle: Path = typer.Argument(..., help="Loihi bundle (.net/.h5) written by snncc, lava-dl netx or SLAYER v1."),
-    input: Path = typer.Option(..., "--input", "-i", help="Input spikes .npy: (T, C) or (B, T, C), values 0/1."),
+    input: Path = typer.Option(..., "--input", "-i", help="Input spikes .npy: (T, C) or (B, T, C), values 0/1; or in the model's shape: the data's channels (input copies tiled by snncc), CNN frames (B, T, C, H, W)."),
     output: Path = typer.Option(..., "--output", "-o", help="Result .npz (written atomically)."),
     record: str = typer.Option("outputs", "--record", help="'outputs' or 'all' (every layer's spikes, voltage, current)."),
     stream: bool = typer.Option(False, "--stream", help="The paper's protocol: one continuous run, --gap blank steps between samples."),

@@ -1,7 +1,8 @@
 """The data ``snncc check`` measures on: a Braille data set file or a plain .npz with inputs and labels.
 
-Inputs with the model's ``base_inputs`` channels are tiled ``input_copies`` times (the authors'
-x.tile((k,))), as the model was trained on them.
+Inputs may come in the model's own shape: its ``base_inputs`` channels are tiled ``input_copies``
+times (the authors' x.tile((k,))), as the model was trained on them, and a CNN's frames (N, T, C, H,
+W) are flattened; ``meta["input_layout"]`` says what was done.
 """
 
 from __future__ import annotations
@@ -31,9 +32,10 @@ def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = 
         except Exception as ex:  # not an npz / no 'inputs'
             raise SnnccError(f"agreement needs an .npz with an array 'inputs' (N, T, C) ({type(ex).__name__})",
                              file=str(path), field="--data") from None
+        inputs, meta["input_layout"] = model_layout(inputs[:limit] if limit is not None else inputs, graph)
         if inputs.ndim != 3:
             raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
-        return tiled(inputs[:limit] if limit is not None else inputs, graph), None, meta
+        return inputs, None, meta
     try:
         inputs, labels, meta = load_dataset(path)
     except SnnccError:   # not a Braille data set: a plain .npz with inputs and labels
@@ -50,6 +52,7 @@ def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = 
         except Exception as ex:  # not an npz / corrupt
             raise SnnccError(f"not a readable .npz data set ({type(ex).__name__})", file=str(path), field="--data") from None
     inputs, labels = np.asarray(inputs), np.asarray(labels)
+    inputs, layout = model_layout(inputs, graph)
     if inputs.ndim != 3:
         raise SnnccError(f"inputs must be (N, T, C), got shape {inputs.shape}", file=str(path), field="inputs")
     from snncc.inputs import check_dataset
@@ -57,13 +60,15 @@ def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = 
     check_dataset(inputs, labels, graph, source=str(path))
     if limit is not None:
         inputs, labels = inputs[:limit], labels[:limit]
-    return tiled(inputs, graph), labels, meta
+    meta = dict(meta) if isinstance(meta, dict) else {}
+    meta["input_layout"] = layout
+    return inputs, labels, meta
 
 
-def tiled(inputs: np.ndarray, graph) -> np.ndarray:
-    """Inputs with ``base_inputs`` channels tiled ``input_copies`` times (the authors' x.tile((k,)))."""
-    k = int(graph.metadata.get("input_copies", 1) or 1)
-    base = graph.metadata.get("base_inputs")
-    if k > 1 and base is not None and inputs.shape[2] == int(base):
-        inputs = np.tile(inputs, (1, 1, k))
-    return inputs
+def model_layout(inputs: np.ndarray, graph) -> tuple[np.ndarray, str | None]:
+    """Inputs in the model's own shape made flat for ``graph`` (``snncc.input_layout``): CNN frames
+    (N, T, C, H, W) flattened, ``base_inputs`` channels tiled ``input_copies`` times (the authors'
+    x.tile((k,))); and the line saying what was done (None: nothing)."""
+    from snncc.input_layout import graph_layout, to_artefact_layout
+
+    return to_artefact_layout(np.asarray(inputs), graph_layout(graph))

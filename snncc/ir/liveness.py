@@ -13,6 +13,12 @@ readout) no spiking population does. Compile then warns in one line naming the f
 population, how close it came and the likely cause (``silence_warning``): a model silent in
 float compiles to an artefact that is "exact" and says nothing.
 
+Spike activity of populations on a target as in float (``SpikeActivity``, from spike counts, chunk by
+chunk with ``Tally``): rate, silent neurons (never spike on any sample), saturated neurons (spike at
+every step they can on every sample: ceil(T / r) spikes, r the refractory period in steps). A
+population is *silent* when no neuron spikes, *saturated* when every neuron is saturated; ``flagged``
+names either in one line with its figures (compile and check report them, float and on the target).
+
 The calibration inputs are the Loihi compiler's (its scale rule is measured on them):
 ``CALIBRATION_BATCH`` seeded random spike trains of density ``CALIBRATION_RATE``, seed
 ``CALIBRATION_SEED``. They are SYNTHETIC.
@@ -20,8 +26,9 @@ The calibration inputs are the Loihi compiler's (its scale rule is measured on t
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
@@ -144,3 +151,115 @@ def calibration_warning(graph: Graph, steps: int) -> str | None:
         return None
     x = calibration_spikes(graph.node(inputs[0]).width, steps)
     return silence_warning(graph, population_activity(graph, x), calibration_text(steps), steps)
+
+
+@dataclass
+class SpikeActivity:
+    neurons: int
+    samples: int
+    steps: int
+    spikes: int
+    rate: float                  # spikes per neuron and step
+    silent_neurons: int
+    saturated_neurons: int
+
+    @property
+    def status(self) -> str:
+        if self.spikes == 0:
+            return "silent"
+        if self.neurons and self.saturated_neurons == self.neurons:
+            return "saturated"
+        return "active"
+
+    def as_dict(self) -> dict[str, Any]:
+        return {**asdict(self), "status": self.status}
+
+    def text(self) -> str:
+        return (f"{self.spikes} spikes ({self.rate:.4f} per neuron and step), {self.silent_neurons}/{self.neurons} "
+                f"neurons silent, {self.saturated_neurons}/{self.neurons} at every step they can")
+
+
+def activity_from_counts(counts: np.ndarray, steps: int, refractory: int = 1) -> SpikeActivity:
+    """Activity of one population from its per-sample spike counts (B, n) over ``steps`` steps."""
+    counts = np.asarray(counts, np.int64)
+    b, n = counts.shape
+    t = int(steps)
+    most = math.ceil(t / max(int(refractory), 1)) if t else 0
+    saturated = int(np.sum(np.all(counts >= most, axis=0))) if b and t else 0
+    total = int(counts.sum())
+    return SpikeActivity(neurons=int(n), samples=int(b), steps=t, spikes=total,
+                              rate=total / (b * t * n) if b * t * n else 0.0,
+                              silent_neurons=int(np.sum(counts.sum(axis=0) == 0)), saturated_neurons=saturated)
+
+
+def spike_activity(spikes: np.ndarray, refractory: int = 1) -> SpikeActivity:
+    """Activity of one population from its spikes (B, T, n) 0/1."""
+    s = np.asarray(spikes)
+    if s.ndim == 2:
+        s = s[None]
+    return activity_from_counts(s.sum(axis=1, dtype=np.int64), s.shape[1], refractory)
+
+
+def activity(spikes: Mapping[str, np.ndarray], refractory: Mapping[str, int] | None = None
+             ) -> dict[str, SpikeActivity]:
+    """``spike_activity`` of every population in ``spikes`` (name -> (B, T, n))."""
+    refractory = refractory or {}
+    return {name: spike_activity(s, int(refractory.get(name, 1))) for name, s in spikes.items()}
+
+
+class Tally:
+    """Per-sample spike counts of several populations, gathered chunk by chunk (``add``), read as
+    activity (``activity``): long runs never hold every spike in memory."""
+
+    def __init__(self) -> None:
+        self.counts: dict[str, list[np.ndarray]] = {}
+        self.steps = 0
+
+    def add(self, spikes: Mapping[str, np.ndarray]) -> None:
+        for name, s in spikes.items():
+            self.counts.setdefault(name, []).append(np.asarray(s).sum(axis=1, dtype=np.int64))
+            self.steps = int(np.shape(s)[1])
+
+    def of(self, name: str) -> np.ndarray:
+        """(B, n) counts of ``name`` over every chunk added."""
+        return np.concatenate(self.counts[name])
+
+    def activity(self, refractory: Mapping[str, int] | None = None) -> dict[str, SpikeActivity]:
+        refractory = refractory or {}
+        return {name: activity_from_counts(self.of(name), self.steps, int(refractory.get(name, 1)))
+                for name in self.counts}
+
+
+def graph_refractory(graph) -> dict[str, int]:
+    """Each LIF population's refractory period in steps (the IR's ``refractory``, at least 1)."""
+    from snncc.ir.nodes import LIF
+
+    return {name: max(int(graph.node(name).refractory), 1) for name in graph.of_kind(LIF)}
+
+
+def flagged(figures: Mapping[str, SpikeActivity], where: str) -> list[str]:
+    """One line per silent or saturated population: ``where`` (e.g. "in float") and its figures."""
+    lines = []
+    for name, a in figures.items():
+        if a.status == "silent":
+            lines.append(f"population '{name}' never spikes {where} ({a.samples} samples x {a.steps} steps, "
+                         f"{a.neurons} neurons)")
+        elif a.status == "saturated":
+            lines.append(f"population '{name}' spikes at every step it can {where} ({a.samples} samples x {a.steps} "
+                         f"steps, {a.neurons} neurons, rate {a.rate:.3f})")
+    return lines
+
+
+def as_dicts(figures: Mapping[str, SpikeActivity]) -> dict[str, dict[str, Any]]:
+    return {name: a.as_dict() for name, a in figures.items()}
+
+
+def float_silence_warning(graph: Graph, inputs: np.ndarray, figures: Mapping[str, SpikeActivity],
+                          described: str = "these inputs") -> str | None:
+    """``silence_warning`` when ``figures`` (float, on ``inputs``) show the output population silent; the
+    float run it needs (voltages) is made only then."""
+    order = [n for n in spiking_populations(graph) if n in figures]
+    if not order or figures[order[-1]].status != "silent":
+        return None
+    x = np.asarray(inputs)
+    return silence_warning(graph, population_activity(graph, x), described, int(x.shape[1]))

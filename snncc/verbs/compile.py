@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from rich.console import Console
 
     from snncc.ir.graph import Graph
-    from snncc.targets.base import Artefact
+    from snncc.targets.base import Artefact, Target
 
 
 @dataclass
@@ -33,10 +33,13 @@ class CompileRecord:
     graph: Graph | None = None
     target_rule: str = "--target"      # how the target was chosen: "--target" or "the suffix '.net' of -o"
     warnings: list[str] = field(default_factory=list)   # e.g. a model silent in float (snncc.ir.liveness)
+    sha256: str | None = None          # of the written artefact (snncc.artefacts.artefact_sha256)
+    sha256_rule: str | None = None
 
     def as_dict(self) -> dict[str, object]:
+        hashed = {"sha256": self.sha256, "sha256_rule": self.sha256_rule} if self.sha256 else {}
         return {"target": self.target, "target_rule": self.target_rule, "output": self.output,
-                "warnings": list(self.warnings), **self.artefact.summary()}
+                "warnings": list(self.warnings), **hashed, **self.artefact.summary()}
 
     def render_text(self, console: Console) -> None:
         from snncc.targets.base import RendersText
@@ -45,7 +48,8 @@ class CompileRecord:
             self.artefact.render_text(console)
         else:
             console.print(self.artefact.summary())
-        console.print(f"wrote {one_line(self.output)}", markup=False)
+        console.print(f"wrote {one_line(self.output)}" + (f" (SHA-256 {self.sha256})" if self.sha256 else ""),
+                      markup=False)
 
 
 def resolve_target(output: str | Path, target: str | None) -> tuple[str, str]:
@@ -107,4 +111,17 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
         warnings += [silent] if silent else []
     artefact.write(output)
     return CompileRecord(name, str(output), artefact, None if isinstance(loaded, BufferedModel) else loaded,
-                         target_rule, warnings)
+                         target_rule, warnings, *_written_hash(tgt, output))
+
+
+def _written_hash(target: Target, output: str | Path) -> tuple[str | None, str | None]:
+    """(SHA-256, rule) of the artefact just written, as ``snncc check`` states it (a directory: over the
+    files the target's ``identify`` lists); (None, None) for output that is no file or directory (-o /dev/null)."""
+    from snncc.artefacts import artefact_sha256, identify_own
+
+    path = Path(output)
+    if not (path.is_file() or path.is_dir()):
+        return None, None
+    identity = identify_own(target, path)
+    digest, rule = artefact_sha256(path, identity.files if identity is not None else None)
+    return digest, rule

@@ -1,6 +1,8 @@
 """``snncc emulate``: run a Loihi bundle in the target's bit-exact emulator and save what it produced.
 
-X.npy: 0/1 spikes (bool, uint8 or float) shaped (T, C) or (B, T, C), C = the bundle's input width.
+X.npy: 0/1 spikes (bool, uint8 or float) shaped (T, C) or (B, T, C), C = the bundle's input width, or in
+the model's own shape: the data's channels when the bundle takes input copies (tiled by snncc), frames
+(B, T, C, H, W) of a convolutional model (flattened); the record says what was done.
 OUT.npz: output_spikes (B, T, n_out) uint8, counts (B, n_out), prediction (B,), overflow counts;
 with record="all" also layer{i}_spikes, layer{i}_voltage, layer{i}_current for every layer i
 (the model's units only: always-on bias sources are left out).
@@ -34,7 +36,12 @@ class EmulateRecord:
         e = self.emulation
         return {"bundle": self.bundle, "output": self.output, "samples": e.samples, "steps": e.steps,
                 "mode": "stream" if self.stream else "batch", "prediction": e.prediction,
-                "overflow": e.overflow, "padded_steps": e.padded_steps}
+                "overflow": e.overflow, "padded_steps": e.padded_steps, "input_layout": self.input_layout()}
+
+    def input_layout(self) -> str | None:
+        """What the emulation did to take the inputs in the model's own shape (``snncc.input_layout``)."""
+        note = getattr(self.emulation, "input_note", None)
+        return note if isinstance(note, str) else None
 
     def warnings(self) -> list[str]:
         """What the user should know but is not the result (the CLI prints it on stderr)."""
@@ -46,6 +53,8 @@ class EmulateRecord:
 
     def render_text(self, console: Console) -> None:
         e = self.emulation
+        if self.input_layout():
+            console.print(f"input: {self.input_layout()}", markup=False)
         if e.padded_steps:
             console.print(f"appended {e.padded_steps} blank step(s) to each sample: on Loihi the outputs appear "
                           f"{e.padded_steps} step(s) later than in the model (see the bundle's timing record)")
@@ -69,7 +78,7 @@ def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path,
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
     emulate = capability(get_target(target), "emulate")
     x = load_array(input, npz_inputs=False)
-    total = int(x.shape[0]) if x.ndim == 3 else 1
+    total = int(x.shape[0]) if x.ndim in (3, 5) else 1   # (B, T, C) or (B, T, C, H, W) frames
     emulation = emulate(Path(bundle), x, record=record, stream=stream, gap=gap, source=str(input),
                         progress=counting(progress, total, "emulating"))
     write_npz_atomic(output, dict(emulation.arrays()))      # zlib level 1: numpy's level 6 took longer than the emulation

@@ -31,6 +31,8 @@ class RunRecord:
         r = self.result.as_dict()
         classes = r["classes"]
         assert isinstance(classes, list)
+        if r.get("input_layout"):
+            console.print(f"input: {r['input_layout']}", markup=False)
         console.print(f"{r['variant']} on {r['backend']}: {r['samples']} sample(s) x {r['time_steps']} steps")
         console.print("predictions: " + " ".join(str(c) for c in classes[:20]) + (" ..." if len(classes) > 20 else ""))
         if self.output is not None:

@@ -4,7 +4,9 @@ This module imports nothing heavy: listing or choosing the target loads neither 
 
     lower  -> JetsonArtefact     (lower.py: ONNX sequence + step models validated in ONNX Runtime;
                                   buffered.py for a buffered classifier, which has no IR graph)
-    check  -> JetsonCheckRecord  (lower.py, check.py: the IR reference vs the artefact on a data set)
+    identify -> ArtefactIdentity (written.py: is a directory a Jetson artefact, from which model)
+    check  -> JetsonCheckRecord  (lower.py, check.py: the written artefact vs the IR reference on a data set)
+    agree  -> JetsonCheckRecord  (lower.py, check.py: the same without labels, random or given inputs)
     run    -> RunResult          (run_artefact.py: an artefact on inputs, TensorRT or ONNX Runtime)
     bench  -> BenchRecord / LatencyComparison (bench_artefacts.py: the paper's latency and power protocol)
 """
@@ -16,11 +18,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from snncc.progress import Progress as PhaseProgress
-from snncc.targets.base import Artefact, Given, Progress, Record, RunResult, TargetOptions, option, target_options
+from snncc.targets.base import (
+    AgreementOptions, Artefact, Given, Progress, Record, RunResult, TargetOptions, capability_options, option,
+    target_options,
+)
 
 if TYPE_CHECKING:
     import numpy as np
 
+    from snncc.artefacts import ArtefactIdentity
     from snncc.ir.graph import Graph
     from snncc.targets.base import Model
 
@@ -38,8 +44,9 @@ class JetsonOptions(TargetOptions):
 
 
 class JetsonTarget:
-    """Capabilities: lower, check (IR vs ONNX Runtime on data), run (an artefact on inputs), bench
-    (the paper's latency and power protocol)."""
+    """Capabilities: lower, identify (is a directory a Jetson artefact), check (the written artefact vs
+    the IR on labelled data), agree (the same without labels), run (an artefact on inputs), bench (the
+    paper's latency and power protocol)."""
 
     name = "jetson"
     description = "NVIDIA Jetson: ONNX (sequence + streaming step) + TensorRT recipe, validated in ONNX Runtime"
@@ -66,13 +73,47 @@ class JetsonTarget:
         found: Artefact = lower_graph(model, settings, progress)
         return found
 
+    def identify(self, path: Path) -> ArtefactIdentity | None:
+        from snncc.targets.jetson.written import identify_directory
+
+        return identify_directory(path)
+
     def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
-              data: str | None = None, synthetic: bool = False, progress: Progress | None = None) -> Record:
-        """IR reference vs the ONNX Runtime artefact on a data set (``lower.check_graph``)."""
+              artefact: Path | None = None, data: str | None = None, synthetic: bool = False,
+              progress: Progress | None = None) -> Record:
+        """The written artefact ``artefact`` (None: the one compile would write, in a temporary directory)
+        vs the IR reference on a data set (``lower.check_graph``)."""
+        from snncc.artefacts import compiled_artefact
         from snncc.targets.jetson.lower import check_graph
 
-        found: Record = check_graph(graph, inputs, labels, self._options(options, "check").as_dict(), data=data,
+        settings = self._options(options, "check")
+        if artefact is None:
+            with compiled_artefact(self, graph, options) as path:
+                return self.check(graph, inputs, labels, settings, artefact=path, data=data, synthetic=synthetic,
+                                  progress=progress)
+        found: Record = check_graph(graph, inputs, labels, settings.as_dict(), artefact=artefact, data=data,
                                     synthetic=synthetic, progress=progress)
+        return found
+
+    def agree(self, graph: Graph, inputs: np.ndarray | None, options: Given = None,
+              agreement: AgreementOptions | None = None, *, artefact: Path | None = None, data: str | None = None,
+              progress: Progress | None = None) -> Record:
+        """The written artefact's agreement with the float model without labels (``lower.agree_graph``);
+        ``agreement.noise`` (the float model's sensitivity to 8-bit-sized weight noise) is a Loihi figure."""
+        from snncc.artefacts import compiled_artefact
+        from snncc.errors import SnnccError
+        from snncc.targets.jetson.lower import agree_graph
+
+        how = agreement or capability_options(AgreementOptions)
+        if how.noise != capability_options(AgreementOptions).noise:
+            raise SnnccError("applies to --target loihi (the float model's sensitivity to 8-bit-sized weight noise); "
+                             "the Jetson artefact runs in float32", field="--noise")
+        settings = self._options(options, "agree")
+        if artefact is None:
+            with compiled_artefact(self, graph, options) as path:
+                return self.agree(graph, inputs, settings, how, artefact=path, data=data, progress=progress)
+        found: Record = agree_graph(graph, inputs, artefact=artefact, samples=how.samples, density=how.density,
+                                    data=data, progress=progress)
         return found
 
     def run(self, artefact: Path, inputs: np.ndarray, *, source: str | None = None, stream: bool = False,

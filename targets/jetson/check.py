@@ -1,8 +1,12 @@
-"""``snncc check --target jetson``: the IR reference against the ONNX Runtime artefact on a data set.
+"""``snncc check --target jetson``: the IR reference against the written artefact, on a data set.
 
-Reports accuracy of both (when labels are given), prediction agreement, output spike agreement
-(SNNs), max |delta| of scores and outputs, and the fp16 emulation's spike flips and prediction
-changes. The reference is ``snncc.ir.simulate`` in float64; the artefact runs in float32.
+The artefact is run from its directory (``written.py``: ``model.onnx`` in ONNX Runtime, or
+``step.onnx`` step by step for inputs of another length). Reports accuracy of both (when labels
+are given), prediction agreement (``snncc.measure.agreement``: samples whose float output ties at
+the top or is silent are left out and counted), output spike agreement (SNNs), max |delta| of
+scores and outputs, the fp16 emulation's spike flips and prediction changes, and every
+population's liveness (in float; on the artefact: its output population, the one the ONNX model
+exposes). The reference is ``snncc.ir.simulate`` in float64; the artefact runs in float32.
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.targets.jetson.plan import GraphPlan
-from snncc.targets.jetson.validate import FP16_METHOD, fp16_run, host_score, reference, session
+from snncc.targets.jetson.validate import FP16_METHOD, fp16_run, host_score, reference
 
 BATCH = 64
 
@@ -24,17 +28,21 @@ class JetsonCheckRecord:
     samples: int
     time_steps: int
     reference: str
-    artefact: str
+    runtime: str                                # which written model ran, and where (e.g. "model.onnx, ONNX Runtime")
     accuracy_reference: float | None
     accuracy_artefact: float | None
     accuracy_fp16: float | None
-    prediction_agreement: float
+    prediction_agreement: float | None          # share of decided samples (None: undefined, e.g. outputs silent)
     spike_agreement: float | None
     max_abs_delta_score: float
     max_abs_delta_outputs: float | None
     fp16: dict
     validation: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
+    argmax: dict = field(default_factory=dict)            # ArgmaxAgreement: decided, ties, silent, 95 % interval
+    liveness: dict = field(default_factory=dict)          # "float": every population; "jetson": the output population
+    flagged: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -46,7 +54,10 @@ class JetsonCheckRecord:
         console.print(f"[bold]snncc check --target jetson[/bold]  {self.samples} samples x {self.time_steps} steps")
         console.print(f"accuracy: IR reference {pct(self.accuracy_reference)}, ONNX Runtime artefact "
                       f"{pct(self.accuracy_artefact)}, fp16 emulation {pct(self.accuracy_fp16)}")
-        console.print(f"prediction agreement (artefact vs reference): {self.prediction_agreement:.2%}")
+        from snncc.measure.agreement import ArgmaxAgreement
+
+        console.print(f"prediction agreement (artefact vs reference): {ArgmaxAgreement(**self.argmax).text()}",
+                      markup=False)
         if self.spike_agreement is not None:
             console.print(f"output spike agreement: {self.spike_agreement:.4%}")
         console.print(f"max |delta| score: {self.max_abs_delta_score:.3g}" +
@@ -54,8 +65,12 @@ class JetsonCheckRecord:
         flips = f"{self.fp16['spike_flips']} spike flips, " if "spike_flips" in self.fp16 else ""
         console.print(f"fp16: {flips}{self.fp16['predictions_changed']} predictions changed, max |delta| score "
                       f"{self.fp16['max_abs_delta_score']:.3g}")
+        for line in self.flagged:
+            console.print(f"liveness: {line}", markup=False)
+        for line in self.warnings:
+            console.print(f"warning: {line}", markup=False)
         for note in self.notes:
-            console.print(f"note: {note}")
+            console.print(f"note: {note}", markup=False)
 
 
 def _base_channels(plan: GraphPlan, x: np.ndarray) -> np.ndarray:
@@ -70,56 +85,99 @@ def _base_channels(plan: GraphPlan, x: np.ndarray) -> np.ndarray:
     raise SnnccError(f"data have {c} channels, the model takes {plan.base_inputs}", field="inputs")
 
 
-def check_artefact(plan: GraphPlan, artefact, inputs: np.ndarray, labels: np.ndarray | None,
+def float_spikes(plan: GraphPlan, x: np.ndarray) -> dict[str, np.ndarray]:
+    """Every LIF population's float spikes (B, T, n) on base-channel data (copies tiled as the authors do)."""
+    from snncc.ir.simulate import simulate
+
+    tiled = np.tile(x, (1, 1, plan.input_copies)) if plan.input_copies > 1 else x
+    res = simulate(plan.graph, tiled.astype(np.float64), record="spikes")
+    return {k: v.numpy().astype(np.uint8) for k, v in res.spikes.items()}
+
+
+def check_artefact(plan: GraphPlan, written, inputs: np.ndarray, labels: np.ndarray | None,
                    progress=None) -> JetsonCheckRecord:
-    """``progress(n)`` (optional) is called with the number of samples done after each batch."""
+    """The written artefact (``written.WrittenJetson``) against the IR reference on ``inputs``;
+    ``progress(n)`` (optional) is called with the number of samples done after each batch."""
+    from snncc.ir import liveness
+    from snncc.measure.agreement import argmax_agreement
+
     x = _base_channels(plan, np.asarray(inputs, dtype=np.float32))
     if labels is not None and len(labels) != x.shape[0]:
         raise SnnccError(f"{len(labels)} labels for {x.shape[0]} samples", field="labels")
-    manifest = artefact.manifest
-    if manifest["time_axis"] != "dynamic" and x.shape[1] != manifest["time_steps"]:
-        raise SnnccError(f"data have {x.shape[1]} time steps, the artefact {manifest['time_steps']}", field="inputs")
-    sess = session(artefact.files["model.onnx"])
-    in_name = sess.get_inputs()[0].name
+    from snncc.ir.nodes import LIF
+    from snncc.measure.agreement import chunk_size
+
+    batch = chunk_size(sum(plan.graph.node(p).n for p in plan.graph.of_kind(LIF)), x.shape[1], BATCH)
     ref_seq, ref_score, got_seq, got_score = [], [], [], []
-    for start in range(0, x.shape[0], BATCH):
-        xb = x[start:start + BATCH]
+    float_tally, target_tally = liveness.Tally(), liveness.Tally()
+    for start in range(0, x.shape[0], batch):
+        xb = x[start:start + batch]
         rs, rsc = reference(plan, xb)
         ref_seq.append(rs)
         ref_score.append(rsc if rsc is not None else host_score(plan.score_mode, rs))
-        outs = sess.run(None, {in_name: xb})
-        got_score.append(outs[0])
-        if len(outs) > 1:
-            got_seq.append(outs[1])
+        if plan.has_lif:
+            float_tally.add(float_spikes(plan, xb))
+        score, seq = written.run(xb)
+        got_score.append(score)
+        if seq is not None:
+            got_seq.append(seq)
+            if plan.spiking_output:
+                target_tally.add({_lif_of_output(plan): seq.astype(np.uint8)})
         if progress is not None:
             progress(len(xb))
     ref_seq_a, ref_score_a = np.concatenate(ref_seq), np.concatenate(ref_score)
     got_score_a = np.concatenate(got_score)
     got_seq_a = np.concatenate(got_seq) if got_seq else None
-    pred, ref_pred = np.argmax(got_score_a, 1), np.argmax(ref_score_a, 1)
+    pred = np.argmax(got_score_a, 1)
     seq16, score16 = [], []
-    for start in range(0, x.shape[0], BATCH):
-        a, b = fp16_run(plan, x[start:start + BATCH])
+    for start in range(0, x.shape[0], batch):
+        a, b = fp16_run(plan, x[start:start + batch])
         seq16.append(a)
         score16.append(b)
     seq16_a, score16_a = np.concatenate(seq16), np.concatenate(score16)
     pred16 = np.argmax(score16_a, 1)
     fp16 = {"method": FP16_METHOD, "predictions_changed": int(np.sum(pred16 != pred)),
             "max_abs_delta_score": float(np.max(np.abs(score16_a - got_score_a)))}
-    if got_seq_a is not None and plan.spiking_output:
+    if got_seq_a is not None and plan.spiking_output and seq16_a.shape == got_seq_a.shape:
         fp16["spike_flips"] = int(np.sum(seq16_a != got_seq_a))
         fp16["spike_flip_fraction"] = float(np.mean(seq16_a != got_seq_a))
+
     def acc(p):
         return None if labels is None else float(np.mean(p == np.asarray(labels)))
 
-    notes = ["reference: snncc.ir.simulate float64; artefact: model.onnx in ONNX Runtime float32 (CPU)"]
+    spiking = bool(plan.spiking_output and plan.score_mode in (None, "spike_count"))
+    agreement = argmax_agreement(ref_score_a, got_score_a, spiking=spiking)
+    f_act = float_tally.activity(liveness.graph_refractory(plan.graph)) if plan.has_lif else {}
+    t_act = target_tally.activity(liveness.graph_refractory(plan.graph)) if target_tally.counts else {}
+    warning = None
+    if f_act:
+        tiled = np.tile(x[:batch], (1, 1, plan.input_copies)) if plan.input_copies > 1 else x[:batch]
+        warning = liveness.float_silence_warning(plan.graph, tiled.astype(np.float64), f_act, "these inputs")
+    notes = ["reference: snncc.ir.simulate float64; artefact: the written "
+             f"{written.variants_ran()} in ONNX Runtime float32 (CPU)"]
+    if "step.onnx" in written.ran:
+        notes.append(f"the data have {x.shape[1]} steps and model.onnx is unrolled for {written.time_steps}: the step "
+                     "model ran them one step at a time")
     return JetsonCheckRecord(
         target="jetson", samples=int(x.shape[0]), time_steps=int(x.shape[1]),
-        reference="snncc.ir.simulate (float64)", artefact="model.onnx, ONNX Runtime (float32)",
-        accuracy_reference=acc(ref_pred), accuracy_artefact=acc(pred), accuracy_fp16=acc(pred16),
-        prediction_agreement=float(np.mean(pred == ref_pred)),
+        reference="snncc.ir.simulate (float64)", runtime=f"{written.variants_ran()}, ONNX Runtime (float32)",
+        accuracy_reference=acc(np.argmax(ref_score_a, 1)), accuracy_artefact=acc(pred), accuracy_fp16=acc(pred16),
+        prediction_agreement=agreement.share,
         spike_agreement=float(np.mean(got_seq_a == ref_seq_a)) if (got_seq_a is not None and plan.spiking_output) else None,
         max_abs_delta_score=float(np.max(np.abs(got_score_a - ref_score_a))),
         max_abs_delta_outputs=float(np.max(np.abs(got_seq_a - ref_seq_a))) if got_seq_a is not None else None,
-        fp16=fp16, validation=artefact.manifest["validation"], notes=notes,
+        fp16=fp16, validation=written.manifest["validation"], notes=notes, argmax=agreement.as_dict(),
+        liveness={"float": liveness.as_dicts(f_act), "jetson": liveness.as_dicts(t_act)},
+        flagged=liveness.flagged(f_act, "in float") + liveness.flagged(t_act, "on the Jetson artefact"),
+        warnings=[warning] if warning else [],
     )
+
+
+def _lif_of_output(plan: GraphPlan) -> str:
+    """The LIF population whose spikes the Output carries (through any Readout)."""
+    from snncc.ir.nodes import LIF
+
+    node = plan.output_name
+    while not isinstance(plan.graph.node(node), LIF):
+        node = plan.graph.predecessors(node)[0]
+    return node

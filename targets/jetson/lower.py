@@ -60,6 +60,7 @@ class JetsonArtefact(ArtefactFiles):
                 "step": {k: x for k, x in v["step"].items() if k != "operators"},
                 "dynamic_axes_checked": v["dynamic_axes_checked"],
                 "fp16": v["fp16"],
+                "liveness": v.get("liveness", {}),
             },
             "notes": self.notes,
         }
@@ -87,9 +88,13 @@ class JetsonArtefact(ArtefactFiles):
                       f"{inp['note']}")
         seq, step, fp16 = v["sequence"], v["step"], v["fp16"]
         if "spike_agreement" in seq:
+            from snncc.measure.agreement import ArgmaxAgreement
+
+            decided = (ArgmaxAgreement(**seq["prediction"]).text() if "prediction" in seq
+                       else f"{seq['prediction_agreement']:.0%} equal")
             console.print(f"validated against the IR reference ({v['samples']} seeded samples): output spike agreement "
                           f"model.onnx {seq['spike_agreement']:.4%}, step.onnx {step['spike_agreement']:.4%}; "
-                          f"predictions {seq['prediction_agreement']:.0%} equal")
+                          f"predictions {decided}", markup=False)
         else:
             console.print(f"validated against the IR reference ({v['samples']} seeded samples): max |delta| score "
                           f"{seq['max_abs_delta_score']:.2g} (model.onnx), {step['max_abs_delta_score']:.2g} (step.onnx); "
@@ -97,6 +102,8 @@ class JetsonArtefact(ArtefactFiles):
         flips = f"{fp16['spike_flips']} spike flips, " if "spike_flips" in fp16 else ""
         console.print(f"fp16 emulation: {flips}max |delta| score {fp16['max_abs_delta_score']:.3g} "
                       f"(range {fp16['score_range']:.3g}), {fp16['predictions_changed']} predictions changed")
+        for line in (v.get("liveness") or {}).get("flagged", []):
+            console.print(f"liveness on the validation inputs: {line}", markup=False, style="yellow")
         for note in self.notes:
             console.print(f"note: {note}")
 
@@ -135,21 +142,51 @@ def lower_graph(graph: Graph, options: dict[str, Any], progress: Progress | None
 
 
 def check_graph(graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, options: dict[str, Any], *,
-                data: str | None = None, synthetic: bool = False,
+                artefact: Path, data: str | None = None, synthetic: bool = False,
                 progress=None) -> JetsonCheckRecord:
-    """IR reference vs the ONNX Runtime artefact on a data set (``check.check_artefact``), the
-    artefact unrolled for the data's T unless --time-steps says otherwise; errors name ``data``."""
+    """The written artefact directory ``artefact`` against the IR reference on a data set
+    (``check.check_artefact``: model.onnx, or step.onnx for data of another length); errors name ``data``."""
+    from snncc.targets.jetson.written import WrittenJetson
+
     x = np.asarray(inputs)
     if x.ndim == 2:
         x = x[None]
-    if options.get("time_steps") is None:
-        options = {**options, "time_steps": int(x.shape[1])}
-    artefact = lower_graph(graph, options)
+    written = WrittenJetson.open(artefact)
     try:
         with one_thread():
-            record = check_artefact(plan_graph(graph.copy()), artefact, x, labels, progress)
+            record = check_artefact(plan_graph(graph.copy()), written, x, labels, progress)
     except SnnccError as err:
         raise (err.with_file(data) if data is not None else err) from None
     if synthetic:
         record.notes.append("the data set is synthetic: these accuracies are not the paper's")
+    return record
+
+
+def agree_graph(graph: Graph, inputs: np.ndarray | None, *, artefact: Path, samples: int | None, density: float,
+                data: str | None = None, progress=None) -> JetsonCheckRecord:
+    """The written artefact's agreement with the float model without labels: on ``inputs``, or on
+    ``samples`` (default ``snncc.measure.agreement.default_samples``) seeded random 0/1 trains of
+    ``density`` as long as the artefact's T (SYNTHETIC)."""
+    from snncc.ir.nodes import LIF
+    from snncc.measure.agreement import default_samples, default_samples_note, random_inputs
+    from snncc.targets.jetson.written import WrittenJetson
+
+    written = WrittenJetson.open(artefact)
+    plan = plan_graph(graph.copy())
+    if inputs is None:
+        n = samples or default_samples(sum(graph.node(p).n for p in graph.of_kind(LIF)), written.time_steps)
+        x = random_inputs(n, written.time_steps, plan.base_inputs, density, seed=0)
+        described = (f"{default_samples_note(n) if samples is None else f'{n} samples'}: seeded random 0/1 trains "
+                     f"(density {density:g} per channel and step, seed 0), {written.time_steps} steps (SYNTHETIC)")
+    else:
+        x = np.asarray(inputs)
+        described = f"{x.shape[0]} given input trains of {x.shape[1]} steps"
+    try:
+        with one_thread():
+            record = check_artefact(plan, written, x, None, progress)
+    except SnnccError as err:
+        raise (err.with_file(data) if data is not None else err) from None
+    record.notes.insert(0, f"inputs: {described}")
+    if inputs is None:
+        record.notes.append("random inputs: agreement with the float model, not accuracy on real data")
     return record

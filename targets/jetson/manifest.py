@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import snncc
+from snncc.input_layout import frame_shape
 from snncc.ir.nodes import LIF
 from snncc.targets.jetson.plan import GraphPlan
 from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK
@@ -69,6 +70,7 @@ def build_manifest(plan: GraphPlan, steps: int, opset: int, jetpack: str, valida
     step_in = [_tensor(f"{x}_t", ["batch", plan.base_inputs])] + [_tensor(s.input_name, ["batch", *s.shape]) for s in slots]
     step_out = [_tensor("y_t", ["batch", n_out])] + [_tensor(s.output_name, ["batch", *s.shape]) for s in slots]
     classes = meta.get("classes") or [str(i) for i in range(n_out)]
+    frame = frame_shape(g)     # a CNN's input frame (C, H, W): runners flatten frames given in that shape
     return {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
@@ -83,6 +85,7 @@ def build_manifest(plan: GraphPlan, steps: int, opset: int, jetpack: str, valida
         "time_axis": "fixed (unrolled)" if plan.has_lif else "dynamic",
         "encoding": meta.get("encoding") or ("events (0/1)" if plan.signal == "spikes" else "analog frames"),
         "input": {"name": x, "channels": plan.base_inputs, "input_copies": plan.input_copies,
+                  **({"frame_shape": frame} if frame else {}),
                   "graph_width": plan.base_inputs * plan.input_copies, "signal": plan.signal, "dtype": "float32",
                   "note": ("the model takes the channels as the data has them; the input copies are applied "
                            "inside the graph (concat of k copies on the channel axis)" if plan.input_copies > 1

@@ -52,6 +52,7 @@ class ArtefactRun:
     stream: bool
     time_steps: int
     class_names: list[str]
+    input_note: str | None = None     # what was done to take the inputs in the model's own shape
 
     def arrays(self) -> dict[str, np.ndarray]:
         return self.outputs
@@ -62,21 +63,28 @@ class ArtefactRun:
         return {"backend": self.backend, "variant": "step (streaming)" if self.stream else "sequence",
                 "samples": int(self.outputs["prediction"].shape[0]), "time_steps": self.time_steps,
                 "prediction": prediction,
-                "classes": [names[i] if 0 <= i < len(names) else str(i) for i in prediction]}
+                "classes": [names[i] if 0 <= i < len(names) else str(i) for i in prediction],
+                "input_layout": self.input_note}
 
 
 def run_artefact(artefact: Path, inputs, *, source: str | None = None, stream: bool = False,
                  backend: str = "auto") -> ArtefactRun:
-    """Check ``inputs`` (T, C) or (B, T, C) against the artefact's input signal and run the sequence model,
-    or with ``stream`` the step model one time step at a time."""
+    """Check ``inputs`` (T, C) or (B, T, C) -- or CNN frames (B, T, C, H, W), flattened -- against the
+    artefact's input signal and run the sequence model, or with ``stream`` the step model one step at a time."""
     from snncc.inputs import check_batch
     from snncc.targets.jetson.standalone_runner import RunnerError
 
+    from snncc.input_layout import InputLayout, to_artefact_layout
+
     runner = open_runner(artefact, backend, "step" if stream else "sequence")
-    x = check_batch(inputs, spikes=runner.manifest["input"]["signal"] == "spikes", source=source)
+    spec = runner.manifest["input"]
+    inputs, note = to_artefact_layout(inputs, InputLayout(width=int(spec["channels"]),
+                                                          frame=tuple(spec["frame_shape"]) if spec.get("frame_shape")
+                                                          else None))
+    x = check_batch(inputs, spikes=spec["signal"] == "spikes", source=source)
     try:
         res = runner.stream(x) if stream else runner.run(x)
         used = runner.session("step" if stream else "sequence").backend
     except RunnerError as ex:
         raise SnnccError(ex.rule, file=source, field=ex.field) from None
-    return ArtefactRun(res, used, stream, int(np.asarray(x).shape[-2]), list(runner.manifest["classes"]))
+    return ArtefactRun(res, used, stream, int(np.asarray(x).shape[-2]), list(runner.manifest["classes"]), note)

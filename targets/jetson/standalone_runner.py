@@ -7,7 +7,8 @@ This file is also copied into every artefact as ``run.py``: it needs only numpy 
     python3 run.py --input x.npy [--stream] [-o out.npz] [--backend auto|tensorrt|onnxruntime]
 
 ``x.npy``: (T, C) or (B, T, C) with C = manifest["input"]["channels"] (the data's own channels;
-input copies are applied inside the model). Output: for SNNs ``output_spikes`` (B, T, n) uint8,
+input copies are applied inside the model), or a CNN's frames (B, T, *manifest["input"]["frame_shape"]).
+Output: for SNNs ``output_spikes`` (B, T, n) uint8,
 ``counts`` (B, n), ``prediction`` (B,); for LSTMs ``scores`` (B, n) and ``prediction``.
 ``--stream`` feeds step.onnx one time step at a time (any T), the state kept on the host.
 """
@@ -192,8 +193,12 @@ def open_session(directory: str, variant: dict, backend: str = "auto", threads: 
 
 
 def prepare_input(manifest: dict, x) -> np.ndarray:
-    """(T, C) or (B, T, C) -> float32 (B, T, C) checked against the manifest."""
+    """(T, C) or (B, T, C) -> float32 (B, T, C) checked against the manifest; frames (B, T, *frame_shape)
+    of a convolutional model are flattened in C order first."""
     x = np.asarray(x)
+    frame = tuple(manifest["input"].get("frame_shape") or ())
+    if frame and x.ndim in (len(frame) + 1, len(frame) + 2) and tuple(x.shape[-len(frame):]) == frame:
+        x = x.reshape(x.shape[:-len(frame)] + (int(np.prod(frame)),))
     if x.ndim == 2:
         x = x[None]
     if x.ndim != 3:

@@ -47,6 +47,7 @@ class ValidationRecord:
     dynamic_axes_checked: list = field(default_factory=list)
     fp16: dict = field(default_factory=dict)
     passed: bool = True
+    liveness: dict = field(default_factory=dict)   # every population on the validation inputs (float; the output on ONNX)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -155,7 +156,14 @@ def _compare(plan: GraphPlan, got_seq: np.ndarray | None, got_score: np.ndarray,
         raise InternalError(f"scores differ from the IR reference by {delta:.3g} (allowed {VALUE_TOLERANCE * scale:.3g})",
                          field=label)
     pred, ref_pred = np.argmax(got_score, axis=1), np.argmax(ref_score, axis=1)
-    rec["prediction_agreement"] = float(np.mean(pred == ref_pred))
+    if plan.spiking_output and plan.score_mode in (None, "spike_count"):
+        from snncc.measure.agreement import argmax_agreement
+
+        decisions = argmax_agreement(ref_score, got_score)   # silent or tied float outputs: left out, counted
+        rec["prediction_agreement"] = decisions.share        # None: undefined (outputs silent)
+        rec["prediction"] = decisions.as_dict()
+    else:
+        rec["prediction_agreement"] = float(np.mean(pred == ref_pred))
     if not plan.spiking_output:
         top2 = np.sort(ref_score, axis=1)[:, -2:] if ref_score.shape[1] > 1 else None
         clear = (top2[:, 1] - top2[:, 0] > 2 * delta) if top2 is not None else np.ones(len(pred), bool)
@@ -230,7 +238,26 @@ def _validate(plan: GraphPlan, steps: int, sequence: ExportedModel, step: Export
     record.dynamic_axes_checked.append({"model": "step.onnx", "shapes": [[MAIN_BATCH, plan.base_inputs],
                                                                          [SECOND_BATCH, plan.base_inputs]]})
     record.fp16 = fp16_emulation(plan, x, got_seq if got_seq is not None else step_seq, got_score)
+    if plan.has_lif:
+        record.liveness = validation_liveness(plan, x, got_seq)
     return record
+
+
+def validation_liveness(plan: GraphPlan, x: np.ndarray, got_seq: np.ndarray | None) -> dict:
+    """Every LIF population's activity on the validation inputs in float, the output population's on
+    model.onnx, the silent or saturated ones named (compile's one-line warning for a model silent in float
+    is ``snncc.ir.liveness.calibration_warning``)."""
+    from snncc.ir import liveness
+    from snncc.targets.jetson.check import _lif_of_output, float_spikes
+
+    refractory = liveness.graph_refractory(plan.graph)
+    f_act = liveness.activity(float_spikes(plan, x), refractory)
+    t_act = {}
+    if got_seq is not None and plan.spiking_output:
+        t_act = liveness.activity({_lif_of_output(plan): got_seq.astype(np.uint8)}, refractory)
+    return {"inputs": f"the {x.shape[0]} seeded validation samples", "float": liveness.as_dicts(f_act),
+            "jetson": liveness.as_dicts(t_act),
+            "flagged": liveness.flagged(f_act, "in float") + liveness.flagged(t_act, "on the ONNX model")}
 
 
 def fp16_run(plan: GraphPlan, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -4,8 +4,9 @@ This module imports nothing heavy, so listing or choosing the target, and verbs 
 map, emulate or estimate a bundle, never load the compiler's torch-based reference simulator.
 
     lower      -> LoihiArtefact   (lowering/lower.py: timing, quantization, bundle checked by the emulator)
-    check      -> CheckRecord     (checks/accuracy.py: accuracy lost on a labelled data set, and why)
-    agree      -> AgreementRecord (checks/agreement.py: agreement with the float graph, no labels)
+    identify   -> ArtefactIdentity (bundle/identify.py: is this file a Loihi bundle, from which model)
+    check      -> CheckRecord     (checks/accuracy.py: accuracy the written bundle loses on labelled data, and why)
+    agree      -> AgreementRecord (checks/agreement.py: the written bundle's agreement with the float model)
     emulate    -> BundleEmulation (emulation/run_bundle.py: a bundle on 0/1 inputs, bit-exact)
     map        -> CoreMap         (mapping/partition.py: populations placed on cores under every limit)
     estimate   -> EnergyReport    (estimate/report.py: ESTIMATE of energy and delay per sample)
@@ -29,6 +30,7 @@ from snncc.targets.base import (
 if TYPE_CHECKING:
     import numpy as np
 
+    from snncc.artefacts import ArtefactIdentity
     from snncc.ir.graph import Graph
     from snncc.targets.base import Model
 
@@ -86,24 +88,43 @@ class LoihiTarget:
         found: Artefact = lower_artefact(model, settings, progress=progress)
         return found
 
+    def identify(self, path: Path) -> ArtefactIdentity | None:
+        from snncc.targets.loihi.bundle.identify import identify_bundle
+
+        return identify_bundle(path)
+
     def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
-              data: str | None = None, synthetic: bool = False, progress: Progress | None = None) -> Record:
-        from snncc.targets.loihi.checks.accuracy import check_model
+              artefact: Path | None = None, data: str | None = None, synthetic: bool = False,
+              progress: Progress | None = None) -> Record:
+        """The written bundle ``artefact`` (None: the one compile would write, in a temporary directory)."""
+        from snncc.targets.loihi.checks.accuracy import check_bundle, check_model
+        from snncc.targets.loihi.checks.written import open_bundle
 
         opts = self._options(options, "check")
         settings = _settings(opts, data=data, synthetic=synthetic, mode="stream" if opts.stream else "batch")
-        found: Record = check_model(graph, inputs, labels, settings, progress=progress)
-        return found
+        if artefact is None:
+            found: Record = check_model(graph, inputs, labels, settings, progress=progress)
+            return found
+        written: Record = check_bundle(graph, open_bundle(artefact, graph), inputs, labels, settings,
+                                       progress=progress)
+        return written
 
     def agree(self, graph: Graph, inputs: np.ndarray | None, options: Given = None,
-              agreement: AgreementOptions | None = None, *, data: str | None = None) -> Record:
-        from snncc.targets.loihi.checks.agreement import measure_agreement
+              agreement: AgreementOptions | None = None, *, artefact: Path | None = None, data: str | None = None,
+              progress: Progress | None = None) -> Record:
+        """Agreement of the written bundle ``artefact`` (None: the one compile would write) with the float model."""
+        from snncc.targets.loihi.checks.agreement import measure_agreement, measure_bundle
+        from snncc.targets.loihi.checks.written import open_bundle
 
         how = agreement or capability_options(AgreementOptions)
-        settings = _settings(self._options(options, "agree"), data=data)
-        found: Record = measure_agreement(graph, settings, inputs, samples=how.samples, density=how.density,
-                                          noise=how.noise)
-        return found
+        if artefact is None:
+            settings = _settings(self._options(options, "agree"), data=data)
+            found: Record = measure_agreement(graph, settings, inputs, samples=how.samples, density=how.density,
+                                              noise=how.noise, progress=progress)
+            return found
+        written: Record = measure_bundle(graph, open_bundle(artefact, graph), inputs, samples=how.samples,
+                                         density=how.density, noise=how.noise, data=data, progress=progress)
+        return written
 
     def emulate(self, bundle: Path, inputs: np.ndarray, *, record: str = "outputs", stream: bool = False,
                 gap: int | None = None, source: str | None = None, progress: Progress | None = None) -> Emulation:

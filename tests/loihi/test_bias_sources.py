@@ -94,7 +94,7 @@ def test_biased_network_lowers_exactly_and_sources_are_laid_out(refractory):
 @pytest.mark.parametrize("off_by", [-1, 1])
 def test_the_compile_check_catches_a_bias_source_one_step_off(layer, first_source, off_by):
     """The exactness check has teeth: a bias arriving one step early or late is an error."""
-    low = lower_model(biased_graph(), {"timing": "exact"})
+    low = lower_model(biased_graph(), {"timing": "exact", "scale": "global"})   # one exponent: delays 1 and 2 apart
     target_layer = low.network.layers[layer]
     d = np.array(np.broadcast_to(np.asarray(target_layer.delay), target_layer.weight.shape))
     d[:, first_source:] = np.maximum(d[:, first_source:] + off_by, 0)

@@ -125,7 +125,7 @@ def test_split_exponents_keep_small_weights_and_outliers():
     np.testing.assert_allclose(split.node("w_rec").weight.flat[[3, 50, 97]], plain.node("w_rec").weight.flat[[3, 50, 97]])
 
 
-def test_split_lowers_exactly_and_auto_prefers_it_on_outliers():
+def test_split_lowers_exactly_and_auto_keeps_to_portable_rules():
     g = small_graph(seed=3)
     rec = g.node("w_rec").weight
     rec.flat[[5, 77, 130]] = 100 * np.median(np.abs(rec))
@@ -135,8 +135,7 @@ def test_split_lowers_exactly_and_auto_prefers_it_on_outliers():
     assert np.ndim(exp) == 2 and np.count_nonzero(exp == exp.max()) == 3
     auto = target.lower(g, {"scale": "auto"})
     errors = auto.quantization["calibration"]["errors"]
-    split_name = next(k for k in errors if k.startswith("per-layer, split"))
-    assert errors[split_name] < errors["per-layer"], errors
+    assert set(errors) == {"global", "per-layer"} and auto.quantization["rule"] in errors, errors   # netx runs both
 
 
 def test_per_neuron_thresholds_and_decays_become_per_neuron_registers():

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from snncc.targets.loihi.lowering.scaling import Flag, FlagKind, Screen, choose, screen
+from snncc.targets.loihi.bundle.portability import NetxGap
+from snncc.targets.loihi.lowering.scaling import CandidateMeasure, Flag, FlagKind, Screen, choose, screen
 from tests.loihi.helpers import small_graph
 
 
@@ -28,13 +29,60 @@ def test_split_follows_the_kind_not_the_wording():
     sc = Screen({"w_rec": Flag(FlagKind.LOW_RANGE, "max|W| is worded like an outlier")}, True)
     assert sc.of_kind(FlagKind.OUTLIERS) == set()
     graph = _outlier_graph()
-    g, rec = choose(graph, "split", measure=lambda g, r: 0.0, calibration="none")
+    g, rec = choose(graph, "split", measure=lambda g, r: CandidateMeasure(0.0), calibration="none")
     assert rec.rule == "split" and "split exponents on ['w_rec']" in rec.reason
 
 
 def test_the_calibration_record_keeps_plain_messages():
     graph = _outlier_graph()
-    _, rec = choose(graph, "auto", measure=lambda g, r: float(r.rule != "fine"), calibration="none")
+    _, rec = choose(graph, "auto", measure=lambda g, r: CandidateMeasure(float(r.rule != "fine")), calibration="none")
     flagged = rec.calibration["flagged"]
     assert all(isinstance(v, str) for v in flagged.values()) and flagged["w_rec"].startswith("max|W| is ")
     assert f"w_rec: {flagged['w_rec']}" in rec.reason
+
+
+def _gap(by_rule):
+    return [NetxGap("per-synapse weight exponents" if by_rule else "always-on bias sources", "/layer/1", by_rule)]
+
+
+def _measure(errors, silent=(), float_silent=False, model_gap=False):
+    """A stand-in measurement: ``errors`` by rule, outputs silent for the rules in ``silent``."""
+    def measure(g, r):
+        key = r.rule if r.fine_step in (None, 1.0) else f"fine x{r.fine_step:g}"
+        gaps = (_gap(True) if r.rule in ("split", "fine") else []) + (_gap(False) if model_gap else [])
+        return CandidateMeasure(None if float_silent else errors.get(key, 0.5), outputs_silent=key in silent or
+                                float_silent, float_silent=float_silent, gaps=gaps)
+    return measure
+
+
+def test_auto_never_chooses_a_candidate_whose_outputs_are_silent():
+    graph = _outlier_graph()
+    _, rec = choose(graph, "auto", _measure({"global": 0.0, "per-layer": 0.3}, silent={"global"}), "none")
+    assert rec.rule == "per-layer" and rec.calibration["outputs_silent"] == ["global"], rec.reason
+    assert "left out (outputs silent" in rec.reason
+
+
+def test_auto_keeps_to_portable_rules_unless_the_model_needs_more():
+    graph = _outlier_graph()
+    _, rec = choose(graph, "auto", _measure({"global": 0.3, "per-layer": 0.2, "fine x1.25": 0.01}), "none")
+    assert rec.rule == "per-layer" and set(rec.calibration["errors"]) == {"global", "per-layer"}
+    # the model needs always-on sources whatever the rule: every candidate is measured, the best is taken,
+    # and the best under a rule netx runs is recorded beside it
+    _, rec = choose(graph, "auto", _measure({"global": 0.3, "per-layer": 0.2, "fine x1.25": 0.01}, model_gap=True),
+                    "none")
+    assert rec.rule == "fine" and rec.fine_step == 1.25 and rec.calibration["best_netx_rule"] == {
+        "rule": "per-layer", "error": 0.2}
+
+
+def test_a_model_silent_in_float_is_not_measured_and_all_silent_rules_are_refused():
+    graph = _outlier_graph()
+    _, rec = choose(graph, "auto", _measure({}, float_silent=True), "none")
+    assert rec.rule == "global" and "silent" in rec.reason and set(rec.calibration["errors"].values()) == {None}
+    everything = {"global", "per-layer", "split", "fine"} | {f"fine x{k:g}" for k in (1.125, 1.25, 1.375, 1.5, 1.625,
+                                                                                      1.75, 1.875)}
+    import pytest
+
+    from snncc.errors import SnnccError
+
+    with pytest.raises(SnnccError, match="silent"):
+        choose(graph, "auto", _measure({}, silent=everything), "none")

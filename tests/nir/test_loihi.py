@@ -79,8 +79,9 @@ def test_braille_sized_with_recurrent_outliers(tmp_path, capsys):
 
     This random graph is near-chaotic: the float model against itself with 1 % weight noise agrees
     on only 0.81 of these inputs, so no 8-bit deployment can reach 0.95 here (bench/README.md).
-    Measured (200 samples): global 0.63, per-layer 0.74, split 0.82, fine 0.885, auto picks the fine
-    candidate with the smallest measured error (every synapse its finest exponent)."""
+    Measured (200 samples): global 0.63, per-layer 0.74, split 0.82, fine 0.885. auto keeps to the rules
+    netx runs as written (portable: global, per-layer) and takes the better measured of them; split and
+    fine, which netx cannot express, are used when asked for."""
     _, src, x = _braille(tmp_path, outliers=True)
     figures = {}
     for rule in ("global", "per-layer", "split", "fine", "auto"):
@@ -91,13 +92,15 @@ def test_braille_sized_with_recurrent_outliers(tmp_path, capsys):
         if rule == "split":
             assert np.ndim(net.layers[1].wgt_exp_rec) == 2 and len(np.unique(net.layers[1].wgt_exp_rec)) == 2
             assert "split" in json.loads(out)["scale_reason"]
-        if rule in ("fine", "auto"):
+        if rule == "fine":
             assert np.ndim(net.layers[1].wgt_exp_rec) == 2 and len(np.unique(net.layers[1].wgt_exp_rec)) > 2
         if rule == "auto":
-            assert "chose 'fine" in json.loads(out)["scale_reason"] and json.loads(out)["scale_rule"] == "fine"
+            report = json.loads(out)
+            assert report["scale_rule"] in ("global", "per-layer") and report["portability"]["netx_runnable"], report
+            assert set(report["scale_candidates"]) == {"global", "per-layer"}
+            assert figures["auto"] == figures[report["scale_rule"]]
     assert figures["global"] >= 0.55 and figures["per-layer"] >= 0.70, figures
     assert figures["split"] >= figures["per-layer"] + 0.05 and figures["fine"] >= figures["split"] + 0.03, figures
-    assert figures["auto"] >= figures["split"] + 0.03, figures
 
 
 def test_trained_graph_with_outliers_agrees_on_loihi(tmp_path, capsys):
@@ -183,10 +186,12 @@ def test_per_neuron_parameters_become_compartment_profiles(tmp_path, capsys):
     nir.write(str(src), model.to_nir())
     x = sparse_inputs(rng, batch=SAMPLES, steps=STEPS, p=0.05).astype(np.uint8)
     net_path = tmp_path / "pn.net"
-    code, out, err = _compile(src, net_path, capsys, "--json")
+    code, out, err = _compile(src, net_path, capsys, "--json", "--scale", "global")   # decays truncated (Euler rule)
     assert code == 0, err
     report = json.loads(out)
     assert report["validation"]["timing_exact"] and report["validation"]["quantized_params_exact"]
+    assert not report["portability"]["netx_runnable"]          # profiles and bias sources: netx lacks both
+    assert {g["feature"] for g in report["portability"]["reasons"]} == {"per-neuron registers", "always-on bias sources"}
     net = read_bundle(net_path)
     hidden = net.layers[1]
     lif = model.hidden.to_nir()

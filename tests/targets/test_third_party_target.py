@@ -5,6 +5,7 @@ snncc; the option records refuse what a target does not take, in today's words."
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -66,14 +67,24 @@ def test_compile_and_check_with_a_third_party_target(toy, toy_data, small_rsnn_c
     assert code == 0, err
     written = json.loads(out.read_text())
     assert written["time_steps"] == 30 and written["nodes"] >= 3
+    sha = hashlib.sha256(out.read_bytes()).hexdigest()
     assert json.loads(stdout) == {"target": "toy", "target_rule": "--target", "output": str(out), "warnings": [],
-                                  **written}
+                                  "sha256": sha, "sha256_rule": "SHA-256 of the file's bytes", **written}
     assert written["precision"] is None
 
-    code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data, "--json"],
-                                capsys)
+    code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data, "--json",
+                                 "--time-steps", "30"], capsys)
     assert code == 0, err
     record = json.loads(stdout)
+    artefact = record.pop("artefact")
+    assert artefact["sha256"] == sha and artefact["compiled_by_check"] and artefact["target"] == "toy"
+    assert record.pop("input_layout") is None
+    # the written toy artefact, found by the toy target's own identify: the same figures
+    code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "--artefact", out, "--data", toy_data, "--json"],
+                                capsys)
+    assert code == 0, err
+    again = json.loads(stdout)
+    assert again.pop("artefact")["sha256"] == sha and again.pop("input_layout") is None and again == record
     # the same accuracy as the IR reference computed here, independently of the toy target
     from snncc.frontends import load_model
     from snncc.ir.simulate import simulate
@@ -83,7 +94,11 @@ def test_compile_and_check_with_a_third_party_target(toy, toy_data, small_rsnn_c
     expected = float(np.mean(simulate(load_model(small_rsnn_checkpoint), x.astype(np.float32)).prediction.numpy() == y))
     assert record == {"target": "toy", "samples": 6, "accuracy": expected, "precision": None}
     code, stdout, _ = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data], capsys)
-    assert code == 0 and stdout.startswith("toy check: 6 samples, accuracy")
+    assert code == 0 and "\ntoy check: 6 samples, accuracy" in stdout and stdout.startswith("measured artefact: toy")
+    code, _, err = run_cli(["check", small_rsnn_checkpoint, "--artefact", out, "--target", "loihi", "--data", toy_data],
+                           capsys)
+    assert code == 2 and err == ("snncc: error: --target: the artefact is a toy artefact, not loihi's (its target "
+                                 "follows from the artefact; leave --target out)\n")
 
 
 def test_a_capability_the_target_lacks_is_refused_in_one_line(toy, toy_data, small_rsnn_checkpoint, tmp_path, capsys):
@@ -102,7 +117,8 @@ def test_a_capability_the_target_lacks_is_refused_in_one_line(toy, toy_data, sma
     assert code == 2 and err == ("snncc: error: snncc compile: --scale: does not apply to --target toy (it takes "
                                  "--time-steps, --toy-precision)\n")
     code, _, err = run_cli(["check", small_rsnn_checkpoint, "-t", "toy"], capsys)   # no labels: agreement
-    assert code == 2 and "agreement without labels is measured for --target loihi" in err
+    assert code == 2 and err == ("snncc: error: --target: target 'toy' has no agreement without labels "
+                                 "(capability 'agree'); give --data with labels\n")
 
 
 def test_the_toy_target_through_the_installed_command(tmp_path, small_rsnn_checkpoint):
@@ -115,7 +131,8 @@ def test_the_toy_target_through_the_installed_command(tmp_path, small_rsnn_check
     proc = subprocess.run([sys.executable, "-m", "snncc.cli.main", "compile", str(small_rsnn_checkpoint), "-t", "toy",
                            "-o", str(out)], capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.splitlines()[-1] == f"wrote {out}" and json.loads(out.read_text())["nodes"] >= 3
+    sha = hashlib.sha256(out.read_bytes()).hexdigest()
+    assert proc.stdout.splitlines()[-1] == f"wrote {out} (SHA-256 {sha})" and json.loads(out.read_text())["nodes"] >= 3
     proc = subprocess.run([sys.executable, "-m", "snncc.cli.main", "compile", str(small_rsnn_checkpoint), "-t", "toy",
                            "-o", str(out), "--toy-precision", "6"], capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr

@@ -64,10 +64,26 @@ class ToyTarget:
             progress(1, 1, "summarising")
         return ToyArtefact(len(list(graph)), float(graph.dt), opts.time_steps, opts.toy_precision)
 
-    def check(self, graph, inputs, labels, options=None, *, data=None, synthetic=False, progress=None) -> ToyCheck:
+    def identify(self, path):
+        """A JSON file holding the toy summary's keys is a toy artefact (it records no source hash)."""
+        from snncc.artefacts import ArtefactIdentity
+
+        try:
+            record = json.loads(Path(path).read_text())
+        except (OSError, ValueError):
+            return None
+        if not isinstance(record, dict) or set(record) != {"nodes", "dt", "time_steps", "precision"}:
+            return None
+        return ArtefactIdentity(target="toy", path=str(path), description="toy summary (JSON)")
+
+    def check(self, graph, inputs, labels, options=None, *, artefact=None, data=None, synthetic=False,
+              progress=None) -> ToyCheck:
+        """The written summary must describe ``graph``; the accuracy is the IR reference's."""
         from snncc.ir.simulate import simulate
 
         opts = target_options(self, options, "check")
+        if artefact is not None and json.loads(Path(artefact).read_text())["nodes"] != len(list(graph)):
+            raise ValueError("the toy artefact describes another graph")
         prediction = simulate(graph, np.asarray(inputs, np.float32)).prediction.numpy()
         if progress is not None:
             progress(len(labels))

@@ -8,7 +8,11 @@
     /layer/i/alwaysOn (the layer's last k units are bias sources: input axons held at 1 every step,
     or compartments that fire on their own; see lowering/bias_sources.py)
     /snncc/{version, quantization, timing, validation, metadata (JSON strings), source_sha256,
-            core_map (JSON, when mapped), netx_compat (what netx would run differently)}
+            core_map (JSON, when mapped), netx_compat (what netx would run differently),
+            portability (JSON: netx_runnable, line, reasons, best_netx_rule; bundle/portability.py),
+            liveness (JSON: every population's activity on the calibration inputs, float and Loihi)}
+    metadata holds compile_options (timing, scale, allow_reset_change, time_steps: what check re-lowers
+    with), input_copies / base_inputs (the data's channels, tiled by snncc) and input_shape (C, H, W)
 
 The writer is atomic and byte-identical for identical input (no timestamps, fixed order). The
 reader also accepts SLAYER v1 files as the paper's authors wrote them (a ``flatten`` layer after
@@ -461,7 +465,8 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
     core_map = None
     if SNNCC_GROUP in f:
         s = f[SNNCC_GROUP]
-        for key in ("metadata", "quantization", "timing", "validation", "netx_compat", "core_map"):
+        for key in ("metadata", "quantization", "timing", "validation", "netx_compat", "core_map", "portability",
+                    "liveness"):
             if key in s:
                 try:
                     value = json.loads(_text(s[key]))

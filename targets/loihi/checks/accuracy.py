@@ -1,15 +1,22 @@
-"""``snncc check --target loihi``: what deploying on Loihi costs, on a data set, and why.
+"""``snncc check --target loihi --data``: what the written bundle costs on a labelled data set, and why.
 
-Four runs on the same inputs (five when the reset changes):
-  (a) the float model as trained (IR reference of the original graph)
+Runs on the same inputs, each a stage between the model and the bundle:
+  (a) the float model as trained (IR reference of the model file, its own reset)
   (r) the float model with reset to zero (only when --allow-reset-change replaced a subtract reset)
   (b) the IR in the order Loihi runs, float (timing change only, e.g. the paper's export order)
   (c) the IR with the quantized weights, thresholds and decay constants, float
-  (d) the bit-exact emulator of the bundle (integer, truncating decays, wrap/clip)
-plus (d') the emulator without overflow (wide registers) when any overflow occurred, and (e) the
-relayed bundle when a layer's fan-in needs relays (``relays.py``; loss "relays" = acc(d) - acc(e)).
-Loss split: reset = acc(a) - acc(r); timing = acc(r) - acc(b); quantization = acc(b) - acc(c) + acc(c) - acc(d'),
-i.e. parameters plus integer truncation; overflow = acc(d') - acc(d).
+  (d) the bundle as written, read from its file and run in the bit-exact emulator
+plus (d') the bundle with wide registers (no overflow) when any overflow occurred, and, for a
+relayed bundle, (d0) the same network without relays (the loss "relays" = acc(d0) - acc(d)).
+Loss split: reset = acc(a) - acc(r); timing = acc(r) - acc(b); quantization = acc(b) - acc(c);
+integer_truncation = acc(c) - acc(d'); overflow = acc(d') - acc(d) (relayed: measured on (d0));
+total = acc(a) - acc(d). Stages (r), (b), (c) exist only inside the compiler: they are re-derived
+from the model with the bundle's recorded options (``written.py``); when that does not reproduce
+the bundle, only (a) and (d) are measured and the record says why.
+
+Prediction agreements follow ``snncc.measure.agreement``'s rule (samples whose float output has no
+single winner are left out and counted); liveness (``snncc.ir.liveness``) is measured for every
+population in float (a) and on the bundle (d).
 """
 
 from __future__ import annotations
@@ -24,6 +31,8 @@ from snncc.ir.graph import Graph
 from snncc.ir.simulate import simulate
 
 CHUNK = 64
+STAGES = ("float_trained", "ir_reset_changed", "ir_loihi_order", "ir_quantized", "emulator_without_relays",
+          "emulator_wide", "emulator")
 
 
 @dataclass
@@ -34,163 +43,219 @@ class CheckRecord:
     timing: str
     scale_rule: str
     scale_reason: str
-    accuracy: dict[str, float]                 # float_trained, ir_reset_changed, ir_loihi_order, ir_quantized, emulator
-    loss_points: dict[str, float]              # reset, timing, quantization (params), truncation, overflow, total
-    spike_agreement: dict[str, dict[str, float]]   # comparison -> layer -> fraction of equal entries
-    prediction_agreement: dict[str, float]
+    accuracy: dict[str, float]                 # stage -> accuracy (only the stages measured)
+    loss_points: dict[str, float]              # reset, timing, quantization, integer_truncation, overflow, [relays], total
+    spike_agreement: dict[str, dict[str, float | None]]   # comparison -> layer -> share of equal entries (None: both silent)
+    prediction_agreement: dict[str, dict[str, Any]]       # comparison -> ArgmaxAgreement (decided rule, 95 % interval)
     overflow: dict[str, int]
     mode: str = "batch"
     notes: list[str] = field(default_factory=list)
     reset_changed: bool = False                # --allow-reset-change replaced a subtract reset
+    liveness: dict[str, Any] = field(default_factory=dict)   # "float" / "loihi": population -> activity
+    flagged: list[str] = field(default_factory=list)         # silent or saturated populations
+    warnings: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
 
     def render_text(self, console) -> None:
+        from snncc.measure.agreement import ArgmaxAgreement
+
         a, l = self.accuracy, self.loss_points
-        console.print(f"[bold]snncc check: {self.target}[/bold] on {self.samples} samples x {self.steps} steps "
-                      f"(timing '{self.timing}', scale '{self.scale_rule}', {self.mode} mode)")
-        rows = [("(a) float model as trained", "float_trained")] + (
-            [("(r) reset to zero instead, float", "ir_reset_changed")] if self.reset_changed else []) + [
-                ("(b) IR in Loihi order, float", "ir_loihi_order"),
-                ("(c) IR with quantized parameters, float", "ir_quantized"), ("(d) Loihi emulator (bit-exact)", "emulator")] + (
-            [("(e) relayed bundle (fan-in relays), emulator", "relayed")] if "relayed" in a else [])
-        for label, key in rows:
-            console.print(f"  {label:<42} accuracy {100 * a[key]:6.2f} %")
-        console.print("  loss (points) from: " + ", ".join(f"{k} {v:+.2f}" for k, v in l.items()))
+        say = lambda text: console.print(text, markup=False, highlight=False, soft_wrap=True)  # noqa: E731
+        say(f"snncc check: {self.target} on {self.samples} samples x {self.steps} steps "
+            f"(timing '{self.timing}', scale '{self.scale_rule}', {self.mode} mode)")
+        labels = {"float_trained": "(a) float model as trained", "ir_reset_changed": "(r) reset to zero instead, float",
+                  "ir_loihi_order": "(b) IR in Loihi order, float", "ir_quantized": "(c) IR with quantized parameters, float",
+                  "emulator_without_relays": "(d0) the network without relays, emulator",
+                  "emulator": "(d) the bundle as written, emulator (bit-exact)"}
+        for key, label in labels.items():
+            if key in a:
+                say(f"  {label:<50} accuracy {100 * a[key]:6.2f} %")
+        say("  loss (points) from: " + ", ".join(f"{k} {v:+.2f}" for k, v in l.items()))
         for name, per_layer in self.spike_agreement.items():
-            console.print(f"  spike agreement {name}: " + ", ".join(f"{k} {100 * v:.2f}%" for k, v in per_layer.items()))
-        console.print("  prediction agreement: " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in self.prediction_agreement.items()))
-        console.print(f"  overflow events: {self.overflow}")
+            say(f"  spike agreement {name}: " + ", ".join(
+                f"{k} {'undefined (silent)' if v is None else f'{100 * v:.2f}%'}" for k, v in per_layer.items()))
+        for name, agreement in self.prediction_agreement.items():
+            say(f"  prediction agreement {name}: {ArgmaxAgreement(**agreement).text()}")
+        say(f"  overflow events: {self.overflow}")
+        for line in self.flagged:
+            say(f"  liveness: {line}")
+        for line in self.warnings:
+            say(f"  warning: {line}")
         for note in self.notes:
-            console.print(f"  note: {note}")
+            say(f"  note: {note}")
 
 
 def _ir_run(graph: Graph, x: np.ndarray, names: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """(output spike counts (B, classes), population spikes) of the float IR."""
     from snncc.threads import one_thread
 
     with one_thread():
         res = simulate(graph, x, record="spikes")
-    return res.prediction.numpy(), {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
+    spikes = {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
+    return spikes[names[-1]].sum(axis=1, dtype=np.int64), spikes
 
 
-def _relays(network):
-    """(relayed network, plan) when a layer's fan-in needs relays, else (None, None)."""
-    from snncc.targets.loihi.mapping.relays import needs_relays, relay_network
-
-    if not needs_relays(network):
-        return None, None
-    return relay_network(network)
+def _layer_agreement(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> dict[str, float | None]:
+    """Share of equal spike entries per layer; None where both are silent (nothing to agree on)."""
+    return {k: None if not a[k].any() and not b[k].any() else float(np.mean(a[k] == b[k])) for k in a}
 
 
-def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: dict[str, Any],
-                progress: Callable[[int], None] | None = None) -> CheckRecord:
-    """Run (a)-(d) over ``inputs`` (N, T, C) 0/1 with ``labels`` (N,); ``progress(n)`` after each chunk."""
-    from snncc.targets.loihi import lower_model
-    from snncc.targets.loihi.emulation.emulator import check_inputs, emulate
-    from snncc.targets.loihi.checks.exactness import lead_steps, loihi_spikes, pad
+def check_bundle(graph: Graph, bundle, inputs: np.ndarray, labels: np.ndarray, options: dict[str, Any],
+                 progress: Callable[[int], None] | None = None) -> CheckRecord:
+    """Measure the written ``bundle`` (``written.WrittenBundle``) against ``graph`` on ``inputs`` (N, T, C)
+    0/1 with ``labels`` (N,); ``progress(n)`` after each chunk. Options: mode ("batch" | "stream"),
+    gap, data (the data file, for messages), synthetic."""
+    from snncc.ir import liveness
+    from snncc.measure.agreement import argmax_agreement
+    from snncc.targets.loihi.checks.exactness import lead_steps, loihi_spikes
+    from snncc.targets.loihi.emulation.emulator import check_inputs, emulate, pad
 
-    lowered = lower_model(graph, dict(options, t_sample=options.get("t_sample") or np.asarray(inputs).shape[1]))
-    net = lowered.network
+    net = bundle.network
     x_all = check_inputs(inputs, net.input_width, source=options.get("data"))
     labels = np.asarray(labels).reshape(-1)
     if labels.shape[0] != x_all.shape[0]:
         raise SnnccError(f"{labels.shape[0]} labels for {x_all.shape[0]} samples", file=options.get("data"), field="labels")
     n, steps, _ = x_all.shape
-    names = [c.lif for c in lowered.layers]
-    shift = lowered.timing_record.output_shift
-    lead = lead_steps(lowered.timing_record.shifts, shift)
-    mode = options.get("mode", "batch")
-    relayed, plan = _relays(net)
-    preds = {k: [] for k in ("float_trained", "ir_reset_changed", "ir_loihi_order", "ir_quantized", "emulator",
-                             "emulator_wide", "relayed")}
-    agree_sum = {k: {nm: 0.0 for nm in names} for k in
-                 ("emulator_vs_trained", "emulator_vs_quantized_ir", "loihi_order_vs_trained")}
+    names = bundle.populations
+    lowered = bundle.lowered
+    mode, gap = options.get("mode", "batch"), int(options.get("gap", 100))
+    relayed = lowered is not None and "relayed_layer_index" in net.metadata
+    counts: dict[str, list[np.ndarray]] = {k: [] for k in STAGES}
+    compare = {"emulator_vs_trained": ("emulator", "float_trained")}
+    if lowered is not None:
+        compare.update({"emulator_vs_quantized_ir": ("emulator", "ir_quantized"),
+                        "loihi_order_vs_trained": ("ir_loihi_order", "float_trained")})
+    agree_sum = {k: {nm: [0.0, 0] for nm in names} for k in compare}
     overflow = {"q_wrap": 0, "u_wrap": 0, "v_clip": 0}
+    float_tally, loihi_tally = liveness.Tally(), liveness.Tally()
     wide_needed = False
-    emu_outputs = []
-    for start in range(0, n, CHUNK):
-        x = x_all[start:start + CHUNK]
-        p_a, s_a = _ir_run(lowered.trained, x, names)
-        if lowered.order is lowered.trained:
-            p_b, s_b = p_a, s_a
-        else:
-            p_b, s_b = _ir_run(lowered.order, x, names)
-        if lowered.deployed is None:
-            p_r = p_a
-        else:
-            p_r = p_b if lowered.order is lowered.deployed else _ir_run(lowered.deployed, x, names)[0]
-        p_c, s_c = _ir_run(lowered.quantized, x, names)
-        if mode == "batch":
-            res = emulate(net, pad(x, lead), record="all")
-        else:
-            res = emulate(net, pad(x, lead), record="all", mode="stream", gap=int(options.get("gap", 100)))
-        s_d = loihi_spikes(res, lowered.network, lowered.layers, lowered.timing_record.shifts, steps)
-        p_d = np.argmax(s_d[names[-1]].sum(axis=1), axis=1)
-        if plan is not None:
-            from snncc.targets.loihi.mapping.relays import emulate_relayed
+    chunks = []
+    from snncc.measure.agreement import chunk_size
 
-            kw = {"mode": "stream", "gap": int(options.get("gap", 100))} if mode != "batch" else {}
-            s_e = loihi_spikes(emulate_relayed(relayed, plan, pad(x, lead), **kw), lowered.network, lowered.layers,
-                               lowered.timing_record.shifts, steps)
-            preds["relayed"].append(np.argmax(s_e[names[-1]].sum(axis=1), axis=1))
-        for k, v in res.overflow.items():
+    chunk = chunk_size(sum(net.layers[bundle.layer_of[p]].model_n for p in names), steps, CHUNK)
+    for start in range(0, n, chunk):
+        x = x_all[start:start + chunk]
+        runs: dict[str, tuple[np.ndarray, dict[str, np.ndarray]]] = {"float_trained": _ir_run(graph, x, names)}
+        if lowered is not None:
+            order = lowered.order
+            runs["ir_loihi_order"] = _ir_run(order, x, names) if order is not lowered.trained else runs["float_trained"]
+            if lowered.deployed is not None:
+                runs["ir_reset_changed"] = (runs["ir_loihi_order"] if order is lowered.deployed
+                                            else _ir_run(lowered.deployed, x, names))
+            else:
+                runs["ir_reset_changed"] = runs["float_trained"]
+            runs["ir_quantized"] = _ir_run(lowered.quantized, x, names)
+        s_d, res = bundle.run(x, mode=mode, gap=gap)
+        runs["emulator"] = (s_d[names[-1]].sum(axis=1, dtype=np.int64), s_d)
+        if relayed:
+            trec = lowered.timing_record
+            kw = {"mode": "stream", "gap": gap} if mode == "stream" else {}
+            plain = emulate(lowered.network, pad(x, lead_steps(trec.shifts, trec.output_shift)), record="all", **kw)
+            s_0 = loihi_spikes(plain, lowered.network, lowered.layers, trec.shifts, steps)
+            runs["emulator_without_relays"] = (s_0[names[-1]].sum(axis=1, dtype=np.int64), s_0)
+            res_over = plain.overflow
+        else:
+            res_over = res.overflow
+        for k, v in res_over.items():
             overflow[k] += v
-        emu_outputs.append((x, mode))
+        wide_needed = wide_needed or any(res_over.values())
+        chunks.append(x)
+        for key, (c, _) in runs.items():
+            counts[key].append(c)
+        float_tally.add(runs["float_trained"][1])
+        loihi_tally.add(s_d)
         w = x.shape[0]
-        for nm in names:
-            agree_sum["emulator_vs_trained"][nm] += float(np.mean(s_d[nm] == s_a[nm])) * w
-            agree_sum["emulator_vs_quantized_ir"][nm] += float(np.mean(s_d[nm] == s_c[nm])) * w
-            agree_sum["loihi_order_vs_trained"][nm] += float(np.mean(s_b[nm] == s_a[nm])) * w
-        for key, p in (("float_trained", p_a), ("ir_reset_changed", p_r), ("ir_loihi_order", p_b),
-                       ("ir_quantized", p_c), ("emulator", p_d)):
-            preds[key].append(np.asarray(p))
-        if any(res.overflow.values()):
-            wide_needed = True
+        for comp, (got, want) in compare.items():
+            for nm in names:
+                a, b = runs[got][1][nm], runs[want][1][nm]
+                if a.any() or b.any():
+                    agree_sum[comp][nm][0] += float(np.mean(a == b)) * w
+                    agree_sum[comp][nm][1] += w
         if progress is not None:
             progress(w)
+    base = "emulator_without_relays" if relayed else "emulator"
     if wide_needed:
-        for x, m in emu_outputs:
-            kw = {"mode": "stream", "gap": int(options.get("gap", 100))} if m == "stream" else {}
-            r = emulate(net, pad(x, lead), wide=True, **kw)
-            counts = r.output_spikes[:, shift:shift + steps].sum(axis=1)
-            preds["emulator_wide"].append(np.argmax(counts, axis=1))
+        for x in chunks:
+            if relayed:
+                trec = lowered.timing_record
+                kw = {"mode": "stream", "gap": gap} if mode == "stream" else {}
+                r = emulate(lowered.network, pad(x, lead_steps(trec.shifts, trec.output_shift)), wide=True, **kw)
+                out = r.output_spikes[:, trec.output_shift:trec.output_shift + steps]
+            else:
+                out = bundle.run_wide(x, mode=mode, gap=gap)
+            counts["emulator_wide"].append(out.sum(axis=1, dtype=np.int64))
     else:
-        preds["emulator_wide"] = preds["emulator"]
-    if plan is None:
-        preds["relayed"] = preds["emulator"]
-    p = {k: np.concatenate(v) for k, v in preds.items()}
-    acc = {k: float(np.mean(v == labels)) for k, v in p.items()}
-    loss = {
-        "reset": 100 * (acc["float_trained"] - acc["ir_reset_changed"]),
-        "timing": 100 * (acc["ir_reset_changed"] - acc["ir_loihi_order"]),
-        "quantization": 100 * (acc["ir_loihi_order"] - acc["ir_quantized"]),
-        "integer_truncation": 100 * (acc["ir_quantized"] - acc["emulator_wide"]),
-        "overflow": 100 * (acc["emulator_wide"] - acc["emulator"]),
-        "total": 100 * (acc["float_trained"] - acc["emulator"]),
-    }
-    if plan is not None:
-        loss["relays"] = 100 * (acc["emulator"] - acc["relayed"])
-        loss["total"] = 100 * (acc["float_trained"] - acc["relayed"])
+        counts["emulator_wide"] = counts[base]
+    c = {k: np.concatenate(v) for k, v in counts.items() if v}
+    pred = {k: np.argmax(v, axis=1) for k, v in c.items()}
+    acc = {k: float(np.mean(v == labels)) for k, v in pred.items()}
+    if lowered is not None:
+        loss = {
+            "reset": 100 * (acc["float_trained"] - acc["ir_reset_changed"]),
+            "timing": 100 * (acc["ir_reset_changed"] - acc["ir_loihi_order"]),
+            "quantization": 100 * (acc["ir_loihi_order"] - acc["ir_quantized"]),
+            "integer_truncation": 100 * (acc["ir_quantized"] - acc["emulator_wide"]),
+            "overflow": 100 * (acc["emulator_wide"] - acc[base]),
+        }
+        if relayed:
+            loss["relays"] = 100 * (acc["emulator_without_relays"] - acc["emulator"])
+    else:
+        loss = {}
+    loss["total"] = 100 * (acc["float_trained"] - acc["emulator"])
+    shown = [k for k in ("float_trained", "ir_reset_changed", "ir_loihi_order", "ir_quantized",
+                         "emulator_without_relays", "emulator") if k in acc]
     notes = []
-    if lowered.timing_record.changes:
-        notes += [f"timing: {c}" for c in lowered.timing_record.changes]
-    if plan is not None:
-        notes += plan.notes()
+    meta = net.metadata
+    changes = list((meta.get("timing") or {}).get("changes") or [])
+    notes += [f"timing: {ch}" for ch in changes]
+    if bundle.stages_note:
+        notes.append(bundle.stages_note)
+    if relayed:
+        from snncc.targets.loihi.mapping.relays import RelayPlan
+
+        notes += RelayPlan(records=list(meta.get("fan_in_relays") or []), index=list(meta["relayed_layer_index"]),
+                           shift=[]).notes()
+    if steps != bundle.steps:
+        notes.append(f"the inputs have {steps} steps; the bundle's tSample is for {bundle.steps} (the emulator runs "
+                     "the inputs' length)")
     if options.get("synthetic"):
         notes.append("the data set is synthetic: these accuracies are not the paper's")
+    f_act = float_tally.activity(liveness.graph_refractory(graph))
+    l_act = loihi_tally.activity({nm: int(net.layers[bundle.layer_of[nm]].ref_delay) for nm in names})
+    warning = liveness.float_silence_warning(graph, x_all[:chunk], f_act, f"the first {min(chunk, n)} of these samples")
+    quant = meta.get("quantization") or {}
+    prediction = {
+        "emulator_vs_trained": argmax_agreement(c["float_trained"], c["emulator"]).as_dict(),
+        **({"emulator_vs_quantized_ir": argmax_agreement(c["ir_quantized"], c["emulator"]).as_dict(),
+            "loihi_order_vs_trained": argmax_agreement(c["float_trained"], c["ir_loihi_order"]).as_dict()}
+           if lowered is not None else {}),
+        **({"relayed_vs_emulator": argmax_agreement(c["emulator_without_relays"], c["emulator"]).as_dict()}
+           if relayed else {}),
+    }
     return CheckRecord(
-        target="loihi", samples=n, steps=steps, timing=lowered.timing_record.mode,
-        scale_rule=lowered.quant_record.rule, scale_reason=lowered.quant_record.reason,
-        accuracy={k: acc[k] for k in ("float_trained", "ir_reset_changed", "ir_loihi_order", "ir_quantized", "emulator")
-                  + (("relayed",) if plan is not None else ())},
+        target="loihi", samples=n, steps=steps, timing=str(meta.get("timing", "unknown")) if isinstance(
+            meta.get("timing"), str) else str((meta.get("timing") or {}).get("mode", "unknown")),
+        scale_rule=str(quant.get("rule", "unknown")), scale_reason=str(quant.get("reason", "not recorded")),
+        accuracy={k: acc[k] for k in shown},
         loss_points=loss,
-        spike_agreement={k: {nm: v / n for nm, v in d.items()} for k, d in agree_sum.items()},
-        prediction_agreement={
-            "emulator_vs_trained": float(np.mean(p["emulator"] == p["float_trained"])),
-            "emulator_vs_quantized_ir": float(np.mean(p["emulator"] == p["ir_quantized"])),
-            "loihi_order_vs_trained": float(np.mean(p["ir_loihi_order"] == p["float_trained"])),
-            **({"relayed_vs_emulator": float(np.mean(p["relayed"] == p["emulator"]))} if plan is not None else {}),
-        },
-        overflow=overflow, mode=mode, notes=notes, reset_changed=lowered.deployed is not None,
+        spike_agreement={k: {nm: (s / w if w else None) for nm, (s, w) in d.items()} for k, d in agree_sum.items()},
+        prediction_agreement=prediction,
+        overflow=overflow, mode=mode, notes=notes, reset_changed=lowered is not None and lowered.deployed is not None,
+        liveness={"float": liveness.as_dicts(f_act), "loihi": liveness.as_dicts(l_act)},
+        flagged=liveness.flagged(f_act, "in float") + liveness.flagged(l_act, "on Loihi (the bundle)"),
+        warnings=[warning] if warning else [],
     )
+
+
+def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: dict[str, Any],
+                progress: Callable[[int], None] | None = None) -> CheckRecord:
+    """``check_bundle`` on the bundle ``compile`` would write for ``graph`` with ``options`` (written to a
+    temporary directory and read back: the measured network is the file's)."""
+    from snncc.artefacts import compiled_artefact
+    from snncc.targets.loihi.capabilities import target
+    from snncc.targets.loihi.checks.written import open_bundle
+
+    with compiled_artefact(target, graph, options) as path:
+        return check_bundle(graph, open_bundle(path, graph), inputs, labels, options, progress)

@@ -49,8 +49,9 @@ def loihi_spikes(result: EmulationResult, network: LoihiNetwork, layers: list[Ch
     return out
 
 
-def agreement(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> dict[str, float]:
-    return {k: float(np.mean(a[k] == b[k])) for k in a}
+def agreement(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> dict[str, float | None]:
+    """Share of equal spike entries per layer; None where both are silent (nothing to agree on)."""
+    return {k: None if not a[k].any() and not b[k].any() else float(np.mean(a[k] == b[k])) for k in a}
 
 
 @dataclass
@@ -62,7 +63,8 @@ class ValidationRecord:
     trained_vs_loihi_order: dict[str, float] = field(default_factory=dict)   # IR as trained vs IR in Loihi order
     emulator_vs_quantized_ir: dict[str, float] = field(default_factory=dict)
     emulator_vs_trained: dict[str, float] = field(default_factory=dict)
-    prediction_agreement: float = 1.0       # emulator vs float model as trained
+    prediction_agreement: float | None = None   # emulator vs float model as trained (None: undefined, outputs silent)
+    prediction: dict[str, Any] = field(default_factory=dict)   # snncc.measure.agreement.ArgmaxAgreement
     overflow: dict[str, int] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
@@ -123,8 +125,10 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
     record.emulator_vs_quantized_ir = agreement(emu, ir_quant)
     record.emulator_vs_trained = agreement(emu, ir_trained)
     last = names[-1]
-    pred_emu = np.argmax(emu[last].sum(axis=1), axis=1)
-    pred_ir = np.argmax(ir_trained[last].sum(axis=1), axis=1)
-    record.prediction_agreement = float(np.mean(pred_emu == pred_ir))
+    from snncc.measure.agreement import argmax_agreement
+
+    decisions = argmax_agreement(ir_trained[last].sum(axis=1), emu[last].sum(axis=1))
+    record.prediction_agreement = decisions.share
+    record.prediction = decisions.as_dict()
     record.overflow = dict(fast.overflow)
     return record

@@ -1,5 +1,9 @@
 """``snncc emulate``'s work: a bundle run on 0/1 inputs in chunks, with the outputs' timing shift applied.
 
+Inputs may come in the model's own shape (``snncc.input_layout``: frames (B, T, C, H, W) of a
+convolutional model, or the data's channels when the bundle takes input copies, tiled); the
+bundle's flat width is taken as it is.
+
 When compile shifted the outputs (timing, current biases), an input of the model's length
 tSample - output_shift gets output_shift blank steps appended, so every output step is seen.
 Batch mode runs ``CHUNK`` samples at a time on one flattened network (the same results as one
@@ -26,6 +30,7 @@ class BundleEmulation:
     steps: int
     padded_steps: int        # blank steps appended for the outputs' shift
     output_shift: int
+    input_note: str | None = None   # what was done to take the inputs in the model's own shape
 
     @property
     def prediction(self) -> np.ndarray:
@@ -58,8 +63,10 @@ def emulate_bundle(network, inputs, *, record: str = "outputs", stream: bool = F
                    source: str | None = None, progress: Callable[[int], None] | None = None) -> BundleEmulation:
     """Check ``inputs`` against the bundle's width, pad for the output shift, emulate; ``progress(n)``
     after each chunk of n samples (batch mode)."""
+    from snncc.input_layout import InputLayout, to_artefact_layout
     from snncc.targets.loihi.emulation.emulator import PreparedNetwork, check_inputs, emulate, pad
 
+    inputs, note = to_artefact_layout(inputs, InputLayout.from_record(network.input_width, network.metadata))
     x = check_inputs(inputs, network.input_width, source=source)
     shift = int(network.metadata.get("output_shift", 0) or 0)
     padded = shift if shift and x.shape[1] + shift == network.t_sample else 0
@@ -74,7 +81,7 @@ def emulate_bundle(network, inputs, *, record: str = "outputs", stream: bool = F
             if progress is not None:
                 progress(min(CHUNK, x.shape[0] - start))
         result = merge(parts)
-    return BundleEmulation(network, result, int(x.shape[0]), int(x.shape[1]), padded, shift)
+    return BundleEmulation(network, result, int(x.shape[0]), int(x.shape[1]), padded, shift, note)
 
 
 def merge(parts):

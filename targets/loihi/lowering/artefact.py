@@ -22,10 +22,16 @@ class LoihiArtefact:
     timing: dict[str, Any]
     validation: dict[str, Any]
     notes: list[str] = field(default_factory=list)
+    liveness: dict[str, Any] = field(default_factory=dict)      # populations' activity on the calibration inputs
+    portability: dict[str, Any] = field(default_factory=dict)   # netx runs it as written? (bundle/portability.py)
 
     def write(self, path: str | Path) -> None:
-        write_bundle(self.network, path, extra={"quantization": self.quantization, "timing": self.timing,
-                                                "validation": self.validation})
+        extra = {"quantization": self.quantization, "timing": self.timing, "validation": self.validation}
+        if self.liveness:
+            extra["liveness"] = self.liveness
+        if self.portability:
+            extra["portability"] = self.portability
+        write_bundle(self.network, path, extra=extra)
 
     def summary(self) -> dict[str, Any]:
         net = self.network
@@ -50,6 +56,8 @@ class LoihiArtefact:
             "timing": self.timing["mode"], "timing_changes": self.timing["changes"],
             "validation": self.validation,
             "netx_compat": netx_compat(net),
+            "portability": self.portability,
+            "liveness": self.liveness,
             "core_map": net.core_map,
             "notes": self.notes,
         }

@@ -9,6 +9,7 @@ when the model states no recording length; --time-steps).
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -16,6 +17,7 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
+from snncc.input_layout import frame_shape
 from snncc.passes.fold_linear import fold_linear
 from snncc.ir.timebase import sample_steps
 from snncc.progress import Progress
@@ -27,6 +29,7 @@ from snncc.targets.loihi.network import LoihiNetwork
 from snncc.targets.loihi.mapping.partition import map_network
 from snncc.targets.loihi.mapping.resources import LOIHI1
 
+COMPILE_OPTIONS = ("timing", "scale", "allow_reset_change", "time_steps")   # recorded in the bundle: check re-lowers with them
 VALIDATION_BATCH = 4
 VALIDATING = "validating the bundle against the IR reference"
 
@@ -46,15 +49,58 @@ class LoweredModel:
     notes: list[str] = field(default_factory=list)
 
 
+_RECENT: OrderedDict[str, LoweredModel] = OrderedDict()   # graph content + options -> lowering (this process)
+RECENT_KEPT = 2
+
+
+def content_key(graph: Graph, options: dict[str, Any]) -> str:
+    """SHA-256 of everything lowering reads: the graph (nodes, parameters, edges, dt, metadata) and the
+    options it reads (``COMPILE_OPTIONS``, ``t_sample``; ``source`` for a graph that names no source file);
+    equal keys lower to equal results (lowering is deterministic: seeded calibration)."""
+    import hashlib
+    import json
+
+    from snncc.ir.serialize import graph_to_record
+    from snncc.records import to_jsonable
+
+    read = {k: options.get(k) for k in (*COMPILE_OPTIONS, "t_sample")}
+    if "source_file" not in graph.metadata:
+        read["source"] = options.get("source")          # the bundle records it only then
+    record, arrays = graph_to_record(graph)
+    h = hashlib.sha256(json.dumps(to_jsonable([record, read]), sort_keys=True).encode())
+    for key in sorted(arrays):
+        a = np.ascontiguousarray(arrays[key])
+        h.update(f"{key}{a.dtype}{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
 def lower_model(graph: Graph, options: dict[str, Any], progress: Progress | None = None) -> LoweredModel:
     """Timing, quantization and register values (no validation); ``progress(done, total, phase)`` as the
-    scale rule's candidates are measured (``--scale auto``)."""
+    scale rule's candidates are measured (``--scale auto``). The last ``RECENT_KEPT`` results are kept
+    by content (``content_key``), so a check that lowers the model compile just lowered does not redo the
+    calibration; the checks compare what they use with the written bundle anyway (``checks/written.py``)."""
+    import copy
+
+    key = content_key(graph, options)
+    if key in _RECENT:
+        _RECENT.move_to_end(key)
+        return copy.deepcopy(_RECENT[key])      # a caller may change what it gets; the kept one stays as made
+    lowered = _lower_model(graph, options, progress)
+    _RECENT[key] = copy.deepcopy(lowered)
+    while len(_RECENT) > RECENT_KEPT:
+        _RECENT.popitem(last=False)
+    return lowered
+
+
+def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | None = None) -> LoweredModel:
     from snncc.ir.liveness import calibration_spikes, calibration_text
     from snncc.targets.loihi.lowering import scaling
     from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
 
     timing_mode = options.get("timing") or "exact"
     rule = options.get("scale") or "auto"
+    frame = frame_shape(graph)           # the input frame (C, H, W) before convolutions are folded
     graph, fold = fold_linear(graph)     # Conv -> connection matrix; linear chains -> one projection
     layers = chain(graph)
     deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
@@ -71,8 +117,10 @@ def lower_model(graph: Graph, options: dict[str, Any], progress: Progress | None
     calib = calibration_spikes(graph.node(layers[0].pre).width, steps)   # the inputs compile's liveness warning uses
     reference: dict[str, Any] = {}
 
-    def measure(gq: Graph, rq) -> float:
-        """Mean over layers of ``count_error``: per-neuron spike counts against the float model's."""
+    def measure(gq: Graph, rq) -> scaling.CandidateMeasure:
+        """Mean over layers of ``count_error`` (per-neuron spike counts against the float model's), whether
+        the outputs are silent, and what netx lacks to run the candidate as written."""
+        from snncc.targets.loihi.bundle.portability import netx_runnable
         from snncc.targets.loihi.emulation.emulator import emulate
 
         if "spikes" not in reference:
@@ -80,7 +128,10 @@ def lower_model(graph: Graph, options: dict[str, Any], progress: Progress | None
         net = build_network(order, layers, rq, trec, steps + trec.output_shift, {})
         xp = pad(calib, lead_steps(trec.shifts, trec.output_shift))
         emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
-        return float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
+        float_silent = not reference["spikes"][names[-1]].any()
+        error = None if float_silent else float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
+        return scaling.CandidateMeasure(error, outputs_silent=not emu[names[-1]].any(), float_silent=float_silent,
+                                        gaps=netx_runnable(net))
 
     quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps), progress=progress)
     quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
@@ -99,6 +150,8 @@ def lower_model(graph: Graph, options: dict[str, Any], progress: Progress | None
         "population_shifts": trec.shifts,
         "steps": steps,
         "t_sample_rule": t_rule,
+        "input_shape": frame,
+        "compile_options": {key: options.get(key) for key in COMPILE_OPTIONS},
     }
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
     return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
@@ -159,6 +212,8 @@ def lower_artefact(graph: Graph, options: dict[str, Any], progress: Progress | N
                                               validation["relays"]["spike_agreement"].items())
                      + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
                      + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
+    liveness = calibration_liveness(graph, lowered)
+    portability = portability_record(network, lowered.quant_record)
     if progress is not None:
         progress(1, 1, VALIDATING)
     notes.append(f"tSample {network.t_sample}: {lowered.network.metadata['t_sample_rule']}"
@@ -167,7 +222,45 @@ def lower_artefact(graph: Graph, options: dict[str, Any], progress: Progress | N
         notes.append(f"outputs appear {network.metadata['output_shift']} step(s) later than in the IR; tSample "
                      "includes them")
     return LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
-                         timing=lowered.timing_record.as_dict(), validation=validation, notes=notes)
+                         timing=lowered.timing_record.as_dict(), validation=validation, notes=notes,
+                         liveness=liveness, portability=portability)
+
+
+def calibration_liveness(graph: Graph, lowered: LoweredModel) -> dict[str, Any]:
+    """Every population's activity on the calibration inputs (``snncc.ir.liveness.calibration_spikes``),
+    in float (the model as given) and on Loihi (the lowered network, bit-exact), the silent or saturated
+    ones named. (The one-line warning for a model silent in float is compile's: ``calibration_warning``.)"""
+    from snncc.ir import liveness
+    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
+    from snncc.targets.loihi.emulation.emulator import emulate
+
+    steps = int(lowered.network.metadata["steps"])
+    x = liveness.calibration_spikes(lowered.network.input_width, steps)
+    names = [c.lif for c in lowered.layers]
+    trec, net = lowered.timing_record, lowered.network
+    floats = ir_spikes(graph, x, names)
+    chip_run = loihi_spikes(emulate(net, pad(x, lead_steps(trec.shifts, trec.output_shift)), record="all"), net,
+                            lowered.layers, trec.shifts, steps)
+    f_act = liveness.activity(floats, liveness.graph_refractory(graph))
+    l_act = liveness.activity(chip_run, {c.lif: int(net.layers[i].ref_delay) for i, c in enumerate(lowered.layers, 1)})
+    return {"inputs": liveness.calibration_text(steps), "float": liveness.as_dicts(f_act),
+            "loihi": liveness.as_dicts(l_act),
+            "flagged": liveness.flagged(f_act, "in float") + liveness.flagged(l_act, "on Loihi")}
+
+
+def portability_record(network: LoihiNetwork, quant) -> dict[str, Any]:
+    """Whether netx runs the bundle as written (``bundle/portability.py``), why not, and the best bundle
+    under a rule netx runs that auto measured beside it."""
+    from snncc.targets.loihi.bundle.portability import netx_runnable, portability_line
+
+    gaps = netx_runnable(network)
+    calib = quant.calibration or {}
+    chosen = calib.get("chosen")
+    return {"netx_runnable": not gaps, "line": portability_line(gaps), "reasons": [g.as_dict() for g in gaps],
+            "best_netx_rule": calib.get("best_netx_rule"),
+            "chosen_error": (calib.get("errors") or {}).get(chosen) if chosen else None,
+            "rule": "ASSUMED until bench/lava_netx_agreement.py measures it: netx 0.6 runs one weight exponent, "
+                    "threshold and decay per layer and no always-on bias sources"}
 
 
 __all__ = ["LoihiArtefact", "LoihiNetwork", "lower_model", "lower_artefact"]

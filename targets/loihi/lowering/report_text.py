@@ -21,7 +21,8 @@ def render_compile_report(s: dict[str, Any], console) -> None:
     console.print(f"  scale: {s['scale_reason']}")
     if s["scale_candidates"]:
         console.print("  scale candidates, measured spike-count error on the calibration inputs (lower is better): "
-                      + ", ".join(f"{k} {v:.4f}" for k, v in s["scale_candidates"].items()))
+                      + ", ".join(f"{k} {'undefined (outputs silent in float)' if v is None else f'{v:.4f}'}"
+                                  for k, v in s["scale_candidates"].items()))
     for lay in s["layers"]:
         sources = lay["bias_sources"]
         if lay["index"] == 0:
@@ -42,12 +43,29 @@ def render_compile_report(s: dict[str, Any], console) -> None:
     v = s["validation"]
     console.print(f"  checked on {v['inputs']}: timing exact {v['timing_exact']}, quantized registers exact "
                   f"{v['quantized_params_exact']}, emulator kernel exact {v['kernel_exact']}")
+    from snncc.measure.agreement import ArgmaxAgreement
+
+    decided = (ArgmaxAgreement(**v["prediction"]).text() if v.get("prediction")
+               else f"{100 * v['prediction_agreement']:.1f}%")
     console.print("  spike agreement, emulator vs float model as trained: "
-                  + ", ".join(f"{k} {100 * a:.2f}%" for k, a in v["emulator_vs_trained"].items())
-                  + f"; predictions {100 * v['prediction_agreement']:.1f}% (quantization-only loss; "
-                  "`snncc check` measures accuracy on data)")
+                  + ", ".join(f"{k} {'undefined (silent)' if a is None else f'{100 * a:.2f}%'}"
+                              for k, a in v["emulator_vs_trained"].items())
+                  + f"; predictions {decided} (quantization-only loss; `snncc check` measures the written bundle)",
+                  markup=False)
     if any(v["overflow"].values()):
         console.print(f"  [yellow]overflow on the check inputs: {v['overflow']}[/yellow]")
+    live = s.get("liveness") or {}
+    for line in live.get("flagged", []):
+        console.print(f"  liveness on the calibration inputs: {line}", markup=False, style="yellow")
+    port = s.get("portability") or {}
+    if port:
+        console.print(f"  {port['line']}", markup=False, style=None if port["netx_runnable"] else "yellow")
+        best = port.get("best_netx_rule")
+        if not port["netx_runnable"] and best:
+            chosen = port.get("chosen_error")
+            console.print(f"  best bundle under a rule netx runs (one weight exponent per layer): '{best['rule']}', "
+                          f"calibration spike-count error {best['error']:.4f}"
+                          + (f" (this bundle: {chosen:.4f})" if chosen is not None else ""), markup=False)
     for note in s["netx_compat"]:
         console.print(f"  [yellow]netx compatibility: {note}[/yellow]")
     if s["netx_compat"]:

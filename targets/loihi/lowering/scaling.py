@@ -4,21 +4,26 @@ scale="auto" keeps the paper's global rule unless a screen finds projections it 
     outlier ratio  max|W| / median|W != 0| > 20    (one weight dictates the scale of all others)
     range used     max|W_k| * w_scale / 256 < 1/8   (a projection left with fewer than 5 bits)
     max|W| > 256                                     (w_scale would be 0)
-When flagged, candidates are measured by emulating calibration inputs and comparing every layer's
-per-neuron spike counts with the float model's (in the order Loihi runs): the global rule, per-layer scales,
+Candidates are measured by emulating calibration inputs and comparing every layer's per-neuron
+spike counts with the float model's (in the order Loihi runs). Portable first: auto chooses among
+the rules lava-dl netx runs as written (``bundle/portability.py``: the global rule, per-layer
+scales), the global rule alone when the screen flags nothing. Only when no portable candidate is
+live -- the model itself needs what netx lacks (current biases through always-on sources,
+per-neuron profiles), or no portable rule lowers with live outputs -- are the others measured too:
 per-layer scales with split exponents on the projections that have outliers (the outliers keep
 the exponent that fits them, the bulk of the weights gets a finer one: two synapse formats), and
 the fine rule (every synapse its own finest exponent, thresholds near 2**14 chip units, decay
 registers rounded to nearest: ``quantize.py``) at the scales s * k, k in FINE_STEPS (one octave: the
 same precision, each weight rounded differently; which rounding errors cancel is measured, not
-assumed). The candidate with the smallest measured error
-wins (ties go to the one listed first, the simpler), so auto is never worse, on the calibration
-inputs, than any rule it tried.
+assumed). The candidate with the smallest measured error among those considered wins (ties go to
+the one listed first, the simpler). A candidate whose outputs never spike on the calibration
+inputs is never chosen; when the float model's outputs are silent there, nothing can be measured
+and the simplest rule that lowers is kept (the report says so).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 from typing import Callable
 
@@ -88,7 +93,38 @@ def screen(graph: Graph) -> Screen:
 
 FINE_REASON = ("requested: fine (each synapse its finest weight exponent, threshold mantissa near 256, "
                "decay registers rounded to nearest)")
-ErrorFn = Callable[[Graph, QuantizationRecord], float]
+PORTABLE_RULES = ("global", "per-layer")     # one weight exponent per layer: what netx expresses (portability.py)
+
+
+@dataclass
+class CandidateMeasure:
+    """A candidate emulated on the calibration inputs against the float model.
+
+    error: mean over layers of the per-neuron spike-count error (None when the float model's outputs
+    are silent: nothing to compare); outputs_silent: the candidate's output population never spikes;
+    gaps: why netx would not run the candidate's network as written (``bundle/portability.py``)."""
+
+    error: float | None
+    outputs_silent: bool = False
+    float_silent: bool = False
+    gaps: list = field(default_factory=list)
+
+    @property
+    def live(self) -> bool:
+        """Measurable and alive: the float outputs spike, and so do the candidate's."""
+        return self.error is not None and not self.outputs_silent
+
+    @property
+    def portable(self) -> bool:
+        return not self.gaps
+
+    @property
+    def rule_portable(self) -> bool:
+        """No gap the scale rule causes (the model's own needs aside)."""
+        return not any(g.by_rule for g in self.gaps)
+
+
+ErrorFn = Callable[[Graph, QuantizationRecord], CandidateMeasure]
 
 
 def split_projections(record: QuantizationRecord) -> list[str]:
@@ -96,10 +132,24 @@ def split_projections(record: QuantizationRecord) -> list[str]:
     return sorted(p.dense for p in record.projections if p.wgt_exp_outliers is not None)
 
 
+def _error_text(m: CandidateMeasure) -> str:
+    if m.error is None:
+        return "undefined (outputs silent in float)"
+    return f"{m.error:.4f}" + (" (outputs silent)" if m.outputs_silent else "")
+
+
 def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
            progress: Progress | None = None) -> tuple[Graph, QuantizationRecord]:
-    """Quantize ``graph`` under ``rule``; for "auto", decide by the screen and by measured error
-    (``progress(done, total, phase)`` after each candidate)."""
+    """Quantize ``graph`` under ``rule``; for "auto", decide by the screen and by measurement
+    (``progress(done, total, phase)`` after each candidate; the total grows when more rules are measured).
+
+    auto keeps to the rules netx runs as written (``PORTABLE_RULES``, checked on each candidate's
+    network by ``netx_runnable``): the paper's global rule when the screen flags nothing, else the
+    portable candidate with the smallest measured error. Only when no portable candidate is live
+    (the model itself needs what netx lacks, or no portable rule can be lowered or keeps the outputs
+    alive) are split exponents and the fine rule measured too, and the best of all is taken. A
+    candidate whose outputs are silent on the calibration inputs is never chosen; when the float
+    model's own outputs are silent nothing can be measured, and the first rule that lowers is kept."""
     if rule == "global":
         return quantize_graph(graph, "global", reason="requested: the paper's rule (one w_scale, wgtExp 0)")
     if rule == "per-layer":
@@ -118,17 +168,8 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
                     f"(max|W| > {OUTLIER_RATIO:.0f}x its median): per-layer scales")
         return g, r
     refused: dict[str, str] = {}
-    if sc.global_possible and not sc.flagged:
-        try:
-            return quantize_graph(graph, "global", reason="auto: the paper's global rule; no outlier weights (every "
-                                  f"max|W| <= {OUTLIER_RATIO:.0f}x its median, every projection uses >= 1/8 of the "
-                                  "8-bit range)")
-        except SnnccError as ex:   # e.g. a threshold mantissa beyond 17 bits: measure the other rules
-            refused["global"] = ex.line()
-            sc.flagged["graph"] = Flag(FlagKind.GLOBAL_REFUSED, "the paper's global rule cannot be lowered")
-            sc.global_possible = False
-    candidates: list[tuple[str, Graph, QuantizationRecord, float]] = []
-    planned = int(sc.global_possible) + 1 + int(bool(outliers)) + len(FINE_STEPS)
+    candidates: list[tuple[str, Graph, QuantizationRecord, CandidateMeasure]] = []
+    planned = [int(sc.global_possible) + 1]          # the portable rules; more when the rest are measured
     considered = [0]
 
     def consider(name: str, make: Callable[[], tuple[Graph, QuantizationRecord]]) -> None:
@@ -140,42 +181,80 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
             refused[name] = ex.line()
         considered[0] += 1
         if progress is not None:
-            progress(considered[0], planned, MEASURING)
+            progress(considered[0], max(planned[0], considered[0]), MEASURING)
 
     if progress is not None:
-        progress(0, planned, MEASURING)
+        progress(0, planned[0], MEASURING)
 
     if sc.global_possible:
         consider("global", lambda: quantize_graph(graph, "global"))
-    consider("per-layer", lambda: quantize_graph(graph, "per-layer"))
-    if outliers:
-        try:
-            split = quantize_graph(graph, "per-layer", split=outliers)
-        except SnnccError as ex:
-            refused["split"] = ex.line()
-        else:
-            if split_projections(split[1]):
-                consider(f"per-layer, split exponents on {split_projections(split[1])}", lambda: split)
-    for step in FINE_STEPS:
-        consider("fine" if step == 1.0 else f"fine x{step:g}", lambda step=step: quantize_graph(graph, "fine", fine_step=step))
+        if "global" in refused:
+            sc.flagged["graph"] = Flag(FlagKind.GLOBAL_REFUSED, "the paper's global rule cannot be lowered")
+    clean = not sc.flagged and candidates and candidates[0][3].live and candidates[0][3].portable
+    if not clean and not (candidates and candidates[0][3].float_silent):
+        consider("per-layer", lambda: quantize_graph(graph, "per-layer"))
+    float_silent = any(m.float_silent for *_, m in candidates)
+    portable = [c for c in candidates if c[3].live and c[3].portable]
+    extended = not portable and not float_silent
+    if extended:        # the model needs what netx lacks, or no portable rule is live: measure the rest
+        planned[0] = considered[0] + int(bool(outliers)) + len(FINE_STEPS)
+        if outliers:
+            try:
+                split = quantize_graph(graph, "per-layer", split=outliers)
+            except SnnccError as ex:
+                refused["split"] = ex.line()
+            else:
+                if split_projections(split[1]):
+                    consider(f"per-layer, split exponents on {split_projections(split[1])}", lambda: split)
+        for step in FINE_STEPS:
+            consider("fine" if step == 1.0 else f"fine x{step:g}",
+                     lambda step=step: quantize_graph(graph, "fine", fine_step=step))
     if not candidates:
         raise SnnccError(f"no scale rule can be lowered: {'; '.join(f'{k}: {v}' for k, v in refused.items())}",
                          field="--scale")
+    float_silent = any(m.float_silent for *_, m in candidates)
     if progress is not None:
-        progress(planned, planned, MEASURING)
-    errors = {name: err for name, _, _, err in candidates}
-    paper = errors.get("global")
-    name, g, r, err = min(candidates, key=lambda c: c[3])   # min keeps the first of equal errors
-    versus = (f" vs {paper:.4f} under the paper's global rule" if paper is not None else
-              " (the global rule cannot be lowered)" if "global" in refused else
-              " (the global rule is impossible: max|W| > 256)" if not sc.global_possible else
-              " (the global rule cannot be lowered)")
-    why = (f"auto: {', '.join(f'{k}: {v}' for k, v in sc.flagged.items())}; chose '{name}' by measured "
-           f"spike-count error {err:.4f}{versus}, the smallest of {len(errors)} candidates")
+        progress(considered[0], considered[0], MEASURING)
+    measures = {name: m for name, _, _, m in candidates}
+    errors = {name: m.error for name, m in measures.items()}
+    silent = sorted(name for name, m in measures.items() if m.outputs_silent and m.error is not None)
+    live = [c for c in candidates if c[3].live]
+    best_rule_portable = min((c for c in live if c[3].rule_portable), key=lambda c: c[3].error, default=None)
+    if float_silent:
+        name, g, r, m = candidates[0]        # the simplest rule that lowers: nothing to measure
+        why = (f"auto: the float model's outputs are silent on the calibration inputs, so no rule can be measured; "
+               f"kept '{name}', the simplest rule that lowers")
+    elif clean:
+        name, g, r, m = candidates[0]
+        why = (f"auto: the paper's global rule; no outlier weights (every max|W| <= {OUTLIER_RATIO:.0f}x its median, "
+               "every projection uses >= 1/8 of the 8-bit range); outputs spike on the calibration inputs "
+               f"(spike-count error {m.error:.4f})")
+    else:
+        pool = portable or live
+        if not pool:
+            raise SnnccError("every scale rule leaves the outputs silent on the calibration inputs, where the float "
+                             f"model's spike ({', '.join(f'{k}: {_error_text(v)}' for k, v in measures.items())}); "
+                             "a bundle that never answers is not written", field="--scale")
+        name, g, r, m = min(pool, key=lambda c: c[3].error)   # min keeps the first of equal errors
+        paper = errors.get("global")
+        versus = (f" vs {paper:.4f} under the paper's global rule" if paper is not None else
+                  " (the global rule cannot be lowered)" if "global" in refused else
+                  " (the global rule is impossible: max|W| > 256)" if not sc.global_possible else "")
+        scope = (f"the smallest of {len(pool)} netx-runnable candidate(s) ({', '.join(c[0] for c in pool)})"
+                 if portable else f"the smallest of {len(pool)} live candidates (no netx-runnable rule is: "
+                 + "; ".join(sorted({str(gap) for c in candidates for gap in c[3].gaps if not gap.by_rule}
+                                    or {"none lowers with live outputs"})) + ")")
+        why = (f"auto: {', '.join(f'{k}: {v}' for k, v in sc.flagged.items()) or 'no flags'}; chose '{name}' by "
+               f"measured spike-count error {m.error:.4f}{versus}, {scope}")
+    if silent:
+        why += "; left out (outputs silent on the calibration inputs): " + ", ".join(silent)
     if refused:
         why += "; left out (cannot be lowered): " + "; ".join(f"{k}: {v}" for k, v in refused.items())
     r.reason = why
     r.calibration = {"inputs": calibration, "metric": "mean |spike count difference| per neuron and sample relative "
-                     "to the float model's mean count, mean over layers", "errors": errors, "flagged": sc.messages(),
-                     "refused": refused}
+                     "to the float model's mean count, mean over layers (None: the float outputs are silent)",
+                     "errors": errors, "outputs_silent": silent, "flagged": sc.messages(), "refused": refused,
+                     "chosen": name,
+                     "best_netx_rule": None if best_rule_portable is None else
+                     {"rule": best_rule_portable[0], "error": best_rule_portable[3].error}}
     return g, r
