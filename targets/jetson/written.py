@@ -85,7 +85,7 @@ class WrittenJetson:
 
     def run(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
         """(score (B, classes), output sequence (B, T, n) or None) of the written models on ``x`` (B, T, C)."""
-        from snncc.targets.jetson.runner import RunnerError
+        from snncc.targets.jetson.standalone_runner import RunnerError
 
         m = self.manifest
         fixed = m["time_axis"] != "dynamic"

@@ -42,7 +42,8 @@ def test_the_moved_bias_is_exact_and_the_input_graph_is_untouched():
     low = lower_model(g, {"timing": "exact"})
     v = validate_lowering(low.trained, low.order, low.quantized, low.network, low.layers,
                           low.timing_record.shifts, low.timing_record.output_shift, batch=4)
-    assert v.timing_exact and v.trained_vs_loihi_order == {"lif1": 1.0, "lif2": 1.0}
+    assert v.timing_exact and v.trained_vs_loihi_order["lif1"] == 1.0
+    assert v.trained_vs_loihi_order["lif2"] in (1.0, None)   # None: silent in both on these inputs (nothing to agree on)
     assert low.network.layers[0].always_on == 1          # the input axon that carries lif1's bias
     # no input: V = 1.2 (1 - 0.9^(t+1)) first exceeds 1 at IR step 17 (a compartment bias fired at 16)
     trec = low.timing_record
