@@ -108,10 +108,12 @@ def check_model(model: str | Path, *, artefact: str | Path | None = None, target
         written: contextlib.AbstractContextManager[Path] = contextlib.nullcontext(Path(artefact))
     else:
         tgt = get_target(target or "loihi")
-        split = verb_options(tgt, given, ("lower", use), OFFERS)
+        split = verb_options(tgt, given, (use, "lower"), OFFERS)   # the options of compiling it too
         written = compiled_artefact(tgt, graph, split.target)
-    measure = capability(tgt, "check") if labelled else capability(
-        tgt, "agree", rule=f"target '{tgt.name}' {AGREEMENT_RULE}")
+    if labelled:
+        check = capability(tgt, "check")
+    else:
+        agree = capability(tgt, "agree", rule=f"target '{tgt.name}' {AGREEMENT_RULE}")
     layout = None
     with written as path:
         if identity is None:
@@ -123,7 +125,7 @@ def check_model(model: str | Path, *, artefact: str | Path | None = None, target
             assert labels is not None
             found = meta.get("input_layout") if isinstance(meta, dict) else None
             layout = found if isinstance(found, str) else None
-            record: Record = measure(graph, inputs, labels, split.target, artefact=path, data=str(where),
+            record: Record = check(graph, inputs, labels, split.target, artefact=path, data=str(where),
                                      synthetic=bool(isinstance(meta, dict) and meta.get("synthetic")),
                                      progress=counting(progress, len(labels), "checking"))
         else:
@@ -134,7 +136,7 @@ def check_model(model: str | Path, *, artefact: str | Path | None = None, target
                 layout = found if isinstance(found, str) else None
             how = split.of(AgreementOptions)
             total = len(x) if x is not None else (how.samples or 0)
-            record = measure(graph, x, split.target, how, artefact=path,
+            record = agree(graph, x, split.target, how, artefact=path,
                              data=None if where is None else str(where),
                              progress=counting(progress, total, "measuring agreement") if total else None)
     described: dict[str, object] = {
