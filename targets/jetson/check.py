@@ -17,6 +17,7 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.targets.jetson.plan import GraphPlan
+from snncc.targets.jetson.populations import float_spikes, output_population
 from snncc.targets.jetson.validate import FP16_METHOD, fp16_run, host_score, reference
 
 BATCH = 64
@@ -85,15 +86,6 @@ def _base_channels(plan: GraphPlan, x: np.ndarray) -> np.ndarray:
     raise SnnccError(f"data have {c} channels, the model takes {plan.base_inputs}", field="inputs")
 
 
-def float_spikes(plan: GraphPlan, x: np.ndarray) -> dict[str, np.ndarray]:
-    """Every LIF population's float spikes (B, T, n) on base-channel data (copies tiled as the authors do)."""
-    from snncc.ir.simulate import simulate
-
-    tiled = np.tile(x, (1, 1, plan.input_copies)) if plan.input_copies > 1 else x
-    res = simulate(plan.graph, tiled.astype(np.float64), record="spikes")
-    return {k: v.numpy().astype(np.uint8) for k, v in res.spikes.items()}
-
-
 def check_artefact(plan: GraphPlan, written, inputs: np.ndarray, labels: np.ndarray | None,
                    progress=None) -> JetsonCheckRecord:
     """The written artefact (``written.WrittenJetson``) against the IR reference on ``inputs``;
@@ -122,7 +114,7 @@ def check_artefact(plan: GraphPlan, written, inputs: np.ndarray, labels: np.ndar
         if seq is not None:
             got_seq.append(seq)
             if plan.spiking_output:
-                target_tally.add({_lif_of_output(plan): seq.astype(np.uint8)})
+                target_tally.add({output_population(plan): seq.astype(np.uint8)})
         if progress is not None:
             progress(len(xb))
     ref_seq_a, ref_score_a = np.concatenate(ref_seq), np.concatenate(ref_score)
@@ -171,13 +163,3 @@ def check_artefact(plan: GraphPlan, written, inputs: np.ndarray, labels: np.ndar
         flagged=liveness.flagged(f_act, "in float") + liveness.flagged(t_act, "on the Jetson artefact"),
         warnings=[warning] if warning else [],
     )
-
-
-def _lif_of_output(plan: GraphPlan) -> str:
-    """The LIF population whose spikes the Output carries (through any Readout)."""
-    from snncc.ir.nodes import LIF
-
-    node = plan.output_name
-    while not isinstance(plan.graph.node(node), LIF):
-        node = plan.graph.predecessors(node)[0]
-    return node

@@ -248,13 +248,13 @@ def validation_liveness(plan: GraphPlan, x: np.ndarray, got_seq: np.ndarray | No
     model.onnx, the silent or saturated ones named (compile's one-line warning for a model silent in float
     is ``snncc.ir.liveness.calibration_warning``)."""
     from snncc.ir import liveness
-    from snncc.targets.jetson.check import _lif_of_output, float_spikes
+    from snncc.targets.jetson.populations import float_spikes, output_population
 
     refractory = liveness.graph_refractory(plan.graph)
     f_act = liveness.activity(float_spikes(plan, x), refractory)
     t_act = {}
     if got_seq is not None and plan.spiking_output:
-        t_act = liveness.activity({_lif_of_output(plan): got_seq.astype(np.uint8)}, refractory)
+        t_act = liveness.activity({output_population(plan): got_seq.astype(np.uint8)}, refractory)
     return {"inputs": f"the {x.shape[0]} seeded validation samples", "float": liveness.as_dicts(f_act),
             "jetson": liveness.as_dicts(t_act),
             "flagged": liveness.flagged(f_act, "in float") + liveness.flagged(t_act, "on the ONNX model")}

@@ -218,7 +218,10 @@ def test_compile_reports_progress_through_the_scale_candidates_and_the_validatio
     api.compile(Path(__file__).resolve().parents[1] / "data" / "nir" / "braille_zero_2023.nir", dt=1e-4,
                 target="loihi", output=tmp_path / "b.net", progress=lambda *c: calls.append(c))
     measuring = [c for c in calls if c[2] == "measuring scale candidates"]
-    assert measuring[0] == (0, measuring[0][1], "measuring scale candidates") and measuring[0][1] >= 3
+    # the portable rules first (2); the total grows when the model needs what netx lacks and every rule is measured
+    assert measuring[0] == (0, measuring[0][1], "measuring scale candidates") and measuring[0][1] >= 2
     assert [d for d, _, _ in measuring] == sorted(d for d, _, _ in measuring) and measuring[-1][0] == measuring[-1][1]
+    assert [t for _, t, _ in measuring] == sorted(t for _, t, _ in measuring) and measuring[-1][1] >= 10
+    assert all(d <= t for d, t, _ in measuring)
     assert calls[-2:] == [(0, 1, "validating the bundle against the IR reference"),
                           (1, 1, "validating the bundle against the IR reference")]

@@ -254,8 +254,8 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
     """``check_bundle`` on the bundle ``compile`` would write for ``graph`` with ``options`` (written to a
     temporary directory and read back: the measured network is the file's)."""
     from snncc.artefacts import compiled_artefact
-    from snncc.targets.loihi.capabilities import target
+    from snncc.targets import get_target
     from snncc.targets.loihi.checks.written import open_bundle
 
-    with compiled_artefact(target, graph, options) as path:
+    with compiled_artefact(get_target("loihi"), graph, options) as path:
         return check_bundle(graph, open_bundle(path, graph), inputs, labels, options, progress)

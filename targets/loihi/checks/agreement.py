@@ -265,8 +265,8 @@ def measure_agreement(graph: Graph, options: dict[str, Any], inputs: np.ndarray 
     """``measure_bundle`` on the bundle ``compile`` would write for ``graph`` with ``options`` (written to a
     temporary directory and read back: the measured network is the file's)."""
     from snncc.artefacts import compiled_artefact
-    from snncc.targets.loihi.capabilities import target
+    from snncc.targets import get_target
     from snncc.targets.loihi.checks.written import open_bundle
 
-    with compiled_artefact(target, graph, options) as path:
+    with compiled_artefact(get_target("loihi"), graph, options) as path:
         return measure_bundle(graph, open_bundle(path, graph), inputs, data=options.get("data"), **kw)
