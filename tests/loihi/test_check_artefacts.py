@@ -67,7 +67,7 @@ def test_check_runs_the_file_it_is_given(tmp_path, capsys, th1_params):
     before = _check(capsys, weights, "--params", th1_params, "--artefact", out, *AGREEMENT)
     with h5py.File(out, "r+") as f:
         w = f["layer/2/weight"]
-        w[...] = -np.asarray(w)                                     # the readout's weights negated
+        w[...] = np.asarray(w)[::-1]                                # the readout's rows in reverse order
     after = _check(capsys, weights, "--params", th1_params, "--artefact", out, *AGREEMENT)
     assert after["artefact"]["sha256"] != before["artefact"]["sha256"]
     assert after["layer_spike_agreement"]["out"] != before["layer_spike_agreement"]["out"]
@@ -148,17 +148,22 @@ def test_a_saturated_population_is_named(tmp_path, capsys):
 
 def test_portability_is_recorded_in_the_report_and_the_bundle(tmp_path, capsys):
     model = tmp_path / "m.snnir"
-    save_graph(small_graph(seed=2), model)
+    save_graph(small_graph(seed=2, order="loihi"), model)     # the chip's own update order
     out = tmp_path / "m.net"
     report = _compile(capsys, model, out)
-    assert report["portability"]["netx_runnable"] and report["portability"]["reasons"] == []
+    assert report["portability"]["netx_runnable"] and report["portability"]["reasons"] == [], report["portability"]
     with h5py.File(out, "r") as f:
         stored = json.loads(f["snncc/portability"][()][0].decode())
         meta = json.loads(f["snncc/metadata"][()][0].decode())
     assert stored["netx_runnable"] and stored["line"].startswith("portable")
     assert meta["compile_options"] == {"timing": None, "scale": None, "allow_reset_change": False, "time_steps": None}
     fine = _compile(capsys, model, tmp_path / "f.net", "--scale", "fine")
-    assert not fine["portability"]["netx_runnable"]
+    assert not fine["portability"]["netx_runnable"] and fine["portability"]["reasons"][0]["by_rule"]
     assert fine["portability"]["line"].startswith("not runnable by netx as written: per-synapse weight exponents")
+    authors = tmp_path / "a.snnir"                            # the authors' order: refractory 2 and delays
+    save_graph(small_graph(seed=2), authors)
+    needs = _compile(capsys, authors, tmp_path / "a.net", "--scale", "global")
+    assert {g["feature"].split(" (")[0] for g in needs["portability"]["reasons"]} >= {"refDelay 2",
+                                                                                    "recurrent synaptic delays"}
     code, stdout, _ = run_cli(["compile", model, "--target", "loihi", "-o", tmp_path / "f.net", "--scale", "fine"], capsys)
     assert code == 0 and "not runnable by netx as written" in stdout

@@ -25,10 +25,11 @@ def test_compile_emulate_check(tmp_path, capsys, weights, th1_params):
     code, stdout, err = run_cli(["compile", weights, "--params", th1_params, "--target", "loihi", "-o", out], capsys)
     assert code == 0, err
     assert "netx" in stdout and "refDelay" in stdout and out.exists()
-    code, stdout, err = run_cli(["compile", weights, "--params", th1_params, "--target", "loihi", "-o", out, "--json"],
-                                capsys)
+    code, stdout, err = run_cli(["compile", weights, "--params", th1_params, "--target", "loihi", "-o", out, "--json",
+                                 "--scale", "global"], capsys)
     rec = json.loads(stdout)
-    assert rec["t_sample"] == 270 and rec["layers"][1]["iDecay"] == 2315 and rec["netx_compat"]
+    assert rec["t_sample"] == 270 and rec["layers"][1]["iDecay"] == 2315 and rec["netx_compat"]   # the paper's rule
+    assert not rec["portability"]["netx_runnable"] and "refDelay 2" in rec["portability"]["line"]
     rng = np.random.default_rng(0)
     np.save(tmp_path / "x.npy", rng.random((2, 30, 48)) < 0.1)
     code, stdout, err = run_cli(["emulate", out, "--input", tmp_path / "x.npy", "-o", tmp_path / "o.npz", "--json"], capsys)

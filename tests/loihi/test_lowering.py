@@ -102,7 +102,7 @@ def test_voltage_bias_is_a_register_and_current_bias_an_always_on_axon():
 
 
 def test_auto_scale_handles_an_outlier_recurrent_matrix():
-    graph = small_graph(seed=8, n_h=30)
+    graph = small_graph(seed=8, n_h=30, order="loihi")     # the chip's own order: nothing netx lacks
     v = graph.node("w_rec").weight
     v[0, 1] = 100 * float(np.median(np.abs(v)))        # one outlier: 100x the median
     art = target.lower(graph, {"scale": "auto"})
@@ -112,15 +112,28 @@ def test_auto_scale_handles_an_outlier_recurrent_matrix():
     # portable by default (issue 22): auto measures only the rules netx runs as written, and takes the one with
     # the smallest measured error among them (issue 14: never worse than a rule it tried)
     assert set(errors) == {"global", "per-layer"}, errors
-    assert q["rule"] in ("global", "per-layer") and art.portability["netx_runnable"], q["reason"]
+    assert q["rule"] in ("global", "per-layer") and art.portability["netx_runnable"], (q["reason"], art.portability)
     assert f"chose '{min(errors, key=errors.get)}'" in q["reason"] and "netx-runnable" in q["reason"], q["reason"]
     assert "median" in q["reason"]
     # the rules netx cannot express are used when asked for: split exponents on the outlier projection
     split = target.lower(graph, {"scale": "split"})
     assert np.ndim(split.network.layers[1].wgt_exp_rec) == 2 and not split.portability["netx_runnable"]
     assert "per-synapse weight exponents" in split.portability["line"]
-    plain = target.lower(small_graph(seed=8), {"scale": "auto"})
+    plain = target.lower(small_graph(seed=8, order="loihi"), {"scale": "auto"})
     assert plain.quantization["rule"] == "global" and "no outlier" in plain.quantization["reason"]
+
+
+def test_auto_measures_every_rule_when_the_model_needs_what_netx_lacks():
+    """The authors' order (refractory 2, input delay 2 on the recurrent layer): no rule is portable, so auto takes
+    the best measured rule, says why netx cannot run it, and records the best rule netx would run beside it."""
+    art = target.lower(small_graph(seed=8, n_h=30), {"scale": "auto"})
+    q, port = art.quantization, art.portability
+    errors = {k: v for k, v in q["calibration"]["errors"].items() if v is not None}
+    assert {"global", "per-layer", "fine"} <= set(errors) and q["calibration"]["chosen"] == min(errors, key=errors.get)
+    assert not port["netx_runnable"] and "refDelay 2" in port["line"] and port["line"].startswith(
+        "not runnable by netx as written")
+    assert port["best_netx_rule"]["rule"] == "global"       # one exponent, 0: all netx needs of the rule
+    assert port["best_netx_rule"]["error"] == errors["global"]
 
 
 def test_tau_syn_longer_than_tau_mem_is_fine_on_loihi():

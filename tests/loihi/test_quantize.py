@@ -126,7 +126,7 @@ def test_split_exponents_keep_small_weights_and_outliers():
 
 
 def test_split_lowers_exactly_and_auto_keeps_to_portable_rules():
-    g = small_graph(seed=3)
+    g = small_graph(seed=3, order="loihi")
     rec = g.node("w_rec").weight
     rec.flat[[5, 77, 130]] = 100 * np.median(np.abs(rec))
     art = target.lower(g, {"scale": "split"})

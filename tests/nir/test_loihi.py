@@ -190,8 +190,8 @@ def test_per_neuron_parameters_become_compartment_profiles(tmp_path, capsys):
     assert code == 0, err
     report = json.loads(out)
     assert report["validation"]["timing_exact"] and report["validation"]["quantized_params_exact"]
-    assert not report["portability"]["netx_runnable"]          # profiles and bias sources: netx lacks both
-    assert {g["feature"] for g in report["portability"]["reasons"]} == {"per-neuron registers", "always-on bias sources"}
+    assert not report["portability"]["netx_runnable"]          # the bias axon: netx does not know it
+    assert [g["where"] for g in report["portability"]["reasons"]] == ["/layer/0/alwaysOn"]   # profiles run in Lava
     net = read_bundle(net_path)
     hidden = net.layers[1]
     lif = model.hidden.to_nir()

@@ -79,7 +79,7 @@ def test_trained_braille_zero_needs_what_netx_lacks_and_agrees_with_its_float_gr
     assert {"global", "per-layer", "fine", "fine x1.5"} <= set(errors), errors
     best = min(errors, key=errors.get)            # auto: never worse than a rule it tried
     assert rec.scale_rule == "fine" and best.startswith("fine") and f"chose '{best}'" in rec.scale_reason, errors
-    assert "no netx-runnable rule is: /layer/0/alwaysOn: always-on bias sources" in rec.scale_reason
+    assert "no netx-runnable rule is: /layer/0/alwaysOn: always-on input axons" in rec.scale_reason
     assert rec.steps == 256 and rec.argmax_agreement >= 0.95 and rec.count_correlation >= 0.94, rec.lines()
     assert not any(rec.overflow.values()), rec.overflow
     paper = measure_agreement(g, {"scale": "global", "time_steps": 256}, **kw)

@@ -259,8 +259,8 @@ def portability_record(network: LoihiNetwork, quant) -> dict[str, Any]:
     return {"netx_runnable": not gaps, "line": portability_line(gaps), "reasons": [g.as_dict() for g in gaps],
             "best_netx_rule": calib.get("best_netx_rule"),
             "chosen_error": (calib.get("errors") or {}).get(chosen) if chosen else None,
-            "rule": "ASSUMED until bench/lava_netx_agreement.py measures it: netx 0.6 runs one weight exponent, "
-                    "threshold and decay per layer and no always-on bias sources"}
+            "rule": "netx_runnable (targets/loihi/bundle/portability.py): the rules bench/lava_netx_agreement.py "
+                    "measured in lava-dl netx 0.6 + Lava's Loihi 1 fixed-point simulation"}
 
 
 __all__ = ["LoihiArtefact", "LoihiNetwork", "lower_model", "lower_artefact"]
