@@ -1,4 +1,4 @@
-"""snncc check --target jetson measures the written artefact directory (issue 22): label-free agreement too,
+"""snncc check --target jetson measures the written artefact directory: label-free agreement too,
 the directory's stated hash, and inputs of another length through the step model."""
 
 from __future__ import annotations

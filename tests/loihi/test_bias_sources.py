@@ -204,7 +204,7 @@ def test_auto_scale_leaves_out_a_candidate_that_cannot_be_lowered():
     assert "per-layer" in q["calibration"]["refused"] and "cannot be lowered" in q["reason"], q["reason"]
     errors = q["calibration"]["errors"]
     assert "global" in errors and "per-layer" not in errors, errors
-    # auto takes the candidate with the smallest measured error (issue 14: never worse than a rule it tried)
+    # auto takes the candidate with the smallest measured error (never worse than a rule it tried)
     assert q["rule"] == min(errors, key=errors.get) and art.validation["quantized_params_exact"], q["reason"]
 
 

@@ -1,4 +1,4 @@
-"""snncc check measures the written Loihi bundle (issue 22): the file compile wrote, or the one compile would
+"""snncc check measures the written Loihi bundle: the file compile wrote, or the one compile would
 write, run again in the emulator; refused when it came from another model; silent models reported as such;
 the authors' RSNN takes its 24 event channels (the bundle's input copies tiled by snncc)."""
 

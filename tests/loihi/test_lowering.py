@@ -109,8 +109,8 @@ def test_auto_scale_handles_an_outlier_recurrent_matrix():
     q = art.quantization
     assert q["calibration"] is not None and "global" in q["calibration"]["errors"]
     errors = q["calibration"]["errors"]
-    # portable by default (issue 22): auto measures only the rules netx runs as written, and takes the one with
-    # the smallest measured error among them (issue 14: never worse than a rule it tried)
+    # portable by default: auto measures only the rules netx runs as written, and takes the one with
+    # the smallest measured error among them (never worse than a rule it tried)
     assert set(errors) == {"global", "per-layer"}, errors
     assert q["rule"] in ("global", "per-layer") and art.portability["netx_runnable"], (q["reason"], art.portability)
     assert f"chose '{min(errors, key=errors.get)}'" in q["reason"] and "netx-runnable" in q["reason"], q["reason"]
