@@ -97,8 +97,8 @@ def test_compile_and_check_with_a_third_party_target(toy, toy_data, small_rsnn_c
     assert code == 0 and "\ntoy check: 6 samples, accuracy" in stdout and stdout.startswith("measured artefact: toy")
     code, _, err = run_cli(["check", small_rsnn_checkpoint, "--artefact", out, "--target", "loihi", "--data", toy_data],
                            capsys)
-    assert code == 2 and err == ("snncc: error: --target: the artefact is a toy artefact, not loihi's (its target "
-                                 "follows from the artefact; leave --target out)\n")
+    assert code == 2 and err == ("snncc: error: snncc check: --target: the artefact is a toy artefact, not loihi's "
+                                 "(its target follows from the artefact; leave --target out)\n")
 
 
 def test_a_capability_the_target_lacks_is_refused_in_one_line(toy, toy_data, small_rsnn_checkpoint, tmp_path, capsys):
@@ -117,7 +117,7 @@ def test_a_capability_the_target_lacks_is_refused_in_one_line(toy, toy_data, sma
     assert code == 2 and err == ("snncc: error: snncc compile: --scale: does not apply to --target toy (it takes "
                                  "--time-steps, --toy-precision)\n")
     code, _, err = run_cli(["check", small_rsnn_checkpoint, "-t", "toy"], capsys)   # no labels: agreement
-    assert code == 2 and err == ("snncc: error: --target: target 'toy' has no agreement without labels "
+    assert code == 2 and err == ("snncc: error: snncc check: --target: target 'toy' has no agreement without labels "
                                  "(capability 'agree'); give --data with labels\n")
 
 

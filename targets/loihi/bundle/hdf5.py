@@ -76,7 +76,7 @@ def netx_compat(network: LoihiNetwork) -> list[str]:
                 used = sorted(set(np.unique(exp).tolist()))
                 formats = f"{len(used)} synapse format{'s' if len(used) != 1 else ''}, one per exponent"
                 notes.append(f"/layer/{i}/neuron/{key}: one exponent per synapse, {used} "
-                             f"({formats}; snncc extension, netx has one exponent per layer)")
+                             f"({formats}; snncc extension; netx reads no weight exponent)")
             elif exp != 0:
                 notes.append(f"/layer/{i}/neuron/{key} = {exp} ("
                              + ("netx ignores weight exponents)" if key == "wgtExp" else "snncc extension)"))

@@ -63,7 +63,7 @@ def render_compile_report(s: dict[str, Any], console) -> None:
         best = port.get("best_netx_rule")
         if not port["netx_runnable"] and best:
             chosen = port.get("chosen_error")
-            console.print(f"  best bundle under a rule netx runs (one weight exponent per layer): '{best['rule']}', "
+            console.print(f"  best bundle under a rule netx can run (the model's own needs aside): '{best['rule']}', "
                           f"calibration spike-count error {best['error']:.4f}"
                           + (f" (this bundle: {chosen:.4f})" if chosen is not None else ""), markup=False)
     for note in s["netx_compat"]:

@@ -93,7 +93,7 @@ def screen(graph: Graph) -> Screen:
 
 FINE_REASON = ("requested: fine (each synapse its finest weight exponent, threshold mantissa near 256, "
                "decay registers rounded to nearest)")
-PORTABLE_RULES = ("global", "per-layer")     # one weight exponent per layer: what netx expresses (portability.py)
+PORTABLE_RULES = ("global", "per-layer")     # one weight exponent per projection: netx runs it when 0 (portability.py)
 
 
 @dataclass
