@@ -508,7 +508,7 @@ def table(rows: list[Row]) -> str:
             note = (f"layer {fd['layer']} {fd['field']} @ step {fd['step']} n{fd['neuron']}; " if fd else "")
             note += "; ".join(r.get("predicted", []))[:160]
         if row.rule == "auto" and row.compiled:
-            chosen = re.search(r"chose '([^']+)'", row.chosen)
+            chosen = re.search(r"(?:chose|kept) '([^']+)'", row.chosen)   # kept: the float outputs are silent
             note = f"[auto chose {chosen.group(1) if chosen else 'global'}] " + note
         holds = {True: "ok", False: "NO"}.get(r.get("definition_holds"), "-")
         lines.append(f"{row.case:32s} {row.rule:9s} {row.timing:6s} {verdict(row):31s} {frac_s} {holds:3s}  {note}")

@@ -1,4 +1,4 @@
-"""Issue 22's "done when" on the real graphs of tests/data/nir: ``snncc check`` on each graph and on each
+"""On the real graphs of tests/data/nir: ``snncc check`` on each graph and on each
 artefact ``compile`` wrote reports the same hash and the same figures as compile; cnn_sinabs checks on both
 targets; no compile or check reports agreement over silent outputs.
 
@@ -64,6 +64,14 @@ def test_check_reports_the_hash_and_figures_compile_reports(name, tmp_path, caps
     check_silent = rec["liveness"]["float"][list(rec["liveness"]["float"])[-1]]["status"] == "silent"
     _never_over_silence(rec, check_silent)
     assert rec["undecided_rule"].startswith("samples whose float output has no single winner")
+
+
+def test_a_jetson_artefact_of_a_trained_graph_checks_like_compile(tmp_path, capsys):
+    """Without labels (agreement) on the Jetson directory compile wrote: same hash, same figures."""
+    report, rec = _same_as_compile(capsys, "braille_zero_2023.nir", "jetson", tmp_path / "bz_jetson",
+                                   ["--time-steps", "20"])
+    assert rec["samples"] == 4 and rec["target"] == "jetson"
+    _never_over_silence(rec, False)
 
 
 @pytest.mark.parametrize("target, flags", [("loihi", []), ("jetson", ["--time-steps", "12"])])
