@@ -1,23 +1,24 @@
 """Population activity of an IR graph in float on given inputs, and the warning for a silent model.
 
-For every spiking LIF population (a finite threshold somewhere) on inputs (B, T, C):
+One record, ``SpikeActivity``, for a population's activity on B samples of T steps (in float or on a
+target, from its spike counts; ``Tally`` gathers them chunk by chunk):
 
-    rate           = spikes / (neurons * B * T)        mean spikes per neuron and step
-    silent_neurons = neurons that never spike on any input
-    peak           = max over samples, steps and neurons of V / threshold (V as the reference
-                     simulator records it, after any reset; for a population that never spikes
-                     this is how close it came)
+    rate              = spikes / (neurons * B * T)        mean spikes per neuron and step
+    silent_neurons    = neurons that never spike on any sample
+    saturated_neurons = neurons that spike at every step they can on every sample (ceil(T / r)
+                        spikes, r the refractory period in steps)
+    peak              = max over samples, steps and neurons of V / threshold (float runs with
+                        voltages only: ``population_activity``; V as the reference simulator records
+                        it, after any reset; for a population that never spikes, how close it came)
+
+A population is *silent* when no neuron spikes, *saturated* when every neuron is saturated;
+``flagged`` names either in one line with its figures (compile and check report them, float and on
+the target).
 
 A model is silent in float when the population its readout counts never spikes, or (without a
 readout) no spiking population does. Compile then warns in one line naming the first silent
 population, how close it came and the likely cause (``silence_warning``): a model silent in
 float compiles to an artefact that is "exact" and says nothing.
-
-Spike activity of populations on a target as in float (``SpikeActivity``, from spike counts, chunk by
-chunk with ``Tally``): rate, silent neurons (never spike on any sample), saturated neurons (spike at
-every step they can on every sample: ceil(T / r) spikes, r the refractory period in steps). A
-population is *silent* when no neuron spikes, *saturated* when every neuron is saturated; ``flagged``
-names either in one line with its figures (compile and check report them, float and on the target).
 
 The calibration inputs are the Loihi compiler's (its scale rule is measured on them):
 ``CALIBRATION_BATCH`` seeded random spike trains of density ``CALIBRATION_RATE``, seed
@@ -41,24 +42,6 @@ CALIBRATION_SEED = 1
 FAR_BELOW = 0.5            # a silent population whose V peaks below this fraction of its threshold
 
 
-@dataclass
-class PopulationActivity:
-    """One spiking population's activity on the inputs it was measured on."""
-
-    name: str
-    neurons: int
-    rate: float
-    silent_neurons: int
-    peak: float            # max V / threshold
-
-    @property
-    def silent(self) -> bool:
-        return self.rate == 0.0
-
-    def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
-
-
 def calibration_spikes(width: int, steps: int, *, batch: int = CALIBRATION_BATCH, rate: float = CALIBRATION_RATE,
                        seed: int = CALIBRATION_SEED) -> np.ndarray:
     """(batch, steps, width) uint8 seeded random spike trains: each entry 1 with probability ``rate``."""
@@ -77,8 +60,8 @@ def spiking_populations(graph: Graph) -> list[str]:
     return [name for name in graph.of_kind(LIF) if np.any(np.isfinite(graph.node(name).threshold))]
 
 
-def population_activity(graph: Graph, inputs: np.ndarray) -> dict[str, PopulationActivity]:
-    """``PopulationActivity`` of every spiking population of ``graph`` on ``inputs``, in float64."""
+def population_activity(graph: Graph, inputs: np.ndarray) -> dict[str, SpikeActivity]:
+    """``SpikeActivity`` of every spiking population of ``graph`` on ``inputs``, in float64, with its ``peak``."""
     from snncc.ir.simulate import simulate
     from snncc.threads import one_thread
 
@@ -87,15 +70,14 @@ def population_activity(graph: Graph, inputs: np.ndarray) -> dict[str, Populatio
         return {}
     with one_thread():
         res = simulate(graph, inputs, record="all")
+    refractory = graph_refractory(graph)
     out = {}
     for name in names:
-        spikes = res.spikes[name].numpy()
         theta = np.asarray(graph.node(name).threshold, np.float64)
         finite = np.isfinite(theta) & (theta > 0)
         v = res.voltage[name].numpy()[..., finite] / theta[finite]
-        out[name] = PopulationActivity(
-            name=name, neurons=int(spikes.shape[-1]), rate=float(spikes.mean()) if spikes.size else 0.0,
-            silent_neurons=int(np.sum(~spikes.any(axis=(0, 1)))), peak=float(v.max()) if v.size else 0.0)
+        out[name] = spike_activity(res.spikes[name].numpy(), refractory.get(name, 1))
+        out[name].peak = float(v.max()) if v.size else 0.0
     return out
 
 
@@ -106,7 +88,7 @@ def _read_out(graph: Graph) -> list[str]:
     return [p for r in graph.of_kind(Readout) for p in graph.predecessors(r)]
 
 
-def silent_population(graph: Graph, activity: dict[str, PopulationActivity]) -> str | None:
+def silent_population(graph: Graph, activity: Mapping[str, SpikeActivity]) -> str | None:
     """The first silent population if the model is silent in float (module docstring), else None."""
     if not activity:
         return None
@@ -116,7 +98,7 @@ def silent_population(graph: Graph, activity: dict[str, PopulationActivity]) -> 
     return next(name for name, a in activity.items() if a.silent)
 
 
-def silence_warning(graph: Graph, activity: dict[str, PopulationActivity], inputs: str, steps: int) -> str | None:
+def silence_warning(graph: Graph, activity: Mapping[str, SpikeActivity], inputs: str, steps: int) -> str | None:
     """One line for a model silent in float on ``inputs`` (described; ``steps`` long), naming the likely
     cause; else None. dt is the likely cause when the silent population's longest time constant outlasts
     the sample (a step then moves V by a small fraction of its input); threshold or gain scale when V
@@ -124,7 +106,7 @@ def silence_warning(graph: Graph, activity: dict[str, PopulationActivity], input
     name = silent_population(graph, activity)
     if name is None:
         return None
-    op, peak = graph.node(name), activity[name].peak
+    op, peak = graph.node(name), activity[name].peak or 0.0
     taus = np.concatenate([np.asarray(op.tau_syn, np.float64), np.asarray(op.tau_mem, np.float64)]) / graph.dt
     taus = taus[np.isfinite(taus) & (taus < 1e20)]          # IF/I populations carry a 1e30 s "no leak"
     head = (f"the model never spikes in float on {inputs}: population '{name}' stays silent (its voltage peaks at "
@@ -155,6 +137,8 @@ def calibration_warning(graph: Graph, steps: int) -> str | None:
 
 @dataclass
 class SpikeActivity:
+    """One population's activity on ``samples`` x ``steps`` (module docstring)."""
+
     neurons: int
     samples: int
     steps: int
@@ -162,6 +146,11 @@ class SpikeActivity:
     rate: float                  # spikes per neuron and step
     silent_neurons: int
     saturated_neurons: int
+    peak: float | None = None    # max V / threshold, where the float voltages were recorded
+
+    @property
+    def silent(self) -> bool:
+        return self.spikes == 0
 
     @property
     def status(self) -> str:
@@ -172,7 +161,8 @@ class SpikeActivity:
         return "active"
 
     def as_dict(self) -> dict[str, Any]:
-        return {**asdict(self), "status": self.status}
+        figures = {k: v for k, v in asdict(self).items() if k != "peak" or v is not None}
+        return {**figures, "status": self.status}
 
     def text(self) -> str:
         return (f"{self.spikes} spikes ({self.rate:.4f} per neuron and step), {self.silent_neurons}/{self.neurons} "
@@ -256,10 +246,9 @@ def as_dicts(figures: Mapping[str, SpikeActivity]) -> dict[str, dict[str, Any]]:
 
 def float_silence_warning(graph: Graph, inputs: np.ndarray, figures: Mapping[str, SpikeActivity],
                           described: str = "these inputs") -> str | None:
-    """``silence_warning`` when ``figures`` (float, on ``inputs``) show the output population silent; the
-    float run it needs (voltages) is made only then."""
-    order = [n for n in spiking_populations(graph) if n in figures]
-    if not order or figures[order[-1]].status != "silent":
+    """``silence_warning`` (its rule: the read-out populations silent) when ``figures`` (float, on ``inputs``)
+    show a silent population; the float run it needs (voltages) is made only then."""
+    if not any(a.silent for name, a in figures.items() if name in spiking_populations(graph)):
         return None
     x = np.asarray(inputs)
     return silence_warning(graph, population_activity(graph, x), described, int(x.shape[1]))
