@@ -71,7 +71,7 @@ def test_auto_keeps_to_portable_rules_unless_the_model_needs_more():
     _, rec = choose(graph, "auto", _measure({"global": 0.3, "per-layer": 0.2, "fine x1.25": 0.01}, model_gap=True),
                     "none")
     assert rec.rule == "fine" and rec.fine_step == 1.25 and rec.calibration["best_netx_rule"] == {
-        "rule": "per-layer", "error": 0.2}
+        "rule": "per-layer", "error": 0.2, "agreement": None}     # this stub measures no agreement
 
 
 def test_a_model_silent_in_float_is_not_measured_and_all_silent_rules_are_refused():

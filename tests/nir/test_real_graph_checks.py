@@ -97,3 +97,23 @@ def test_cnn_sinabs_checks_on_both_targets(target, flags, tmp_path, capsys):
     labelled = _run(capsys, ["check", DATA / "cnn_sinabs.nir", "--artefact", out, "--data", tmp_path / "d.npz",
                              "--json"])
     assert "read frames of 2x34x34 as 2312 channels" in labelled["input_layout"] and labelled["samples"] == 2
+
+
+def test_a_graph_that_needs_what_netx_lacks_names_it_and_the_best_netx_bundles_agreement(tmp_path, capsys):
+    """braille_zero_2023 places its biases on the current (always-on input axons): no rule is netx-runnable as
+    written, so the default bundle is the best measured one, and the best netx rule's figures stand beside it."""
+    src, out = DATA / "braille_zero_2023.nir", tmp_path / "bz.net"
+    report = _run(capsys, ["compile", src, "-o", out, "--json", *_load_flags("braille_zero_2023.nir")])
+    port = report["portability"]
+    assert not port["netx_runnable"] and port["line"].startswith("not runnable by netx as written: always-on input")
+    assert {"feature": "always-on input axons (netx does not know them; its driver must hold them at 1)",
+            "where": "/layer/0/alwaysOn", "by_rule": False} in port["reasons"]
+    best = port["best_netx_rule"]
+    assert best["rule"] in ("global", "per-layer") and best["error"] > port["chosen_error"]
+    assert best["agreement"]["samples"] == 8 and best["agreement"]["decided"] + best["agreement"]["ties"] \
+        + best["agreement"]["silent"] == 8
+    assert port["chosen_agreement"]["samples"] == 8
+    code, stdout, err = run_cli(["compile", src, "-o", tmp_path / "again.net", *_load_flags("braille_zero_2023.nir")],
+                                capsys)
+    assert code == 0, err
+    assert f"argmax agreement with the float model on the calibration inputs: '{best['rule']}' " in stdout

@@ -120,6 +120,7 @@ def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | Non
     def measure(gq: Graph, rq) -> scaling.CandidateMeasure:
         """Mean over layers of ``count_error`` (per-neuron spike counts against the float model's), whether
         the outputs are silent, and what netx lacks to run the candidate as written."""
+        from snncc.measure.agreement import argmax_agreement
         from snncc.targets.loihi.bundle.portability import netx_runnable
         from snncc.targets.loihi.emulation.emulator import emulate
 
@@ -130,8 +131,9 @@ def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | Non
         emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
         float_silent = not reference["spikes"][names[-1]].any()
         error = None if float_silent else float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
+        agreement = argmax_agreement(reference["spikes"][names[-1]].sum(axis=1), emu[names[-1]].sum(axis=1))
         return scaling.CandidateMeasure(error, outputs_silent=not emu[names[-1]].any(), float_silent=float_silent,
-                                        gaps=netx_runnable(net))
+                                        gaps=netx_runnable(net), agreement=agreement.as_dict())
 
     quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps), progress=progress)
     quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
@@ -259,6 +261,7 @@ def portability_record(network: LoihiNetwork, quant) -> dict[str, Any]:
     return {"netx_runnable": not gaps, "line": portability_line(gaps), "reasons": [g.as_dict() for g in gaps],
             "best_netx_rule": calib.get("best_netx_rule"),
             "chosen_error": (calib.get("errors") or {}).get(chosen) if chosen else None,
+            "chosen_agreement": calib.get("chosen_agreement"),
             "rule": "netx_runnable (targets/loihi/bundle/portability.py): the rules bench/lava_netx_agreement.py "
                     "measured in lava-dl netx 0.6 + Lava's Loihi 1 fixed-point simulation"}
 

@@ -66,6 +66,11 @@ def render_compile_report(s: dict[str, Any], console) -> None:
             console.print(f"  best bundle under a rule netx can run (the model's own needs aside): '{best['rule']}', "
                           f"calibration spike-count error {best['error']:.4f}"
                           + (f" (this bundle: {chosen:.4f})" if chosen is not None else ""), markup=False)
+            if best.get("agreement") is not None:
+                theirs, ours = best["agreement"], port.get("chosen_agreement")
+                console.print(f"    argmax agreement with the float model on the calibration inputs: '{best['rule']}' "
+                              f"{ArgmaxAgreement(**theirs).text()}"
+                              + (f"; this bundle {ArgmaxAgreement(**ours).text()}" if ours else ""), markup=False)
     for note in s["netx_compat"]:
         console.print(f"  [yellow]netx compatibility: {note}[/yellow]")
     if s["netx_compat"]:

@@ -102,12 +102,15 @@ class CandidateMeasure:
 
     error: mean over layers of the per-neuron spike-count error (None when the float model's outputs
     are silent: nothing to compare); outputs_silent: the candidate's output population never spikes;
-    gaps: why netx would not run the candidate's network as written (``bundle/portability.py``)."""
+    gaps: why netx would not run the candidate's network as written (``bundle/portability.py``);
+    agreement: the argmax agreement of its output spike counts with the float model's on the same
+    inputs (``snncc.measure.agreement.ArgmaxAgreement.as_dict()``; None where not measured)."""
 
     error: float | None
     outputs_silent: bool = False
     float_silent: bool = False
     gaps: list = field(default_factory=list)
+    agreement: dict | None = None
 
     @property
     def live(self) -> bool:
@@ -256,5 +259,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
                      "errors": errors, "outputs_silent": silent, "flagged": sc.messages(), "refused": refused,
                      "chosen": name,
                      "best_netx_rule": None if best_rule_portable is None else
-                     {"rule": best_rule_portable[0], "error": best_rule_portable[3].error}}
+                     {"rule": best_rule_portable[0], "error": best_rule_portable[3].error,
+                      "agreement": best_rule_portable[3].agreement},
+                     "chosen_agreement": m.agreement}
     return g, r
