@@ -600,6 +600,37 @@ def graph_from_nir(nir_graph: Any, dt: float | None = None, reset: str | None = 
     return g
 
 
+def _group_type(group: Any) -> str:
+    try:
+        value = group["type"][()] if "type" in group else b""
+    except (KeyError, OSError, RuntimeError, ValueError, TypeError):   # damaged: nir.read reports it
+        return ""
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+
+
+def check_graph_groups(f: Any, path: str) -> None:
+    """A NIR file stores its graph in the group ``/node``, a NIRGraph with a ``nodes`` and an ``edges``
+    part, and so does each sub-graph. A missing part is refused in one line (nir.read's own message is
+    a Python KeyError's)."""
+    import h5py
+
+    node = f.get("node") if isinstance(f, h5py.Group) else None
+    if not isinstance(node, h5py.Group):
+        raise SnnccError("missing: a NIR file stores its graph in the group /node", file=path, field="/node")
+    pending = [node]
+    while pending:
+        group = pending.pop()
+        if _group_type(group) != "NIRGraph":
+            continue
+        for part in ("nodes", "edges"):
+            if part not in group:
+                raise SnnccError(f"missing: a NIR graph lists its {part} in {group.name}/{part}", file=path,
+                                 field=f"{group.name}/{part}")
+        nodes = group["nodes"]
+        if isinstance(nodes, h5py.Group):
+            pending.extend(child for child in nodes.values() if isinstance(child, h5py.Group))
+
+
 def check_declared_sizes(path: Path) -> None:
     """Refuse a NIR file whose HDF5 datasets declare more bytes than fit in memory, before nir.read
     allocates them (a small file can declare a huge dataset that is never written)."""
@@ -614,6 +645,7 @@ def check_declared_sizes(path: Path) -> None:
         return   # nir.read reports what the file is not
     with f:
         check_self_contained(f, str(path))   # no link or dataset may lead to another file
+        check_graph_groups(f, str(path))     # /node with its nodes and edges, before nir.read
         try:
             nir_conv.check_raw_fields(f)     # a stride of 0 would divide by zero inside nir.read
         except SnnccError as err:
