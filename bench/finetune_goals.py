@@ -161,6 +161,7 @@ def rsnn_goal(args):
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
     acc = result.record.task[task.name]["accuracy"]
     out = {"checkpoint": str(args.rsnn), "data": str(args.rsnn_data), "options": options,
+           "scale_rule": result.lowered.quant_record.rule, "scale_reason": result.lowered.quant_record.reason,
            "record": result.record.as_dict(), "wall_s": wall, "cpu_s": cpu,
            "goal": "emulated Loihi test accuracy within 0.2 points of the float model's",
            "met": bool(abs(acc["difference"]) <= 0.002),
@@ -199,7 +200,7 @@ def main(argv=None):
     ap.add_argument("--rsnn", type=Path)
     ap.add_argument("--rsnn-data", type=Path)
     ap.add_argument("--rsnn-scale", default=None, help="scale rule (default: compile's auto)")
-    ap.add_argument("--rsnn-train-subset", type=int, default=1536)
+    ap.add_argument("--rsnn-train-subset", type=int, default=2048)
     ap.add_argument("--rsnn-validation", type=int, default=256)
     ap.add_argument("--rsnn-held-out", type=int, default=512)
     args = ap.parse_args(argv)

@@ -4,6 +4,8 @@
               simulator (``teacher.py``): output counts, every population's spikes (and V / theta)
     student   the target's ``DifferentiableArithmetic`` built from the lowered, quantized model
     loss      ``loss.distillation_loss`` (no labels)
+    start     a target may first measure starting points on the validation part (equivalent or nearby
+              register choices: ``starting_points``) and start from the best
     schedule  Adam, one step size per parameter kind, cosine decay to 0 over all steps; the first
               ``force_epochs`` epochs teacher-force the hidden populations (every synapse leaving
               them reads the teacher's spikes, so each layer learns its own map), the rest run free
@@ -32,7 +34,7 @@ from snncc.finetune.inputs import Split
 from snncc.finetune.loss import LossWeights, distillation_loss
 
 Progress = Callable[[int, int, str], None]
-DEFAULT_LR = {"weights": 0.3, "thresholds": 0.3, "decays": 3.0, "biases": 1.0}
+DEFAULT_LR = {"weights": 0.03, "thresholds": 0.05, "decays": 0.3, "biases": 0.1}   # measured: docs/finetune.md
 SELF_CHECK_SAMPLES = 8
 
 
@@ -41,8 +43,8 @@ class FinetuneConfig:
     """The schedule. Step sizes are in register units (half weight mantissas, threshold mantissas,
     decay registers, bias mantissas): Adam moves each shadow by about ``lr`` per step."""
 
-    epochs: int = 12
-    force_epochs: int = 4
+    epochs: int = 6
+    force_epochs: int = 0
     batch: int = 64
     lr: dict = field(default_factory=lambda: dict(DEFAULT_LR))
     cosine: bool = True
