@@ -26,8 +26,8 @@ from typing import TypeVar
 
 from snncc.errors import SnnccError
 from snncc.targets.base import (
-    CAPABILITY_OPTIONS, VERB_OF, AgreementOptions, Artefact, Given, Option, OptionRecord, Record, Target,
-    TargetOptions, capability, capability_options, declared_options, model_kinds,
+    CAPABILITY_OPTIONS, VERB_OF, AgreementOptions, Artefact, FinetuneOptions, Given, Option, OptionRecord, Record,
+    Target, TargetOptions, capability, capability_options, declared_options, model_kinds,
 )
 from snncc.targets.base import target_options as _target_options
 
@@ -89,7 +89,8 @@ def loaded_targets() -> list[Target]:
 class Offer:
     """One flag a command offers: ``name`` (keyword), ``flag``, ``kind`` (bool: a switch; int, float,
     str: a value; str where targets declare different value types: each target converts), the
-    merged ``help`` naming the ``targets`` that take it, and the ``default`` of a capability's option."""
+    merged ``help`` naming the ``targets`` that take it, the ``default`` of a capability's option, and its
+    ``path`` role ("input" | "output" | "": see ``Option``)."""
 
     name: str
     flag: str
@@ -97,6 +98,7 @@ class Offer:
     help: str
     targets: tuple[str, ...]
     default: bool | int | float | str | None = None
+    path: str = ""
 
 
 def _declarations(capabilities: Sequence[str]) -> dict[str, list[tuple[str, Option]]]:
@@ -135,7 +137,11 @@ def offered_options(capabilities: Sequence[str]) -> list[Offer]:
             text = f"{specs[0].help}{shown} (--target {', '.join(targets)})"
         else:
             text = "; ".join(f"--target {t}: {s.help.rstrip('.')}" for t, s in declared) + shown
-        offers.append(Offer(name, specs[0].flag, kind, text, targets, default))
+        roles = {s.path for s in specs}
+        if len(roles) > 1:
+            both = ", ".join(f"{t} ({s.path or 'not a path'})" for t, s in declared)
+            raise SnnccError(f"targets declare it with different path roles: {both}", field=specs[0].flag)
+        offers.append(Offer(name, specs[0].flag, kind, text, targets, default, roles.pop()))
     return offers
 
 
@@ -209,6 +215,7 @@ def takers(kind: str) -> list[str]:
     return [t.name for t in loaded_targets() if kind in model_kinds(t)]
 
 
-__all__ = ["Target", "Artefact", "Record", "TargetOptions", "AgreementOptions", "Offer", "VerbOptions",
+__all__ = ["Target", "Artefact", "Record", "TargetOptions", "AgreementOptions", "FinetuneOptions", "Offer",
+           "VerbOptions",
            "get_target", "available_targets", "loaded_targets", "capability", "target_options", "verb_options",
            "offered_options", "model_kinds", "offering", "takers", "output_suffixes", "targets_for_suffix"]

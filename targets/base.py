@@ -24,8 +24,11 @@ declarations and the verbs pass options through without naming them. The rules:
   that take it (``--target jetson, loihi``); each target validates its own declaration (a flag that
   is a switch for one target and a value for another is refused when the flags are built);
 * options that belong to a capability rather than a target are declared once, here, in that
-  capability's record (``CAPABILITY_OPTIONS``: ``AgreementOptions`` of ``agree``) and offered by
-  every target that has the capability; the capability receives the record.
+  capability's record (``CAPABILITY_OPTIONS``: ``AgreementOptions`` of ``agree``, ``FinetuneOptions``
+  of ``finetune``) and offered by every target that has the capability; the capability receives the
+  record;
+* an option naming a file says so (``path="input"``: read, so no output may overwrite it;
+  ``path="output"``: written), and the CLI protects it like the command's own path parameters.
 
 Options are settings only (what the user chose); runtime state such as a progress callback is a
 separate keyword argument, never an option.
@@ -43,6 +46,8 @@ separate keyword argument, never an option.
     bench(artefacts, *, data, samples, ..., progress)        -> Record          snncc bench
     hardware()                                               -> HardwareCosts   snncc hpo (per trial)
     arithmetic(options)                                      -> Arithmetic      snncc train --qat-from
+    finetune(model, inputs, options, finetuning, *, labels, data, progress) -> FinetunedArtefact
+                                                                                snncc compile --finetune
 
 ``check`` and ``agree`` measure the written artefact at ``artefact`` (run again, never echoed from what
 compile recorded; None: the artefact compile would write, in a temporary directory); ``identify``
@@ -79,7 +84,8 @@ Progress = Callable[[int], None]
 OptionValue = Union[bool, int, float, str, None]
 OPTION_KEY = "snncc.option"
 VERB_OF = {"lower": "compile", "check": "check with labelled data", "agree": "check without labels (agreement)",
-           "map": "map"}
+           "map": "map", "finetune": "compile --finetune"}
+PATH_ROLES = ("", "input", "output")   # an option naming a file the command reads, or one it writes
 
 
 # -- option declarations ----------------------------------------------------------------------------
@@ -88,7 +94,9 @@ class Option:
     """One declared option: ``help`` (what it does, for ``--help``), its ``kind`` (bool | int | float |
     str, read from the field's type), ``choices`` (str values allowed), bounds (``minimum``,
     ``maximum`` inclusive; ``above``: strictly greater), ``rule`` (the refusal's text when a value
-    breaks them) and ``capabilities`` (whose verbs offer it). ``name``/``default`` come from the field."""
+    breaks them), ``capabilities`` (whose verbs offer it) and ``path`` ("input": a file the command
+    reads, protected from every output; "output": a file it writes; "": not a path). ``name``/``default``
+    come from the field."""
 
     help: str
     choices: tuple[str, ...] = ()
@@ -97,6 +105,7 @@ class Option:
     above: float | None = None
     rule: str = ""
     capabilities: tuple[str, ...] = ("lower", "check", "agree")
+    path: str = ""
     name: str = ""
     kind: type = str
     default: OptionValue = None
@@ -161,22 +170,24 @@ T = TypeVar("T", bool, int, float, str)
 @overload
 def option(help: str, *, default: None = None, choices: Sequence[str] = (), minimum: float | None = None,
            maximum: float | None = None, above: float | None = None, rule: str = "",
-           capabilities: Sequence[str] = ("lower", "check", "agree")) -> None: ...
+           capabilities: Sequence[str] = ("lower", "check", "agree"), path: str = "") -> None: ...
 @overload
 def option(help: str, *, default: T, choices: Sequence[str] = (), minimum: float | None = None,
            maximum: float | None = None, above: float | None = None, rule: str = "",
-           capabilities: Sequence[str] = ("lower", "check", "agree")) -> T: ...
+           capabilities: Sequence[str] = ("lower", "check", "agree"), path: str = "") -> T: ...
 
 
 def option(help: str, *, default: OptionValue = None, choices: Sequence[str] = (), minimum: float | None = None,
            maximum: float | None = None, above: float | None = None, rule: str = "",
-           capabilities: Sequence[str] = ("lower", "check", "agree")) -> OptionValue:
+           capabilities: Sequence[str] = ("lower", "check", "agree"), path: str = "") -> OptionValue:
     """A dataclass field declaring a user-facing option (see the module doc); use as a field's default:
 
         time_steps: int | None = option("T of the unrolled model.", minimum=1, capabilities=("lower",))
     """
+    if path not in PATH_ROLES:
+        raise ValueError(f"an option's path role is one of {PATH_ROLES}, not {path!r}")
     declared = Option(help=help, choices=tuple(choices), minimum=minimum, maximum=maximum, above=above, rule=rule,
-                      capabilities=tuple(capabilities))
+                      capabilities=tuple(capabilities), path=path)
     field: OptionValue = dataclasses.field(default=default, metadata={OPTION_KEY: declared})
     return field
 
@@ -239,7 +250,37 @@ class AgreementOptions(OptionRecord):
                           default=0.01, minimum=0, rule="weight noise must be >= 0", capabilities=("agree",))
 
 
-CAPABILITY_OPTIONS: dict[str, type[OptionRecord]] = {"agree": AgreementOptions}
+DEVICE_RULE = "must be auto, cpu, cuda or cuda:N"
+
+
+@dataclass(frozen=True)
+class FinetuneOptions(OptionRecord):
+    """Deployment fine-tuning's settings (capability ``finetune``, ``docs/finetune.md``): the lowered model
+    trained through the target's integer arithmetic towards the float graph as trained (no labels)."""
+
+    finetune: bool = option("Fine-tune the lowered model to the chip's arithmetic, the float graph as trained being "
+                            "the teacher (no labels; docs/finetune.md).", default=False, capabilities=("finetune",))
+    finetune_out: str | None = option("With --finetune: also write the adapted float graph (the fine-tuned "
+                                      "parameters in float units) as NIR to this file.", capabilities=("finetune",),
+                                      path="output")
+    data: str | None = option("With --finetune: the inputs to fine-tune on (the files snncc check takes; labels, "
+                              "where present, only measure task accuracy on the held-out part).",
+                              capabilities=("finetune",), path="input")
+    density: float | None = option("With --finetune, without --data: spike density of the seeded random inputs "
+                                   "(default 0.08).", above=0, maximum=1, rule="spike density must be in (0, 1]",
+                                   capabilities=("finetune",))
+    device: str | None = option("With --finetune: where it trains: auto (CUDA when present), cpu (default), cuda "
+                                "or cuda:N.", capabilities=("finetune",))
+    finetune_samples: int = option("With --finetune, without --data: seeded random training samples (500 more "
+                                   "choose the kept epoch, 1,000 more are held out to measure it).", default=2048,
+                                   minimum=1, rule="must be a whole number >= 1", capabilities=("finetune",))
+    finetune_epochs: int = option("With --finetune: training epochs.", default=6, minimum=1,
+                                  rule="must be a whole number >= 1", capabilities=("finetune",))
+    finetune_seed: int = option("With --finetune: the seed of its inputs, split and training.", default=0, minimum=0,
+                                rule="must be a whole number >= 0", capabilities=("finetune",))
+
+
+CAPABILITY_OPTIONS: dict[str, type[OptionRecord]] = {"agree": AgreementOptions, "finetune": FinetuneOptions}
 
 R = TypeVar("R", bound=OptionRecord)
 Given = Union[Mapping[str, object], OptionRecord, None]
@@ -410,6 +451,28 @@ class Agree(Protocol):
         ceiling under ``agreement.noise``); ``progress(n)`` after n samples."""
 
 
+@runtime_checkable
+class FinetunedArtefact(Artefact, Protocol):
+    """What ``finetune`` returns: the artefact (written and summarised as ``lower``'s, the summary holding a
+    ``finetune`` entry: inputs, seed, steps, held-out agreement before and after with its interval)."""
+
+    def adapted_graph(self) -> Graph:
+        """The fine-tuned parameters read back as a float IR graph (what ``--finetune-out`` writes as NIR)."""
+
+    def finetune_record(self) -> Mapping[str, object]:
+        """What fine-tuning did and measured, plain data (the summary's ``finetune`` entry)."""
+
+
+class Finetune(Protocol):
+    def __call__(self, model: Model, inputs: np.ndarray | None, options: Given = None,
+                 finetuning: FinetuneOptions | None = None, *, labels: np.ndarray | None = None,
+                 data: str | None = None, progress: PhaseProgress | None = None) -> FinetunedArtefact:
+        """Lower ``model`` as ``lower`` does, then train the lowered parameters through the target's integer
+        arithmetic towards the float graph as trained on ``inputs`` (N, T, C) read from ``data`` (None:
+        ``finetuning``'s seeded random spikes); ``labels`` only measure task accuracy on the held-out part.
+        ``progress(done, total, phase)`` as it trains."""
+
+
 class Emulate(Protocol):
     def __call__(self, bundle: Path, inputs: np.ndarray, *, record: str = "outputs", stream: bool = False,
                  gap: int | None = None, source: str | None = None, progress: Progress | None = None) -> Emulation:
@@ -536,6 +599,7 @@ class TrainArithmetic(Protocol):
 CAPABILITIES: dict[str, type] = {
     "lower": Lower, "identify": Identify, "check": Check, "agree": Agree, "emulate": Emulate, "run": Run, "map": Map,
     "estimate": Estimate, "bench": Bench, "hardware": Hardware, "arithmetic": TrainArithmetic,
+    "finetune": Finetune,
 }
 
 
@@ -583,6 +647,8 @@ def capability(target: Target, name: Literal["bench"], rule: str | None = None) 
 def capability(target: Target, name: Literal["hardware"], rule: str | None = None) -> Hardware: ...
 @overload
 def capability(target: Target, name: Literal["arithmetic"], rule: str | None = None) -> TrainArithmetic: ...
+@overload
+def capability(target: Target, name: Literal["finetune"], rule: str | None = None) -> Finetune: ...
 @overload
 def capability(target: Target, name: str, rule: str | None = None) -> Callable[..., object]: ...
 

@@ -15,7 +15,7 @@ from snncc.targets import available_targets
 
 
 @app.command("compile")
-@with_target_flags("lower")
+@with_target_flags("lower", "finetune")
 @declares_paths(inputs=("model", "params"), outputs=("output",))
 def compile_command(
     model: Path = typer.Argument(..., help="Model file: snncc checkpoint (.pt), SpyTorch weight list (.pt, needs --params), NIR graph (.nir) or snncc IR (.snnir)."),

@@ -113,7 +113,7 @@ class FinetuneRecord:
         b, a = self.held_out_before, self.held_out_after
         out = [f"fine-tuned on {self.inputs['description']}: {self.inputs['train']} training, "
                f"{self.inputs['validation']} validation, {self.inputs['held_out']} held-out samples (seed "
-               f"{self.inputs['seed']}), {self.steps} steps on {self.device}, kept epoch {self.kept_epoch} of "
+               f"{self.inputs['seed']}), {self.steps} optimiser steps on {self.device}, kept epoch {self.kept_epoch} of "
                f"{self.epochs_run}, {self.cpu_s:.0f} s CPU / {self.wall_s:.0f} s wall",
                f"  held-out argmax agreement with the float graph: {_text(b)} -> {_text(a)}",
                f"  held-out count correlation: {self.count_correlation_before:.4f} -> "

@@ -12,6 +12,8 @@ map, emulate or estimate a bundle, never load the compiler's torch-based referen
     estimate   -> EnergyReport    (estimate/report.py: ESTIMATE of energy and delay per sample)
     hardware   -> LoihiHardware   (estimate/search_figures.py: a search trial's cores, energy, delay)
     arithmetic -> LoihiArithmetic (arithmetic/straight_through.py: the quantization in torch, for QAT)
+    finetune   -> LoihiFinetunedArtefact (finetune.py: the lowered registers trained through the chip's
+                  integer arithmetic, lowering/differentiable.py, towards the float graph as trained)
 """
 
 from __future__ import annotations
@@ -23,8 +25,8 @@ from typing import TYPE_CHECKING
 from snncc.errors import SnnccError
 from snncc.progress import Progress as PhaseProgress
 from snncc.targets.base import (
-    AgreementOptions, Arithmetic, Artefact, CoreMap, Emulation, Given, HardwareCosts, Progress, Record,
-    TargetOptions, capability_options, option, target_options,
+    AgreementOptions, Arithmetic, Artefact, CoreMap, Emulation, FinetunedArtefact, FinetuneOptions, Given,
+    HardwareCosts, Progress, Record, TargetOptions, capability_options, option, target_options,
 )
 
 if TYPE_CHECKING:
@@ -158,6 +160,20 @@ class LoihiTarget:
         from snncc.targets.loihi.estimate.search_figures import LoihiHardware
 
         return LoihiHardware(self)
+
+    def finetune(self, model: Model, inputs: np.ndarray | None, options: Given = None,
+                 finetuning: FinetuneOptions | None = None, *, labels: np.ndarray | None = None,
+                 data: str | None = None, progress: PhaseProgress | None = None) -> FinetunedArtefact:
+        from snncc.ir.graph import Graph
+        from snncc.targets.loihi.finetune import finetune_artefact
+
+        settings = _settings(self._options(options, "lower"))
+        if not isinstance(model, Graph):
+            raise SnnccError("Loihi fine-tunes IR graphs only (model_kinds)", field="--finetune")
+        found: FinetunedArtefact = finetune_artefact(model, inputs, settings,
+                                                     finetuning or capability_options(FinetuneOptions),
+                                                     labels=labels, data=data, progress=progress)
+        return found
 
     def arithmetic(self, options: Given = None) -> Arithmetic:
         from snncc.targets.loihi.arithmetic.straight_through import LoihiArithmetic

@@ -8,8 +8,9 @@
                (``checks/exactness.validate_lowering``: timing, registers and kernel against the IR)
                against the fine-tuned parameters read back as a float graph (``adapted_graph``)
 
-The integrator wires ``finetune_loihi`` into ``compile --finetune``; the core map and bundle are
-written as for any other network (``lowering/lower.attach_core_map``, ``bundle/hdf5.py``).
+``finetune_artefact`` is the target's ``finetune`` capability (``snncc compile --finetune``): the
+fine-tuned network placed on cores and written as any bundle (``lowering/lower.attach_core_map``,
+``bundle/hdf5.py``), its record under /snncc/finetune and in /snncc/metadata.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 
 
@@ -244,3 +246,87 @@ def finetune_loihi(graph: Graph, options: dict[str, Any], split, *, config=None,
                             "zero (--allow-reset-change): the agreement includes the reset change")
     return result
 
+
+
+# -- the capability: compile --finetune ------------------------------------------------------------------
+@dataclass
+class LoihiFinetunedArtefact:
+    """``finetune``'s artefact: the Loihi bundle with the fine-tuned registers (written and summarised as
+    ``lower``'s, plus a ``finetune`` entry) and the adapted float graph for ``--finetune-out``."""
+
+    bundle: Any                  # LoihiArtefact of the fine-tuned network
+    result: LoihiFinetuned
+
+    def write(self, path) -> None:
+        from snncc.targets.loihi.bundle.hdf5 import write_bundle
+
+        b = self.bundle
+        write_bundle(b.network, path, extra={"quantization": b.quantization, "timing": b.timing,
+                                             "validation": b.validation, "finetune": self.finetune_record()})
+
+    def summary(self) -> dict:
+        return {**self.bundle.summary(), "finetune": self.finetune_record()}
+
+    def render_text(self, console) -> None:
+        self.bundle.render_text(console)
+        for line in self.result.record.lines():
+            console.print(line, markup=False)
+
+    def adapted_graph(self) -> Graph:
+        return self.result.adapted
+
+    def finetune_record(self) -> dict:
+        return {**self.result.metadata(), "record": self.result.record.as_dict()}
+
+
+def _inputs(graph: Graph, inputs, labels, options: dict[str, Any], finetuning, data: str | None):
+    """The split of ``inputs`` (the user's data) or of seeded random spikes of the model's steps."""
+    from snncc.finetune.inputs import split_inputs
+    from snncc.ir.nodes import Input
+    from snncc.ir.timebase import sample_steps
+
+    width = sum(int(graph.node(n).width) for n in graph.of_kind(Input))
+    if inputs is not None:
+        steps = options.get("time_steps")
+        if steps is not None and int(steps) != np.asarray(inputs).shape[1]:
+            raise SnnccError(f"the data has {np.asarray(inputs).shape[1]} steps per sample, --time-steps says {steps}",
+                             file=data, field="--time-steps")
+        return split_inputs(width=width, steps=int(np.asarray(inputs).shape[1]), data=inputs, labels=labels,
+                            seed=finetuning.finetune_seed, source=data)
+    steps, _ = sample_steps(graph, options.get("time_steps"))
+    return split_inputs(width=width, steps=steps, density=finetuning.density, train=finetuning.finetune_samples,
+                        seed=finetuning.finetune_seed)
+
+
+def finetune_artefact(graph: Graph, inputs, options: dict[str, Any], finetuning, *, labels=None,
+                      data: str | None = None, progress=None) -> LoihiFinetunedArtefact:
+    """``target.finetune``: fine-tune (``finetune_loihi``, the engine's default loss and schedule) on the
+    user's data or seeded random spikes, place the result on cores and check it as ``lower`` checks a
+    lowering (timing, registers and kernel against the adapted float graph)."""
+    from snncc.errors import InternalError
+    from snncc.finetune.engine import FinetuneConfig
+    from snncc.targets.loihi.lowering.artefact import LoihiArtefact
+    from snncc.targets.loihi.lowering.lower import attach_core_map
+    from snncc.targets.loihi.mapping.relays import needs_relays
+    from snncc.training.device import resolve_device
+
+    device = finetuning.device or "cpu"
+    resolve_device(device)                      # an unavailable device is refused before any work
+    split = _inputs(graph, inputs, labels, options, finetuning, data)
+    config = FinetuneConfig(epochs=finetuning.finetune_epochs, seed=finetuning.finetune_seed, device=device)
+    result = finetune_loihi(graph, options, split, config=config, progress=progress)
+    network = result.network
+    if needs_relays(network):
+        raise SnnccError("fine-tuning a network whose fan-in needs relay neurons is not supported", field="--finetune")
+    attach_core_map(network)
+    checks = result.validation
+    if not all(checks.get(k) for k in ("timing_exact", "quantized_params_exact", "kernel_exact")):
+        raise InternalError("the fine-tuned bundle differs from its adapted float graph in the emulator "
+                            f"({ {k: checks.get(k) for k in ('timing_exact', 'quantized_params_exact', 'kernel_exact')} })")
+    lowered = result.lowered
+    notes = list(lowered.notes) + [f"tSample {network.t_sample}: {network.metadata['t_sample_rule']}"]
+    notes.append("fine-tuned: registers trained through Loihi's integer arithmetic towards the float graph as "
+                 "trained; the checks above compare the bundle with the adapted float graph (--finetune-out)")
+    bundle = LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
+                           timing=lowered.timing_record.as_dict(), validation=checks, notes=notes)
+    return LoihiFinetunedArtefact(bundle, result)
