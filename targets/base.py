@@ -84,7 +84,7 @@ Progress = Callable[[int], None]
 OptionValue = Union[bool, int, float, str, None]
 OPTION_KEY = "snncc.option"
 VERB_OF = {"lower": "compile", "check": "check with labelled data", "agree": "check without labels (agreement)",
-           "map": "map", "finetune": "compile --finetune"}
+           "map": "map", "finetune": "fine-tuning"}
 PATH_ROLES = ("", "input", "output")   # an option naming a file the command reads, or one it writes
 
 

@@ -291,7 +291,9 @@ def _inputs(graph: Graph, inputs, labels, options: dict[str, Any], finetuning, d
         if steps is not None and int(steps) != np.asarray(inputs).shape[1]:
             raise SnnccError(f"the data has {np.asarray(inputs).shape[1]} steps per sample, --time-steps says {steps}",
                              file=data, field="--time-steps")
+        n = int(np.asarray(inputs).shape[0])   # held out: a quarter (at most 1,000); validation: an eighth (<= 500)
         return split_inputs(width=width, steps=int(np.asarray(inputs).shape[1]), data=inputs, labels=labels,
+                            validation=min(500, max(1, n // 8)), held_out=min(1000, max(1, n // 4)),
                             seed=finetuning.finetune_seed, source=data)
     steps, _ = sample_steps(graph, options.get("time_steps"))
     return split_inputs(width=width, steps=steps, density=finetuning.density, train=finetuning.finetune_samples,
