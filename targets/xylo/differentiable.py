@@ -1,0 +1,240 @@
+"""Xylo Audio 2's v2-core arithmetic as a differentiable torch model, for deployment fine-tuning.
+
+The forward pass computes ``emulator.reference_run``'s rules exactly (docs/xylo.md; float64 tensors
+holding integers, exact below 2**53), for specs without aliases and with thresholds >= 1:
+
+    w_eff = wrap16(w << shift)                                     w: int8 shadows, rounded (straight through)
+    Isyn_s[k] = sat16(... sat16(Isyn_s[k] + c_0 w_0k) ... + c_j w_jk)   inputs of step t (no delay), then the
+                                                                   hidden events of step t - 1, in index order
+    Isyn_s -= decay(Isyn_s, dash_syn_s)      decay(x, d) = x >> d (floor), or sign(x) where that is 0
+    dv = sat16(wrap16(-decay(V, dash_mem)) + Isyn_1 + Isyn_2);  dv = sat16(dv + bias);  V = sat16(V + dv)
+    n = min(floor(V / theta), cap) where V >= theta, else 0;  V -= n * theta   (multi-spike subtract reset:
+                                                                   the chip's loop, cap 31 hidden, 1 output)
+
+Saturation is per addition on the chip; the model adds each step's contributions at once and replays
+them one by one (the chip's order) only where a partial sum leaves the int16 range, so the result is
+the chip's in every case. Backward: rounding, wrapping and the shift decays pass gradients straight
+through (d decay(x, d) / dx = 2**-d), saturation clamps, and the event count uses the fast-sigmoid
+surrogate of ``snncc.finetune.ste`` on (V - theta) / theta.
+
+Learnable: the int8 weights of the three matrices, hidden and output thresholds (>= 1) and biases.
+Fixed: the bit-shift decays (dash_*), the weight shifts, the synapse layout. The model is the
+``DifferentiableArithmetic`` of ``snncc.finetune.protocol``; ``export()`` gives the ``XyloSpec``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+import torch
+
+from snncc.errors import SnnccError
+from snncc.finetune.protocol import StudentRun
+from snncc.finetune.ste import floor_ste, round_ste, wrap_ste
+from snncc.targets.xylo.chip import CORE
+from snncc.targets.xylo.spec import XyloSpec
+
+STATE_MIN, STATE_MAX = float(CORE.state_min), float(CORE.state_max)
+BITS = CORE.state_bits - 1
+
+
+class _Events(torch.autograd.Function):
+    """n = clamp(floor(v / theta), 0, cap) for theta >= 1 (the chip's loop); surrogate h((v - theta) / theta) / theta."""
+
+    @staticmethod
+    def forward(ctx, v, theta, cap: float, slope: float):
+        ctx.save_for_backward(v, theta)
+        ctx.slope = slope
+        n = torch.div(v, theta, rounding_mode="floor").clamp(0.0, cap)
+        return n
+
+    @staticmethod
+    def backward(ctx, g):
+        v, theta = ctx.saved_tensors
+        h = 1.0 / (1.0 + ctx.slope * ((v - theta) / theta).abs()) ** 2 / theta
+        gv = g * h
+        gt = None
+        if ctx.needs_input_grad[1]:
+            gt = (-gv).sum_to_size(theta.shape)
+        return gv, gt, None, None
+
+
+def events(v: torch.Tensor, theta: torch.Tensor, cap: int, slope: float = 5.0) -> torch.Tensor:
+    return _Events.apply(v, theta, float(cap), float(slope))
+
+
+def shift_decay(x: torch.Tensor, dash: torch.Tensor) -> torch.Tensor:
+    """x >> dash (floor), sign(x) where that is 0; gradient 2**-dash."""
+    d = floor_ste(x / 2.0 ** dash)
+    return torch.where(d == 0, torch.sign(x).detach(), d)
+
+
+def sat16(x: torch.Tensor) -> torch.Tensor:
+    return x.clamp(STATE_MIN, STATE_MAX)
+
+
+def deliver(isyn: torch.Tensor, contributions: torch.Tensor) -> torch.Tensor:
+    """sat16 after each addition, in pre-synaptic order: ``isyn`` (B, N, S), ``contributions`` (B, P, N, S)."""
+    total = isyn + contributions.sum(1)
+    with torch.no_grad():
+        path = isyn.unsqueeze(1) + contributions.cumsum(1)
+        bites = bool(((path < STATE_MIN) | (path > STATE_MAX)).any())
+    if not bites:
+        return total
+    out = isyn
+    for j in range(contributions.shape[1]):
+        out = sat16(out + contributions[:, j])
+    return out
+
+
+class DifferentiableXylo(torch.nn.Module):
+    """A ``XyloSpec`` as a trainable model (module doc). ``hidden``: IR population name -> the hidden neurons
+    (indices into the spec's N) that carry it, in the population's neuron order; ``output``: the name of the
+    population Xylo's output neurons carry (the last of ``populations``); ``steps``: time steps per sample."""
+
+    def __init__(self, spec: XyloSpec, steps: int, hidden: dict[str, Any] | None = None, output: str = "output", *,
+                 learn=("weights", "thresholds", "biases"), slope: float = 5.0, device=None):
+        super().__init__()
+        if any(spec.aliases[k] for k in range(spec.n_hidden)):
+            raise SnnccError("fine-tuning a Xylo network with aliases is not supported", field="aliases")
+        if int(np.min(spec.threshold)) < 1 or int(np.min(spec.threshold_out)) < 1:
+            raise SnnccError("fine-tuning needs thresholds >= 1 (the chip's loop wraps otherwise)", field="threshold")
+        self.spec, self.steps, self.slope = spec, int(steps), float(slope)
+        self.hidden = {name: np.asarray(idx, np.int64) for name, idx in (hidden or {}).items()}
+        self.populations = tuple(self.hidden) + (output,)
+        as_t = dict(dtype=torch.float64, device=device)
+        self._as_t = as_t
+
+        def param(a, kind):
+            p = torch.nn.Parameter(torch.as_tensor(np.asarray(a, np.float64), **as_t), requires_grad=kind in learn)
+            return p
+
+        self.w_in = param(spec.weights_in, "weights")
+        self.w_rec = param(spec.weights_rec, "weights")
+        self.w_out = param(spec.weights_out, "weights")
+        self.theta = param(spec.threshold, "thresholds")
+        self.theta_out = param(spec.threshold_out, "thresholds")
+        self.bias = param(spec.bias, "biases")
+        self.bias_out = param(spec.bias_out, "biases")
+        def fixed(a):
+            return torch.as_tensor(np.array(a, np.float64), **as_t)
+
+        self.register_buffer("dash_syn", fixed(np.stack([spec.dash_syn, spec.dash_syn_2], 1)))
+        self.register_buffer("dash_mem", fixed(spec.dash_mem))
+        self.register_buffer("dash_syn_out", fixed(spec.dash_syn_out)[:, None])
+        self.register_buffer("dash_mem_out", fixed(spec.dash_mem_out))
+        self._kinds = {"weights": [self.w_in, self.w_rec, self.w_out], "thresholds": [self.theta, self.theta_out],
+                       "biases": [self.bias, self.bias_out]}
+
+    # -- the registers the shadows round to ---------------------------------------------------------------
+    @staticmethod
+    def _int8(w: torch.Tensor) -> torch.Tensor:
+        return round_ste(w).clamp(float(CORE.weight_min), float(CORE.weight_max))
+
+    def _weights(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """w_eff = wrap16(w << shift), shaped (Nin, N_ien, 2), (N, N, 2), (N_oen, Nout)."""
+        s = self.spec
+
+        def both(w):
+            w = w if w.dim() == 3 else w[:, :, None]
+            pad = w.new_zeros(w.shape[:2] + (CORE.hidden_synapse_states - w.shape[2],))
+            return torch.cat([w, pad], 2)
+
+        return (wrap_ste(both(self._int8(self.w_in)) * 2.0 ** s.weight_shift_in, BITS),
+                wrap_ste(both(self._int8(self.w_rec)) * 2.0 ** s.weight_shift_rec, BITS),
+                wrap_ste(self._int8(self.w_out) * 2.0 ** s.weight_shift_out, BITS))
+
+    def _theta(self, t: torch.Tensor) -> torch.Tensor:
+        return round_ste(t).clamp(1.0, float(CORE.threshold_max))
+
+    def _bias(self, b: torch.Tensor) -> torch.Tensor:
+        return round_ste(b).clamp(float(CORE.bias_min), float(CORE.bias_max))
+
+    # -- the chip's step ----------------------------------------------------------------------------------
+    def forward(self, x: torch.Tensor, force: dict[str, torch.Tensor] | None = None, *, record: bool = False):
+        """``x`` (B, T, Nin) event counts (clipped to 15 as the chip does); ``force``: population -> (B, T, n)
+        events that the synapses leaving those hidden neurons deliver instead of their own."""
+        s = self.spec
+        x = torch.as_tensor(x, **self._as_t).clamp(max=float(CORE.max_input_spikes))
+        b, t_steps, _ = x.shape
+        n, n_out, n_ien, n_oen = s.n_hidden, s.n_out, s.n_ien, s.n_oen
+        w_in, w_rec, w_out = self._weights()
+        theta, theta_out = self._theta(self.theta), self._theta(self.theta_out)
+        bias, bias_out = self._bias(self.bias), self._bias(self.bias_out)
+        cap_h, cap_o = CORE.max_hidden_spikes, CORE.max_output_spikes
+        zeros = dict(dtype=torch.float64, device=x.device)
+        isyn = torch.zeros((b, n, CORE.hidden_synapse_states), **zeros)
+        v = torch.zeros((b, n), **zeros)
+        isyn_o = torch.zeros((b, n_out, 1), **zeros)
+        v_o = torch.zeros((b, n_out), **zeros)
+        ev = torch.zeros((b, n), **zeros)
+        forced = [(torch.as_tensor(self.hidden[p], device=x.device), torch.as_tensor(f, **zeros))
+                  for p, f in (force or {}).items() if p in self.hidden]
+        w_in_full = torch.cat([w_in, w_in.new_zeros((w_in.shape[0], n - n_ien, w_in.shape[2]))], 1)
+        hid, volt, outs, rec = [], [], [], []
+        for t in range(t_steps):
+            contrib = torch.cat([x[:, t, :, None, None] * w_in_full, ev[:, :, None, None] * w_rec], 1)
+            isyn = deliver(isyn, contrib)
+            isyn_o = deliver(isyn_o, (ev[:, n - n_oen:, None] * w_out)[..., None])
+            isyn = isyn - shift_decay(isyn, self.dash_syn)
+            dv = sat16(wrap_ste(-shift_decay(v, self.dash_mem), BITS) + isyn.sum(-1))
+            v = sat16(v + sat16(dv + bias))
+            volt.append(v / theta)
+            ev = events(v, theta, cap_h, self.slope)
+            v = v - ev * theta
+            hid.append(ev)
+            if forced:
+                ev = ev.clone()
+                for idx, f in forced:
+                    ev[:, idx] = f[:, t]
+            isyn_o = isyn_o - shift_decay(isyn_o, self.dash_syn_out)
+            dv_o = sat16(wrap_ste(-shift_decay(v_o, self.dash_mem_out), BITS) + isyn_o.sum(-1))
+            v_o = sat16(v_o + sat16(dv_o + bias_out))
+            o = events(v_o, theta_out, cap_o, self.slope)
+            v_o = v_o - o * theta_out
+            outs.append(o)
+            if record:
+                rec.append((v.detach().clone(), isyn.detach().clone(), v_o.detach().clone(), isyn_o.detach().clone()))
+        out = torch.stack(outs, 1)
+        spikes = torch.stack(hid, 1)
+        voltage = torch.stack(volt, 1)
+        run = StudentRun(counts=out.sum(1), spikes={p: spikes[:, :, torch.as_tensor(i, device=x.device)]
+                                                    for p, i in self.hidden.items()},
+                         voltage={p: voltage[:, :, torch.as_tensor(i, device=x.device)] for p, i in self.hidden.items()})
+        run.spikes[self.populations[-1]] = out
+        if record:
+            run.states = {"vmem": torch.stack([r[0] for r in rec], 1), "isyn": torch.stack([r[1][..., 0] for r in rec], 1),
+                          "isyn2": torch.stack([r[1][..., 1] for r in rec], 1), "spikes": spikes,
+                          "vmem_out": torch.stack([r[2] for r in rec], 1),
+                          "isyn_out": torch.stack([r[3][..., 0] for r in rec], 1), "output_spikes": out}
+        return run
+
+    # -- what the engine needs ----------------------------------------------------------------------------
+    def param_groups(self) -> dict[str, list[torch.nn.Parameter]]:
+        return {k: [p for p in ps if p.requires_grad] for k, ps in self._kinds.items()}
+
+    @torch.no_grad()
+    def project(self) -> None:
+        """Keep the shadows within half a step of the registers' ranges."""
+        for w in self._kinds["weights"]:
+            w.clamp_(CORE.weight_min - 0.49, CORE.weight_max + 0.49)
+        for t in self._kinds["thresholds"]:
+            t.clamp_(0.51, CORE.threshold_max + 0.49)
+        for b in self._kinds["biases"]:
+            b.clamp_(CORE.bias_min - 0.49, CORE.bias_max + 0.49)
+
+    @torch.no_grad()
+    def export(self) -> XyloSpec:
+        """The ``XyloSpec`` with the rounded registers (decays, shifts, aliases and dt unchanged)."""
+        s = self.spec
+
+        def ints(p, like):
+            return np.rint(p.detach().cpu().numpy()).astype(np.asarray(like).dtype)
+
+        return dataclasses.replace(
+            s, weights_in=ints(self._int8(self.w_in), s.weights_in), weights_rec=ints(self._int8(self.w_rec), s.weights_rec),
+            weights_out=ints(self._int8(self.w_out), s.weights_out), threshold=ints(self._theta(self.theta), s.threshold),
+            threshold_out=ints(self._theta(self.theta_out), s.threshold_out), bias=ints(self._bias(self.bias), s.bias),
+            bias_out=ints(self._bias(self.bias_out), s.bias_out))
