@@ -110,7 +110,9 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
     model = Path(model)
     tuned_out = options.get("finetune_out")
     if tuning and tuned_out is not None:
-        _check_finetune_out(Path(str(tuned_out)), model, Path(output))
+        data = options.get("data")
+        _check_finetune_out(Path(str(tuned_out)), [model] + ([Path(str(data))] if data is not None else []),
+                            Path(output))
     loaded = load_compilable(model, LoadOptions(params=None if params is None else Path(params), dt=dt, reset=reset))
     tgt = get_target(name)
     kind = getattr(loaded, "model_kind", "graph")
@@ -159,13 +161,13 @@ def _written_hash(target: Target, output: str | Path) -> tuple[str | None, str |
     return digest, rule
 
 
-def _check_finetune_out(path: Path, model: Path, output: Path) -> None:
-    """``--finetune-out`` is a new file: never the model (nor any input), never ``-o``, writable."""
+def _check_finetune_out(path: Path, inputs: list[Path], output: Path) -> None:
+    """``--finetune-out`` is a new file: never the model or the data (``inputs``), never ``-o``, writable."""
     from snncc.atomic import preflight
 
-    if path.resolve() == model.resolve():
-        raise SnnccError("is the model file; fine-tuning never overwrites it: give a new name", file=str(path),
-                         field="--finetune-out")
+    if any(path.resolve() == given.resolve() for given in inputs):
+        raise SnnccError("is an input (the model or --data); fine-tuning never overwrites it: give a new name",
+                         file=str(path), field="--finetune-out")
     if path.resolve() == output.resolve():
         raise SnnccError("is also -o: give the adapted graph its own name", file=str(path), field="--finetune-out")
     preflight(path)
@@ -178,6 +180,8 @@ def _finetune(tgt: Target, loaded: Model, split: VerbOptions, progress: Progress
 
     how = split.of(FinetuneOptions)
     inputs = labels = None
+    if how.data is not None and how.density is not None:
+        raise SnnccError("applies only to seeded random inputs, not with --data", field="--density")
     if how.data is not None:
         inputs, labels = _finetune_data(Path(how.data), loaded)
     tune = capability(tgt, "finetune")

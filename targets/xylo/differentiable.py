@@ -91,7 +91,7 @@ def deliver(isyn: torch.Tensor, contributions: torch.Tensor) -> torch.Tensor:
 
 class DifferentiableXylo(torch.nn.Module):
     """A ``XyloSpec`` as a trainable model (module doc). ``hidden``: IR population name -> the hidden neurons
-    (indices into the spec's N) that carry it, in the population's neuron order; ``output``: the name of the
+    (indices into the XyloSpec's N) that carry it, in the population's neuron order; ``output``: the name of the
     population Xylo's output neurons carry (the last of ``populations``); ``steps``: time steps per sample."""
 
     def __init__(self, spec: XyloSpec, steps: int, hidden: dict[str, Any] | None = None, output: str = "output", *,

@@ -1,6 +1,6 @@
 """Deployment fine-tuning for Xylo Audio 2: a ``XyloSpec`` trained towards the float graph as trained.
 
-    student   ``DifferentiableXylo`` over the spec (``differentiable.py``): equal to the bit-exact emulator
+    student   ``DifferentiableXylo`` over the XyloSpec (``differentiable.py``): equal to the bit-exact emulator
               on the registers it exports; decays, shifts and the synapse layout are kept
     teacher   the float graph as trained (its own reset), run by the IR reference simulator
     engine    ``snncc.finetune.engine.finetune``: the same loss, schedule, best-on-validation choice and
@@ -49,7 +49,7 @@ def deployed_counts(student, x: np.ndarray) -> np.ndarray:
 def finetune_xylo(spec: XyloSpec, teacher: Graph, split, *, hidden: dict[str, Any], output: str, config=None,
                   task_sets=(), progress=None, learn=("weights", "thresholds", "biases"),
                   slope: float = 5.0) -> XyloFinetuned:
-    """Fine-tune ``spec`` towards ``teacher`` on ``split`` (``snncc.finetune.inputs``; inputs in the spec's
+    """Fine-tune ``spec`` towards ``teacher`` on ``split`` (``snncc.finetune.inputs``; inputs in the XyloSpec's
     input channels). ``config``: ``snncc.finetune.engine.FinetuneConfig`` (its step sizes are in register
     units: int8 weights, thresholds, biases); the decays have no step size here (they are kept)."""
     from snncc.finetune.engine import FinetuneConfig, finetune

@@ -87,6 +87,8 @@ def test_offered_once_by_the_targets_that_have_the_capability():
     ({"finetune": True, "device": "tpu"}, "--device", "not a device"),
     ({"finetune": True, "device": "cuda"}, "--device", "CUDA"),
     ({"finetune": True, "density": 1.5}, "--density", "(0, 1]"),
+    ({"finetune": True, "density": 0.1, "data": "missing.npz"}, "--density", "not with"),
+    ({"finetune": True, "data": "missing.npz"}, "--data", "does not exist"),
 ])
 def test_refusals_are_one_line(model, tmp_path, given, field, words):
     import torch
@@ -108,6 +110,12 @@ def test_finetune_out_never_overwrites_the_model(model, tmp_path):
     with pytest.raises(SnnccError) as e:
         api.compile(model, output=tmp_path / "x.net", finetune=True, finetune_out=str(model), **TINY)
     assert e.value.field == "--finetune-out" and model.read_bytes() == before
+    data = tmp_path / "inputs.npz"
+    np.savez(data, inputs=np.zeros((4, 32, 6), np.uint8))
+    kept = data.read_bytes()
+    with pytest.raises(SnnccError) as e:
+        api.compile(model, output=tmp_path / "x.net", finetune=True, data=str(data), finetune_out=str(data), **TINY)
+    assert e.value.field == "--finetune-out" and data.read_bytes() == kept
     with pytest.raises(SnnccError) as e:
         api.compile(model, output=tmp_path / "x.net", finetune=True, finetune_out=str(tmp_path / "x.net"), **TINY)
     assert e.value.field == "--finetune-out"

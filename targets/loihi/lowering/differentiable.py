@@ -1,6 +1,6 @@
 """Loihi 1's integer arithmetic as a differentiable torch model (for deployment fine-tuning).
 
-The forward pass is the emulator's rule (``emulation/emulator.py``, spec section 3) computed exactly
+The forward pass is the emulator's rule (``emulation/emulator.py``, docs/loihi.md) computed exactly
 in float64 tensors that hold integers, per compartment and chip step t:
 
     q  = wrap21( sum_d  W_d s_pre[t-1-d]  +  sum_d  R_d s_self[t-1-d] )     W = 2*round(P) * 2**(6+wgtExp)
