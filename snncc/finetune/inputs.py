@@ -103,3 +103,26 @@ def split_inputs(*, width: int, steps: int, data=None, labels=None, density: flo
     return Split(x, None, idx[:train], idx[train:train + validation], idx[train + validation:], "synthetic",
                  f"{n} seeded random spike trains (density {density:g}, seed {seed}), {steps} steps (SYNTHETIC)",
                  float(density), seed)
+
+
+def model_split(graph, inputs=None, labels=None, *, time_steps: int | None = None, density: float | None = None,
+                samples: int = DEFAULT_TRAIN, seed: int = 0, data: str | None = None) -> Split:
+    """The split a target's ``finetune`` capability learns from (``FinetuneOptions``): the user's ``inputs``
+    (read from ``data``; a quarter held out, at most 1,000, an eighth for validation, at most 500, the rest
+    trains; their steps must match ``time_steps`` when given), else ``samples`` seeded random spike trains of
+    ``density`` and the model's steps (``snncc.ir.timebase.sample_steps``), 500 validation, 1,000 held out."""
+    from snncc.ir.nodes import Input
+    from snncc.ir.timebase import sample_steps
+
+    width = sum(int(graph.node(n).width) for n in graph.of_kind(Input))
+    if inputs is not None:
+        x = np.asarray(inputs)
+        if x.ndim == 3 and time_steps is not None and int(time_steps) != x.shape[1]:
+            raise SnnccError(f"the data has {x.shape[1]} steps per sample, --time-steps says {time_steps}",
+                             file=data, field="--time-steps")
+        n = int(x.shape[0]) if x.ndim else 0
+        return split_inputs(width=width, steps=int(x.shape[1]) if x.ndim == 3 else 0, data=x, labels=labels,
+                            validation=min(DEFAULT_VALIDATION, max(1, n // 8)),
+                            held_out=min(DEFAULT_HELD_OUT, max(1, n // 4)), seed=seed, source=data)
+    steps, _ = sample_steps(graph, time_steps)
+    return split_inputs(width=width, steps=steps, density=density, train=samples, seed=seed)

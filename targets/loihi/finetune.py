@@ -279,27 +279,6 @@ class LoihiFinetunedArtefact:
         return {**self.result.metadata(), "record": self.result.record.as_dict()}
 
 
-def _inputs(graph: Graph, inputs, labels, options: dict[str, Any], finetuning, data: str | None):
-    """The split of ``inputs`` (the user's data) or of seeded random spikes of the model's steps."""
-    from snncc.finetune.inputs import split_inputs
-    from snncc.ir.nodes import Input
-    from snncc.ir.timebase import sample_steps
-
-    width = sum(int(graph.node(n).width) for n in graph.of_kind(Input))
-    if inputs is not None:
-        steps = options.get("time_steps")
-        if steps is not None and int(steps) != np.asarray(inputs).shape[1]:
-            raise SnnccError(f"the data has {np.asarray(inputs).shape[1]} steps per sample, --time-steps says {steps}",
-                             file=data, field="--time-steps")
-        n = int(np.asarray(inputs).shape[0])   # held out: a quarter (at most 1,000); validation: an eighth (<= 500)
-        return split_inputs(width=width, steps=int(np.asarray(inputs).shape[1]), data=inputs, labels=labels,
-                            validation=min(500, max(1, n // 8)), held_out=min(1000, max(1, n // 4)),
-                            seed=finetuning.finetune_seed, source=data)
-    steps, _ = sample_steps(graph, options.get("time_steps"))
-    return split_inputs(width=width, steps=steps, density=finetuning.density, train=finetuning.finetune_samples,
-                        seed=finetuning.finetune_seed)
-
-
 def finetune_artefact(graph: Graph, inputs, options: dict[str, Any], finetuning, *, labels=None,
                       data: str | None = None, progress=None) -> LoihiFinetunedArtefact:
     """``target.finetune``: fine-tune (``finetune_loihi``, the engine's default loss and schedule) on the
@@ -307,6 +286,7 @@ def finetune_artefact(graph: Graph, inputs, options: dict[str, Any], finetuning,
     lowering (timing, registers and kernel against the adapted float graph)."""
     from snncc.errors import InternalError
     from snncc.finetune.engine import FinetuneConfig
+    from snncc.finetune.inputs import model_split
     from snncc.targets.loihi.lowering.artefact import LoihiArtefact
     from snncc.targets.loihi.lowering.lower import attach_core_map
     from snncc.targets.loihi.mapping.relays import needs_relays
@@ -314,7 +294,8 @@ def finetune_artefact(graph: Graph, inputs, options: dict[str, Any], finetuning,
 
     device = finetuning.device or "cpu"
     resolve_device(device)                      # an unavailable device is refused before any work
-    split = _inputs(graph, inputs, labels, options, finetuning, data)
+    split = model_split(graph, inputs, labels, time_steps=options.get("time_steps"), density=finetuning.density,
+                        samples=finetuning.finetune_samples, seed=finetuning.finetune_seed, data=data)
     config = FinetuneConfig(epochs=finetuning.finetune_epochs, seed=finetuning.finetune_seed, device=device)
     result = finetune_loihi(graph, options, split, config=config, progress=progress)
     network = result.network
