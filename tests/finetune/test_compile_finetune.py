@@ -134,6 +134,11 @@ def test_cli_flags_and_declared_paths(model, tmp_path, capsys):
     np.savez(data, inputs=(np.random.default_rng(0).random((40, 32, 6)) < 0.25).astype(np.uint8))
     code, out, err = run_cli(["compile", model, "-o", tmp_path / "x.net", "--scale", "per-layer",
                               "--allow-reset-change", "--finetune", "--data", data, "--finetune-out", data], capsys)
+    assert code == 2 and "--finetune-out: is an input" in err and err.count("\n") == 1
+    assert np.load(data)["inputs"].shape == (40, 32, 6)
+    # the flag's input declaration protects it like the command's own inputs: -o may not replace it either
+    code, out, err = run_cli(["compile", model, "--target", "loihi", "-o", data, "--scale", "per-layer",
+                              "--allow-reset-change", "--finetune", "--data", data], capsys)
     assert code == 2 and "is an input of this command" in err and err.count("\n") == 1
     assert np.load(data)["inputs"].shape == (40, 32, 6)
     from snncc.cli.main import build_app
