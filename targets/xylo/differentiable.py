@@ -75,17 +75,20 @@ def sat16(x: torch.Tensor) -> torch.Tensor:
     return x.clamp(STATE_MIN, STATE_MAX)
 
 
-def deliver(isyn: torch.Tensor, contributions: torch.Tensor) -> torch.Tensor:
-    """sat16 after each addition, in pre-synaptic order: ``isyn`` (B, N, S), ``contributions`` (B, P, N, S)."""
-    total = isyn + contributions.sum(1)
+def deliver(isyn: torch.Tensor, counts: torch.Tensor, w: torch.Tensor) -> torch.Tensor:
+    """sat16 after each addition, in pre-synaptic order: ``isyn`` (B, N, S) + ``counts`` (B, P) events through
+    ``w`` (P, N, S). The sum at once where no partial sum can leave the range (bounded by the positive and the
+    negative contributions: counts are >= 0), else the additions one by one."""
+    total = isyn + torch.einsum("bp,pns->bns", counts, w)
     with torch.no_grad():
-        path = isyn.unsqueeze(1) + contributions.cumsum(1)
-        bites = bool(((path < STATE_MIN) | (path > STATE_MAX)).any())
-    if not bites:
+        high = isyn + torch.einsum("bp,pns->bns", counts, w.clamp(min=0.0))
+        low = isyn + torch.einsum("bp,pns->bns", counts, w.clamp(max=0.0))
+        safe = bool((high <= STATE_MAX).all()) and bool((low >= STATE_MIN).all())
+    if safe:
         return total
     out = isyn
-    for j in range(contributions.shape[1]):
-        out = sat16(out + contributions[:, j])
+    for j in range(counts.shape[1]):
+        out = sat16(out + counts[:, j, None, None] * w[j])
     return out
 
 
@@ -173,11 +176,12 @@ class DifferentiableXylo(torch.nn.Module):
         forced = [(torch.as_tensor(self.hidden[p], device=x.device), torch.as_tensor(f, **zeros))
                   for p, f in (force or {}).items() if p in self.hidden]
         w_in_full = torch.cat([w_in, w_in.new_zeros((w_in.shape[0], n - n_ien, w_in.shape[2]))], 1)
+        w_hidden = torch.cat([w_in_full, w_rec], 0)              # inputs first, then last step's hidden events
+        w_output = w_out[:, :, None]
         hid, volt, outs, rec = [], [], [], []
         for t in range(t_steps):
-            contrib = torch.cat([x[:, t, :, None, None] * w_in_full, ev[:, :, None, None] * w_rec], 1)
-            isyn = deliver(isyn, contrib)
-            isyn_o = deliver(isyn_o, (ev[:, n - n_oen:, None] * w_out)[..., None])
+            isyn = deliver(isyn, torch.cat([x[:, t], ev], 1), w_hidden)
+            isyn_o = deliver(isyn_o, ev[:, n - n_oen:], w_output)
             isyn = isyn - shift_decay(isyn, self.dash_syn)
             dv = sat16(wrap_ste(-shift_decay(v, self.dash_mem), BITS) + isyn.sum(-1))
             v = sat16(v + sat16(dv + bias))
