@@ -247,7 +247,6 @@ def finetune_loihi(graph: Graph, options: dict[str, Any], split, *, config=None,
     return result
 
 
-
 # -- the capability: compile --finetune ------------------------------------------------------------------
 @dataclass
 class LoihiFinetunedArtefact:
