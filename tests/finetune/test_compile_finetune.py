@@ -161,3 +161,14 @@ def test_given_data_is_split_and_recorded(model, tmp_path):
     inputs = record.as_dict()["finetune"]["inputs"]
     assert inputs["source"] == "data" and inputs["held_out"] == 10 and inputs["validation"] == 5
     assert inputs["train"] == 25 and inputs["steps"] == 32
+
+
+def test_check_measures_the_finetuned_bundle_against_the_model_as_trained(tuned, model):
+    """check --artefact runs the fine-tuned bundle again and compares it with the float model as trained (its
+    own reset: subtract here), not with the reset-changed graph."""
+    from snncc import api
+
+    _, out, _, _ = tuned
+    record = api.check(model, artefact=out, samples=20, density=0.25).as_dict()
+    assert record["reference"] == "the float model as trained (its own reset)"
+    assert record["artefact"]["path"] == str(out)

@@ -197,7 +197,7 @@ def test_the_toy_option_from_the_api(toy, toy_data, small_rsnn_checkpoint, tmp_p
     ("ir", {"time_steps": 5}, "--time-steps: does not apply to --target ir (it takes no target options)"),
     ("ir", {"scale": "global"}, "--scale: does not apply to --target ir (it takes no target options)"),
     ("loihi", {"jetpack": "5.1"}, "--jetpack: does not apply to --target loihi (it takes --timing, --scale, "
-                                  "--allow-reset-change, --stream, --bundle, --time-steps)"),
+                                  "--allow-reset-change, --stream, --time-steps)"),
     ("jetson", {"timing": "paper"}, "--timing: does not apply to --target jetson (it takes --jetpack, --time-steps)"),
     ("jetson", {"stream": True}, "--stream: does not apply to --target jetson (it takes --jetpack, --time-steps)"),
 ])
