@@ -30,7 +30,7 @@ from snncc.atomic import write_bytes_atomic
 from snncc.errors import SnnccError, one_line
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
-from snncc.ir.validate import validate
+from snncc.ir.validate import refuse_spike_rules, validate
 from snncc.records import to_jsonable
 
 RECORD_FORMAT = "snncc-nir"
@@ -81,6 +81,7 @@ def graph_to_nir(graph: Graph, step: float | None = None) -> tuple[Any, ExportRe
     import nir
 
     validate(graph)
+    refuse_spike_rules(graph, "NIR")
     dt = float(graph.dt)
     h = float(dt if step is None else step)
     if not (math.isfinite(h) and h > 0):

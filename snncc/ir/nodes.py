@@ -17,6 +17,7 @@ RESETS = ("zero", "subtract")
 DISCRETISATIONS = ("exp", "euler")
 BIAS_PLACEMENTS = ("current", "voltage")
 READOUT_MODES = ("spike_count", "membrane_max", "last")
+FIRE_TESTS = (">", ">=")   # LIF threshold test: V > theta (default) or V >= theta (Xylo's integer test)
 INPUT_KINDS = ("spikes", "analog")
 
 
@@ -172,6 +173,14 @@ class LIF(Node):
     on a spike: V = 0 (reset "zero") or V -= threshold ("subtract"); then V is held at 0 for
     refractory - 1 further steps.
     A threshold of +inf gives a non-spiking leaky integrator (NIR's LI).
+
+    Spike rule (defaults give the above exactly): ``fire_test`` is ">" or ">=" (V >= threshold,
+    as an integer chip compares); ``max_spikes`` m >= 1 lets one step emit several spikes:
+    s[t] = the number of times the test holds while threshold is subtracted, at most m,
+        ">=": s = min(m, floor(V / theta))   for V >= theta, else 0
+        ">" : s = min(m, ceil(V / theta) - 1) for V > theta, else 0
+    then V -= s*theta ("subtract") or V = 0 where s > 0 ("zero"). The spikes port carries the
+    count s, so a Dense after it delivers s * W (Xylo's hidden neurons fire up to 31 per step).
     """
 
     kind: ClassVar[str] = "LIF"
@@ -184,9 +193,15 @@ class LIF(Node):
     discretisation: str = "exp"
     bias: np.ndarray | None = None
     bias_placement: str = "current"
+    max_spikes: int = 1
+    fire_test: str = ">"
+
+    # fields a serialised graph leaves out while they hold these values (files stay as before)
+    OMIT_AT_DEFAULT: ClassVar[dict[str, Any]] = {"max_spikes": 1, "fire_test": ">"}
 
     def __post_init__(self) -> None:
         self.n = int(self.n)
+        self.max_spikes = int(self.max_spikes)
         self.tau_syn = _vector(self.tau_syn, self.n)
         self.tau_mem = _vector(self.tau_mem, self.n)
         self.threshold = _vector(self.threshold, self.n)
@@ -197,6 +212,11 @@ class LIF(Node):
     @property
     def size(self) -> int:
         return self.n
+
+    @property
+    def standard_spikes(self) -> bool:
+        """One spike per step at most, on V > threshold: the rule every model is trained with."""
+        return self.max_spikes == 1 and self.fire_test == ">"
 
     def decays(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """(alpha, beta) per neuron for this population's discretisation."""
@@ -279,5 +299,5 @@ LINEAR = (Dense, Conv)   # stateless linear maps: y[t] = A x[t] (+ b)
 
 __all__ = [
     "Node", "Input", "Dense", "Conv", "LINEAR", "LIF", "LSTM", "Readout", "Output", "NODE_TYPES", "STATEFUL",
-    "RESETS", "DISCRETISATIONS", "BIAS_PLACEMENTS", "READOUT_MODES", "INPUT_KINDS",
+    "RESETS", "DISCRETISATIONS", "BIAS_PLACEMENTS", "READOUT_MODES", "INPUT_KINDS", "FIRE_TESTS",
 ]

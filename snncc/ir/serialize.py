@@ -30,7 +30,10 @@ def graph_to_record(g: Graph) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     nodes = []
     for name, op in g.items():
         fields: dict[str, Any] = {}
+        omit = getattr(op, "OMIT_AT_DEFAULT", {})
         for key, value in op.scalars().items():
+            if key in omit and value == omit[key]:
+                continue        # a newer field at its default: the file reads as it did before the field existed
             fields[key] = value
         for key, arr in op.arrays().items():
             ref = f"{name}/{key}"
@@ -71,6 +74,8 @@ def graph_from_record(record: dict[str, Any], arrays: dict[str, np.ndarray]) -> 
             if key in kwargs:
                 count = whole_number(kwargs[key], field=f"node {entry.get('name')!r}.{key}")
                 check_memory(8 * count, f"a node of {count:,} units", field=f"node {entry.get('name')!r}.{key}")
+        if "max_spikes" in kwargs:
+            kwargs["max_spikes"] = whole_number(kwargs["max_spikes"], field=f"node {entry.get('name')!r}.max_spikes")
         for key, value in kwargs.items():
             if isinstance(value, np.ndarray):
                 check_real(value, field=f"node {entry.get('name')!r}.{key}")

@@ -6,6 +6,8 @@ output of step t - d (zeros before t = 0). Node equations are those in ``snncc.i
 
     LIF:  I = alpha*I + sum(in) (+b_I);  V = beta*V + I (+b_V);  V = 0 while refractory;
           s = V > theta;  V <- 0 | V - theta where s;  refractory counter <- r - 1 where s
+          (spike rule max_spikes m / fire_test: s = min(m, floor(V/theta)) on V >= theta, or
+          min(m, ceil(V/theta) - 1) on V > theta; V <- 0 | V - s*theta where s > 0)
     LSTM: PyTorch's cell, gate order i, f, g, o
 
     Dense: y = W x (+b);  Conv: PyTorch's convNd on the C-order flattened map (``snncc.ir.conv``)
@@ -58,6 +60,14 @@ def as_input_tensor(x, dtype: torch.dtype) -> torch.Tensor:
     if t.dim() != 3:
         raise SnnccError(f"input must have shape (T, C) or (B, T, C), got {tuple(t.shape)}", field="input")
     return t.to(dtype)
+
+
+def spike_count(v: torch.Tensor, theta: torch.Tensor, max_spikes: int, fire_test: str) -> torch.Tensor:
+    """Spikes in one step under a LIF's spike rule: how many times ``v`` passes ``fire_test`` theta while
+    theta is subtracted, at most ``max_spikes`` (theta > 0; +inf never fires)."""
+    ratio = v / theta
+    n = torch.floor(ratio) if fire_test == ">=" else torch.ceil(ratio) - 1.0
+    return torch.clamp(n, min=0.0, max=float(max_spikes))
 
 
 def _schedule(g: Graph) -> list[str]:
@@ -217,12 +227,17 @@ class _Runner:
                     refractory = st["ref"] > 0
                     v_new = torch.where(refractory, torch.zeros_like(v_new), v_new)
                     ref = torch.where(refractory, st["ref"] - 1, st["ref"])
-                    s = (v_new > theta).to(self.dtype)
+                    if op.standard_spikes:
+                        s = (v_new > theta).to(self.dtype)
+                    else:
+                        s = spike_count(v_new, theta, op.max_spikes, op.fire_test)
                     fired = s > 0
                     if op.reset == "zero":
                         v_after = torch.where(fired, torch.zeros_like(v_new), v_new)
-                    else:
+                    elif op.standard_spikes:
                         v_after = torch.where(fired, v_new - theta, v_new)  # no 0*inf for integrators
+                    else:
+                        v_after = torch.where(fired, v_new - s * theta, v_new)
                     if op.refractory > 1:
                         ref = torch.where(fired, torch.full_like(ref, op.refractory - 1), ref)
                     st["I"], st["V"], st["ref"] = i_new, v_after, ref

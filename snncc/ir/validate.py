@@ -16,6 +16,7 @@ from snncc.ir.graph import Graph
 from snncc.ir.nodes import (
     BIAS_PLACEMENTS,
     DISCRETISATIONS,
+    FIRE_TESTS,
     INPUT_KINDS,
     LIF,
     LSTM,
@@ -104,6 +105,10 @@ def _check_lif(name: str, op: LIF) -> None:
     if op.bias is not None and op.bias.shape != (op.n,):
         _fail(f"bias must have shape ({op.n},)", f"node '{name}'.bias")
     _finite(name, "bias", op.bias)
+    if op.max_spikes < 1:
+        _fail(f"max_spikes must be >= 1 spike per step, got {op.max_spikes}", f"node '{name}'.max_spikes")
+    if op.fire_test not in FIRE_TESTS:
+        _fail(f"fire_test must be one of {FIRE_TESTS}", f"node '{name}'.fire_test")
 
 
 def _check_lstm(name: str, op: LSTM) -> None:
@@ -168,6 +173,15 @@ def rule_node_parameters(g: Graph) -> None:
         if check is None:
             _fail(f"unknown node type {type(op).__name__}", f"node '{name}'")
         check(name, op)
+
+
+def refuse_spike_rules(g: Graph, what: str) -> None:
+    """For a consumer that implements only the standard spike rule (one spike per step, V > theta):
+    refuse a graph with any LIF whose ``max_spikes`` or ``fire_test`` differ, in one line."""
+    for name, op in g.items():
+        if isinstance(op, LIF) and not op.standard_spikes:
+            _fail(f"{what} fires at most one spike per step on V > threshold; this population fires up to "
+                  f"{op.max_spikes} per step on V {op.fire_test} threshold", f"node '{name}'")
 
 
 def rule_edge_delays(g: Graph) -> None:

@@ -16,6 +16,7 @@ import networkx as nx
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Conv, Dense, Input, Output, Readout
+from snncc.ir.validate import refuse_spike_rules
 
 
 @dataclass
@@ -68,6 +69,7 @@ def plan_graph(g: Graph) -> GraphPlan:
     for name, op in g.items():
         if not isinstance(op, (Input, Dense, Conv, LIF, LSTM, Readout, Output)):
             raise SnnccError(f"node kind {type(op).__name__} has no Jetson lowering", field=f"node '{name}'")
+    refuse_spike_rules(g, "the Jetson lowering")
     in_name, out_name = inputs[0], outputs[0]
     width = g.node(in_name).width
     k = int(g.metadata.get("input_copies", 1) or 1)
