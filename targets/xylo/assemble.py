@@ -1,0 +1,188 @@
+"""Float chip-form populations -> the integer spec dict (gains, offsets, shifts, rounding).
+
+Hidden populations fill the reservoir in chain order; the first receives the input weights, each
+later one the previous one's spikes through the recurrent matrix, every population its own loop
+there too; the readout population's weights leave the last hidden population. State ranges come
+from the calibration run (teacher-forced: the float graph's spikes through the chip-form weights).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.targets.xylo import identify, kernels
+from snncc.targets.xylo.chip_table import STATE_MAX, WEIGHT_MAX, WEIGHT_MIN
+from snncc.targets.xylo.quantize import (SINGLE_THRESHOLD, STATE_MARGIN, HiddenFloat, OutputFloat, choose_gains,
+                                         saturating_int16, to_int)
+
+
+@dataclass
+class PopulationRecord:
+    name: str
+    role: str                   # "hidden" | "output"
+    method: str                 # "single" | "direct" | "native"
+    neurons: tuple[int, int]    # [start, stop) in its pool
+    dashes: dict[str, list[int]]
+    fit: str
+    rounding: str
+    gain: dict[str, float]      # chip units per threshold: min / median / max
+    notes: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+
+
+def _currents(pop: HiddenFloat, trains: dict[str, np.ndarray]) -> np.ndarray:
+    """(2, B, T, n) chip-form currents of ``pop`` driven by ``trains`` (IR units, float)."""
+    out = []
+    for k in range(2):
+        a = float(kernels.grid(pop.dash_syn[0, k]))
+        total = 0.0
+        for src, w in pop.weights.items():
+            if np.any(w[k]):
+                total = total + identify.chip_filter(trains[src].astype(np.float64), a) @ w[k].T
+        out.append(np.broadcast_to(total, trains[next(iter(trains))].shape[:2] + (pop.n,)) if np.isscalar(total)
+                   else total)
+    return np.stack(out)
+
+
+def hidden_state_limit(pop: HiddenFloat, trains: dict[str, np.ndarray], v_pre: np.ndarray) -> np.ndarray:
+    """The largest gain (chip units per IR unit) each neuron's calibration states allow."""
+    cur = _currents(pop, trains)
+    i_max = np.abs(cur).max(axis=(0, 1, 2))
+    if pop.method == "single":
+        v = cur.sum(0) + pop.bias
+        v_min = np.minimum(v.min(axis=(0, 1)), 0.0)
+        # V_c = G V + off with off = 16385 - G theta must stay above -32768 (with margin); currents in int16
+        lim_v = (SINGLE_THRESHOLD + (STATE_MAX + 1) / STATE_MARGIN) / np.maximum(pop.theta - v_min, 1e-12)
+        lim_i = STATE_MAX / (STATE_MARGIN * np.maximum(i_max, 1e-12))
+        return np.minimum(np.minimum(lim_v, lim_i), (SINGLE_THRESHOLD - 1) / pop.theta)
+    v_abs = np.maximum(np.abs(v_pre).max(axis=(0, 1)), pop.theta)
+    return STATE_MAX / (STATE_MARGIN * np.maximum(np.maximum(i_max, v_abs), 1e-12))
+
+
+def output_state_limit(out: OutputFloat, pre: np.ndarray, v_pre: np.ndarray) -> np.ndarray:
+    cur = np.zeros(v_pre.shape)
+    for d in np.unique(out.dash_syn):
+        sel = out.dash_syn == d
+        cur[..., sel] = identify.chip_filter(pre.astype(np.float64), float(kernels.grid(d))) @ out.weight[sel].T
+    v_abs = np.maximum(np.abs(v_pre).max(axis=(0, 1)), out.theta)
+    return STATE_MAX / (STATE_MARGIN * np.maximum(np.maximum(np.abs(cur).max(axis=(0, 1)), v_abs), 1e-12))
+
+
+def assemble(hidden: list[HiddenFloat], output: OutputFloat, n_inputs: int, input_source: str,
+             limits: dict[str, np.ndarray], out_limit: np.ndarray, rounding: str) -> tuple[dict, list[PopulationRecord]]:
+    """The spec dict and a record per population. ``limits``: per hidden population its state-limited gains."""
+    starts, at = {}, 0
+    for p in hidden:
+        starts[p.name] = at
+        at += p.n
+    n = at
+    # per hidden neuron, its largest |weight| (threshold units) in the input and the recurrent matrix
+    w_in_max = np.zeros(n)
+    w_rec_max = np.zeros(n)
+    state = np.zeros(n)
+    theta = np.zeros(n)
+    for p in hidden:
+        sl = slice(starts[p.name], starts[p.name] + p.n)
+        theta[sl] = p.theta
+        state[sl] = limits[p.name] * p.theta          # gains per threshold
+        for src, w in p.weights.items():
+            m = np.abs(w).max(axis=(0, 2)) / p.theta
+            if src == input_source:
+                w_in_max[sl] = np.maximum(w_in_max[sl], m)
+            else:
+                w_rec_max[sl] = np.maximum(w_rec_max[sl], m)
+    gains, (s_in, s_rec) = choose_gains(state, [w_in_max, w_rec_max])
+    gains = np.floor(gains)
+    spec: dict[str, Any] = {
+        "weights_in": np.zeros((n_inputs, n, 2), np.int8), "weights_rec": np.zeros((n, n, 2), np.int8),
+        "dash_syn": np.zeros(n, np.uint8), "dash_syn_2": np.zeros(n, np.uint8), "dash_mem": np.zeros(n, np.uint8),
+        "threshold": np.zeros(n, np.int16), "bias": np.zeros(n, np.int16),
+        "weight_shift_in": int(s_in), "weight_shift_rec": int(s_rec),
+    }
+    records = []
+    for p in hidden:
+        s0 = starts[p.name]
+        sl = slice(s0, s0 + p.n)
+        g = gains[sl] / p.theta                      # chip units per IR unit
+        spec["dash_syn"][sl], spec["dash_syn_2"][sl] = p.dash_syn[:, 0], p.dash_syn[:, 1]
+        spec["dash_mem"][sl] = p.dash_mem
+        names = [s for s, k in p.columns if k == 0] if p.columns else list(p.weights)
+        for j in range(p.n):
+            coeffs, steps, blocks = [], [], []
+            for k in range(2):
+                for src in names:
+                    shift = s_in if src == input_source else s_rec
+                    row = p.weights[src][k, j]
+                    coeffs.append(row)
+                    steps.append(np.full(row.size, 2.0 ** shift / g[j]))
+                    blocks.append((src, k, row.size))
+            c, st = np.concatenate(coeffs), np.concatenate(steps)
+            h = p.hessians[j] if (rounding == "feedback" and p.hessians is not None) else None
+            if h is not None and h.shape[0] == c.size + 1:          # the constant column: the bias register
+                c_full = np.concatenate([c, [p.bias[j]]])
+                st_full = np.concatenate([st, [1.0 / g[j]]])
+                low = np.concatenate([np.full(c.size, WEIGHT_MIN), [-STATE_MAX]])
+                high = np.concatenate([np.full(c.size, WEIGHT_MAX), [STATE_MAX]])
+                ints_full = identify.round_with_feedback(h, c_full, st_full, low, high, last=c.size)
+                ints, bias_units = ints_full[:-1], float(ints_full[-1])
+            else:
+                ints = to_int(c, st, h if (h is not None and h.shape[0] == c.size) else None)
+                bias_units = p.bias[j] * g[j]
+            at = 0
+            for src, k, size in blocks:
+                vals = ints[at:at + size].astype(np.int8)
+                at += size
+                if src == input_source:
+                    spec["weights_in"][:, s0 + j, k] = vals
+                else:
+                    src_start = starts[src]
+                    spec["weights_rec"][src_start:src_start + size, s0 + j, k] = vals
+            big_g = int(round(gains[s0 + j]))
+            if p.method == "single":
+                off = SINGLE_THRESHOLD - big_g
+                spec["threshold"][s0 + j] = SINGLE_THRESHOLD
+                spec["bias"][s0 + j] = saturating_int16(off + bias_units)
+            else:
+                spec["threshold"][s0 + j] = big_g
+                spec["bias"][s0 + j] = saturating_int16(bias_units)
+        records.append(PopulationRecord(
+            p.name, "hidden", p.method, (s0, s0 + p.n),
+            {"dash_syn": sorted({int(v) for v in p.dash_syn[:, 0]}), "dash_syn_2": sorted({int(v) for v in p.dash_syn[:, 1]}),
+             "dash_mem": sorted({int(v) for v in p.dash_mem})},
+            p.fit, rounding if p.hessians is not None else "nearest", _spread(gains[sl])))
+    # output neurons
+    m = output.n
+    o_max = np.abs(output.weight).max(axis=1) / output.theta
+    o_gain, (s_out,) = choose_gains(out_limit * output.theta, [o_max])
+    o_gain = np.floor(o_gain)
+    g = o_gain / output.theta
+    w_out = np.zeros((n, m), np.int8)
+    src0 = starts[output.source]
+    for j in range(m):
+        st = np.full(output.weight.shape[1], 2.0 ** s_out / g[j])
+        h = output.hessians[j] if (rounding == "feedback" and output.hessians is not None) else None
+        w_out[src0:src0 + output.weight.shape[1], j] = to_int(output.weight[j], st, h).astype(np.int8)
+    spec.update({
+        "weights_out": w_out, "weight_shift_out": int(s_out),
+        "dash_syn_out": output.dash_syn.astype(np.uint8), "dash_mem_out": output.dash_mem.astype(np.uint8),
+        "threshold_out": saturating_int16(o_gain).astype(np.int16),
+        "bias_out": saturating_int16(output.bias * g).astype(np.int16),
+        "aliases": [[] for _ in range(n)],
+    })
+    if np.any(spec["threshold_out"] < 1) or np.any(spec["threshold"] < 1):
+        raise SnnccError("a threshold rounds below 1 chip unit", field="threshold")
+    records.append(PopulationRecord(output.name, "output", "native", (0, m),
+                                    {"dash_syn_out": sorted({int(v) for v in output.dash_syn}),
+                                     "dash_mem_out": sorted({int(v) for v in output.dash_mem})},
+                                    output.fit, rounding if output.hessians is not None else "nearest", _spread(o_gain)))
+    return spec, records
+
+
+def _spread(v: np.ndarray) -> dict[str, float]:
+    return {"min": float(np.min(v)), "median": float(np.median(v)), "max": float(np.max(v))}

@@ -1,0 +1,106 @@
+"""Fit a memoryless-readout population's synaptic weights to the float graph's own voltages.
+
+Calibration: the float graph runs on calibration inputs; for a population P its pre-reset
+voltage V_j[t] (the IR's, subtract reset: V_post + theta * s) is regressed, per neuron j, on the
+presynaptic spike trains as Xylo's synapses filter them (chip order, decay a_k of synapse k):
+
+    F_k(z)[t] = a_k (F_k(z)[t-1] + z[t]),   z = pre spikes delayed by the IR delay, or P's own spikes
+                                            delayed by 1 (recurrence and the reset's feedback)
+    V_j[t] ~ sum_k F_k(pre)[t] . c_jk + F_k(own)[t] . r_jk (+ b_j)
+
+teacher-forced (the float graph's spikes drive every feature) and weighted by
+exp(-|V - theta| / (scale theta)): the voltages that decide a spike count most. The solution is a
+ridge regression towards the kernel fit (``kernels.two_exponential``), so features the inputs never
+exercise keep the kernel's value. ``round_with_feedback`` then rounds one weight at a time and
+moves the weights not yet rounded to absorb the error under the same quadratic form (the
+optimal-brain-surgeon update), so rounding costs as little voltage error as the data allow.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+ROW_FLOOR = 1e-2          # rows whose regression weight is below this are left out (they hardly count)
+
+
+def chip_filter(z: np.ndarray, a: float) -> np.ndarray:
+    """F[t] = a (F[t-1] + z[t]) along axis 1 of (B, T, n)."""
+    out = np.empty_like(z, dtype=np.float64)
+    acc = np.zeros((z.shape[0], z.shape[2]))
+    for t in range(z.shape[1]):
+        acc = a * (acc + z[:, t])
+        out[:, t] = acc
+    return out
+
+
+def delayed(z: np.ndarray, d: int) -> np.ndarray:
+    """z[:, t - d] (zeros before)."""
+    if d == 0:
+        return z
+    out = np.zeros_like(z)
+    if d < z.shape[1]:
+        out[:, d:] = z[:, :-d]
+    return out
+
+
+@dataclass
+class Design:
+    """Regression data of one population: features (rows, F) and, per neuron, its targets and row weights."""
+
+    features: np.ndarray      # (rows, F)
+    target: np.ndarray        # (rows, n) pre-reset voltages
+    weight: np.ndarray        # (rows, n)
+
+
+def design(sources: list[np.ndarray], decays: tuple[float, float], v_pre: np.ndarray, theta: np.ndarray,
+           scale: float, constant: bool) -> Design:
+    """Features: for each synapse k, each source's filtered trains (already delayed), then a constant column."""
+    cols = [chip_filter(src.astype(np.float64), a) for a in decays for src in sources]
+    if constant:
+        cols.append(np.ones(v_pre.shape[:2] + (1,)))
+    f = np.concatenate(cols, axis=2).reshape(-1, sum(c.shape[2] for c in cols))
+    y = v_pre.reshape(-1, v_pre.shape[2])
+    w = np.exp(-np.abs(y - theta[None, :]) / (scale * theta[None, :]))
+    return Design(f, y, w)
+
+
+def normal_equations(d: Design, j: int) -> tuple[np.ndarray, np.ndarray]:
+    """(H, b) = (A^T A, A^T y) of neuron j's weighted rows."""
+    w = d.weight[:, j]
+    keep = w >= ROW_FLOOR
+    a = d.features[keep] * w[keep, None]
+    return a.T @ a, a.T @ (d.target[keep, j] * w[keep])
+
+
+def ridge_towards(h: np.ndarray, b: np.ndarray, prior: np.ndarray, ridge: float) -> tuple[np.ndarray, np.ndarray]:
+    """argmin |A c - y|^2 + lam |c - prior|^2, lam = ridge * mean(diag H); returns (c, H + lam I)."""
+    lam = ridge * max(float(np.trace(h)) / max(len(b), 1), 1e-12)
+    hr = h + lam * np.eye(len(b))
+    return prior + np.linalg.solve(hr, b - h @ prior), hr
+
+
+def round_with_feedback(h: np.ndarray, c: np.ndarray, step: np.ndarray, low=-128, high=127,
+                        last: int | None = None) -> np.ndarray:
+    """Integers k (in [low, high], scalars or per coefficient) with k * step ~ c, rounded one at a time
+    (largest curvature first, ``last`` at the end); after each, the coefficients still free move by
+    -H_ff^-1 H_fi * error (the quadratic form's optimum)."""
+    c = np.asarray(c, np.float64).copy()
+    n = len(c)
+    low, high = np.broadcast_to(low, (n,)), np.broadcast_to(high, (n,))
+    hinv = np.linalg.inv(h)
+    free = np.ones(n, bool)
+    out = np.zeros(n, np.int64)
+    order = [i for i in np.argsort(-np.diag(h), kind="stable") if i != last] + ([last] if last is not None else [])
+    for i in order:
+        k = int(np.clip(np.round(c[i] / step[i]), low[i], high[i]))
+        out[i] = k
+        err = c[i] - k * step[i]
+        free[i] = False
+        idx = np.flatnonzero(free)
+        if idx.size:
+            col = hinv[idx, i] / hinv[i, i]
+            c[idx] -= col * err
+            hinv[np.ix_(idx, idx)] -= np.outer(hinv[idx, i], hinv[i, idx]) / hinv[i, i]
+    return out

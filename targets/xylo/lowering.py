@@ -1,0 +1,318 @@
+"""IR graph -> Xylo spec dict (the keyword arguments of Rockpool's ``XyloSim.from_specification``).
+
+The contract (Xylo Audio 2; N hidden neurons, Nin inputs, Nout outputs):
+
+    weights_in   int8   (Nin, N, 2)   input -> hidden, last axis the synapse (one row per model input)
+    weights_rec  int8   (N, N, 2)     hidden (pre) -> hidden (post), per synapse
+    weights_out  int8   (N, Nout)     hidden -> output (N_oen = N: every hidden neuron's row)
+    dash_mem, dash_syn, dash_syn_2    uint8 (N)     bit-shift decays, 0..15
+    dash_mem_out, dash_syn_out        uint8 (Nout)
+    threshold, bias                   int16 (N)
+    threshold_out, bias_out           int16 (Nout)
+    weight_shift_in, _rec, _out       int           left shifts, 0..8 (no int8 weight wraps in int16)
+    aliases                           list of N empty lists
+    dt                                float (s)
+
+Lowering, in the IR's terms (``timing.py``, ``quantize.py``): the graph must be a chain that Xylo can
+hold (``structure.py``); subtract reset (a zero reset is refused unless ``allow_reset_change``, then
+subtract is deployed and the change recorded); refractory 1; recurrent IR delay 1. Populations run
+``timing.shifts`` steps late; the chip is fed ``input_pad`` zero steps before a sample and read from
+``output_lag`` on. The rule (``rule``) places hidden populations ``direct`` or ``single``; ``auto``
+measures every candidate's argmax agreement with the float graph on calibration inputs (their
+second half; the first half fits) and keeps the best (ties: the first listed, the simpler).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from snncc.errors import SnnccError
+from snncc.ir.graph import Graph
+from snncc.ir.nodes import LIF
+from snncc.passes.current_bias import current_biases
+from snncc.passes.fold_linear import fold_linear
+from snncc.targets.xylo import kernels, measure, quantize
+from snncc.targets.xylo.assemble import PopulationRecord, assemble, hidden_state_limit, output_state_limit
+from snncc.targets.xylo.chip_table import CHIPS
+from snncc.targets.xylo.identify import delayed
+from snncc.targets.xylo.structure import Population, populations
+from snncc.targets.xylo.timing import XyloTiming, projection_delay, refuse_refractory, solve_timing
+from snncc.targets.xylo.twin import spec_graph
+
+RULES = ("auto", "direct", "single", "single-identified")
+DEFAULT_CALIBRATION_SAMPLES = 256
+DEFAULT_STEPS = 256
+DEFAULT_DENSITY = 0.08
+IDENTIFY_SCALE = 2.0      # regression weight exp(-|V - theta| / (2 theta)) (0.5-4 measured; 2 among the best)
+IDENTIFY_RIDGE = 1e-3     # pull towards the kernel fit, relative to the mean curvature
+PAIRS_TRIED = 2
+
+
+@dataclass
+class XyloLowered:
+    """What lowering produced: the spec, how the float graph maps onto it, and how well it agrees."""
+
+    spec: dict[str, Any]
+    chip: str
+    dt: float
+    rule: str
+    timing: XyloTiming
+    populations: list[PopulationRecord]
+    trained: Graph                       # the model as given
+    reference: Graph                     # the float graph deployed (its reset changed if allowed)
+    twin: Graph                          # the spec as an IR graph (chip time)
+    candidates: dict[str, dict[str, Any]] = field(default_factory=dict)   # rule -> selection agreement
+    changes: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    calibration: dict[str, Any] = field(default_factory=dict)
+
+    def chip_input(self, x: np.ndarray) -> np.ndarray:
+        """IR inputs (B, T, C) as the chip must be fed (``input_pad`` zero steps before, enough after)."""
+        return measure.chip_window(np.asarray(x), self.timing.input_pad, self.timing.output_lag)
+
+    def read_output(self, chip_out: np.ndarray, steps: int) -> np.ndarray:
+        return measure.read_window(np.asarray(chip_out), self.timing.output_lag, steps)
+
+    def record(self) -> dict[str, Any]:
+        """The quantization record (JSON-able)."""
+        return {"chip": self.chip, "dt": self.dt, "rule": self.rule, "timing": self.timing.as_dict(),
+                "populations": [p.as_dict() for p in self.populations], "candidates": self.candidates,
+                "changes": list(self.changes), "notes": list(self.notes), "calibration": dict(self.calibration)}
+
+
+@dataclass
+class _Source:
+    """Per population: the float graph's parameters and its calibration traces."""
+
+    pop: Population
+    alpha: np.ndarray
+    beta: np.ndarray
+    theta: np.ndarray
+    bias_v: np.ndarray
+    bias_i: np.ndarray
+    w_ff: np.ndarray
+    w_rec: np.ndarray | None
+    d_ff: int
+    trains: dict[str, np.ndarray] = field(default_factory=dict)
+    v_pre: np.ndarray | None = None
+
+
+def _check_spike_rules(graph: Graph, pops: list[Population]) -> None:
+    for p in pops:
+        op = graph.node(p.lif)
+        if not op.standard_spikes:
+            raise SnnccError("the Xylo lowering takes models with the standard spike rule (one spike per step on "
+                             f"V > threshold); this population has max_spikes {op.max_spikes}, fire_test "
+                             f"'{op.fire_test}'", field=f"node '{p.lif}'")
+        if np.any(~np.isfinite(op.threshold)):
+            raise SnnccError("a non-spiking population (threshold +inf) cannot run on Xylo's spiking neurons",
+                             field=f"node '{p.lif}'.threshold")
+
+
+def _reset(graph: Graph, pops: list[Population], allow: bool) -> tuple[Graph, list[str]]:
+    g, changes = graph, []
+    for p in pops:
+        if graph.node(p.lif).reset == "zero":
+            if not allow:
+                raise SnnccError("Xylo resets by subtracting the threshold and cannot reset to zero; pass "
+                                 "--allow-reset-change to deploy reset by subtraction (snncc check measures the cost)",
+                                 field=f"node '{p.lif}'.reset")
+            if g is graph:
+                g = graph.copy()
+            g.node(p.lif).reset = "subtract"
+            changes.append(f"{p.lif}: reset zero -> subtract (Xylo subtracts the threshold)")
+    return g, changes
+
+
+def _sources(g: Graph, pops: list[Population]) -> list[_Source]:
+    out = []
+    for p in pops:
+        op = g.node(p.lif)
+        alpha, beta = op.decays(g.dt)
+        bias_v = op.bias if (op.bias is not None and op.bias_placement == "voltage") else np.zeros(op.n)
+        bias_i = np.zeros(op.n)
+        for term in current_biases(g, p.lif):
+            bias_i = bias_i + term.vector
+        out.append(_Source(p, np.asarray(alpha, float), np.asarray(beta, float), op.threshold.astype(float),
+                           np.asarray(bias_v, float), bias_i, g.node(p.ff).weight,
+                           None if p.rec is None else g.node(p.rec).weight, projection_delay(g, p.pre, p.ff, p.lif)))
+    return out
+
+
+def _calibrate(ref: Graph, sources: list[_Source], x: np.ndarray) -> None:
+    """Teacher-forcing traces: each population's delayed presynaptic and own spike trains, pre-reset voltages."""
+    from snncc.ir.simulate import simulate
+    from snncc.threads import one_thread
+
+    with one_thread():
+        res = simulate(ref, x, record="all")
+    trains = {sources[0].pop.pre: np.asarray(x, np.float64)}
+    for s in sources:
+        trains[s.pop.lif] = res.spikes[s.pop.lif].numpy()
+    for s in sources:
+        s.trains = {s.pop.pre: delayed(trains[s.pop.pre], s.d_ff), s.pop.lif: delayed(trains[s.pop.lif], 1)}
+        s.v_pre = res.voltage[s.pop.lif].numpy() + s.theta * trains[s.pop.lif]
+
+
+def _float_counts(ref: Graph, x: np.ndarray, last: str) -> np.ndarray:
+    from snncc.ir.simulate import simulate
+    from snncc.threads import one_thread
+
+    with one_thread():
+        return simulate(ref, x, record="spikes").spikes[last].numpy().sum(axis=1)
+
+
+def twin_counts(twin: Graph, timing: XyloTiming, x: np.ndarray) -> np.ndarray:
+    """Output spike counts of the spec's float twin over the IR's T steps of ``x``."""
+    from snncc.ir.simulate import simulate
+    from snncc.threads import one_thread
+
+    chip_x = measure.chip_window(np.asarray(x), timing.input_pad, timing.output_lag)
+    with one_thread():
+        out = simulate(twin, chip_x, record="spikes").spikes["output"].numpy()
+    return measure.read_window(out, timing.output_lag, x.shape[1]).sum(axis=1)
+
+
+def _hidden(s: _Source, method: str, dashes: tuple[int, int] | None) -> quantize.HiddenFloat:
+    srcs = {s.pop.pre: s.w_ff}
+    if s.w_rec is not None:
+        srcs[s.pop.lif] = s.w_rec
+    if method == "direct":
+        return quantize.hidden_direct(s.pop.lif, s.alpha, s.beta, s.theta, srcs, s.bias_v, s.bias_i)
+    return quantize.hidden_single(s.pop.lif, s.alpha, s.beta, s.theta, srcs, dashes, s.bias_v, s.bias_i)
+
+
+def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: list[tuple[int, int]] | None,
+                    identified: bool) -> tuple[dict, list[PopulationRecord]]:
+    """A spec for one rule: hidden populations ``method`` (single: dash pair per population, kernel or
+    identified weights, rounding with error feedback), the readout population on the output neurons."""
+    hidden = []
+    for i, s in enumerate(sources[:-1]):
+        pop = _hidden(s, method, None if pairs is None else pairs[i])
+        if method == "single":
+            if identified:
+                pop = quantize.identify_hidden(pop, s.trains, s.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
+            else:
+                pop = quantize.hidden_hessians(pop, s.trains, s.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
+        hidden.append(pop)
+    last = sources[-1]
+    out = quantize.output_native(last.pop.lif, last.pop.pre, last.alpha, last.beta, last.theta, last.w_ff,
+                                 last.bias_v, last.bias_i)
+    if identified:
+        out = quantize.identify_output(out, last.trains[last.pop.pre], _own(last), last.v_pre, IDENTIFY_SCALE,
+                                       IDENTIFY_RIDGE)
+    limits = {p.name: hidden_state_limit(p, s.trains, s.v_pre) for p, s in zip(hidden, sources)}
+    out_limit = output_state_limit(out, last.trains[last.pop.pre], last.v_pre)
+    return assemble(hidden, out, n_inputs, sources[0].pop.pre, limits, out_limit,
+                    "feedback" if method == "single" else "nearest")
+
+
+def _own(s: _Source) -> np.ndarray:
+    """A population's own spikes, undelayed (its trains hold them delayed by 1)."""
+    own = s.trains[s.pop.lif]
+    out = np.zeros_like(own)
+    out[:, :-1] = own[:, 1:]
+    return out
+
+
+def candidate_rules(sources: list[_Source], rule: str) -> list[tuple[str, str, list | None, bool]]:
+    """(name, method, dash pairs per hidden population, identified) for ``rule``."""
+    hidden = sources[:-1]
+    fits = [kernels.best_pairs(float(np.median(s.alpha)), float(np.median(s.beta)), PAIRS_TRIED) for s in hidden]
+    out: list[tuple[str, str, list | None, bool]] = []
+    if rule in ("auto", "direct"):
+        out.append(("direct", "direct", None, False))
+    for k in range(PAIRS_TRIED if rule == "auto" else 1):
+        pairs = [f[min(k, len(f) - 1)].dashes for f in fits]
+        label = "/".join(f"{a},{b}" for a, b in pairs)
+        if rule in ("auto", "single"):
+            out.append((f"single dashes {label}", "single", pairs, False))
+        if rule in ("auto", "single-identified"):
+            out.append((f"single-identified dashes {label}", "single", pairs, True))
+    return out
+
+
+def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
+    """Lower ``graph`` for a Xylo chip. Options: chip ("audio2"), rule (RULES), allow_reset_change,
+    calibration (an array (B, T, C) of 0/1 spikes) or calibration_samples / time_steps / density / seed;
+    emulator: a callable (spec, chip inputs) -> output spikes that measures candidates (default: the spec's
+    float twin, ``twin.py``, which ignores the chip's integer rounding; a bit-exact emulator is better)."""
+    opts = dict(options or {})
+    chip = opts.get("chip") or "audio2"
+    if chip not in CHIPS:
+        raise SnnccError(f"chip must be one of {', '.join(CHIPS)}", field="--chip")
+    rule = opts.get("rule") or "auto"
+    if rule not in RULES:
+        raise SnnccError(f"rule must be one of {', '.join(RULES)}", field="--rule")
+    from snncc.targets.xylo import rules as design_rules
+
+    trained = graph
+    g, fold = fold_linear(graph)
+    pops = populations(g)
+    _check_spike_rules(g, pops)
+    refuse_refractory(g, pops)
+    ref, changes = _reset(g, pops, bool(opts.get("allow_reset_change", False)))
+    design_rules.check_graph(ref, pops, CHIPS[chip])
+    if len(pops) < 2:
+        raise SnnccError("Xylo needs at least one hidden population before the readout population "
+                         "(inputs reach output neurons only through hidden neurons)", field="graph")
+    timing = solve_timing(ref, pops)
+    sources = _sources(ref, pops)
+    n_in = ref.node(pops[0].pre).width
+    x = _calibration_inputs(opts, n_in)
+    half = max(1, x.shape[0] // 2)
+    fit_x, sel_x = x[:half], x[half:] if x.shape[0] > 1 else x
+    _calibrate(ref, sources, fit_x)
+    float_sel = _float_counts(ref, sel_x, pops[-1].lif)
+    candidates: dict[str, dict[str, Any]] = {}
+    emulator = opts.get("emulator")      # (spec, chip inputs (B, T', C)) -> output spikes (B, T', Nout); None: the twin
+    best = None
+    for name, method, pairs, identified in candidate_rules(sources, rule):
+        spec, records = build_candidate(sources, n_in, method, pairs, identified)
+        spec["dt"] = float(ref.dt)
+        twin = spec_graph(spec, ref.dt)
+        counts = (twin_counts(twin, timing, sel_x) if emulator is None else
+                  measure.read_window(np.asarray(emulator(spec, measure.chip_window(sel_x, timing.input_pad,
+                                                                                   timing.output_lag))),
+                                      timing.output_lag, sel_x.shape[1]).sum(axis=1))
+        agr = measure.agreement(counts, float_sel)
+        candidates[name] = agr.as_dict()
+        if best is None or agr.agreement > best[0].agreement:
+            best = (agr, name, spec, records, twin)
+    agr, name, spec, records, twin = best
+    design_rules.check_spec(spec, CHIPS[chip])
+    notes = list(timing.notes) + fold.notes()
+    if any(r.method == "direct" for r in records):
+        notes.append("direct rule: a hidden neuron fires up to 31 spikes per step on the chip where the IR fires one "
+                     "(the deployed graph states it: max_spikes 31, fire_test '>=')")
+    return XyloLowered(spec=spec, chip=chip, dt=float(ref.dt), rule=name, timing=timing, populations=records,
+                       trained=trained, reference=ref, twin=twin, candidates=candidates, changes=changes, notes=notes,
+                       calibration={"inputs": _describe(opts, x), "fit_samples": int(fit_x.shape[0]),
+                                    "selection_samples": int(sel_x.shape[0]), "metric": "argmax agreement of the "
+                                    "spec's float twin with the float graph over clear-winner samples"})
+
+
+def _calibration_inputs(opts: dict[str, Any], width: int) -> np.ndarray:
+    given = opts.get("calibration")
+    if given is not None:
+        x = np.asarray(given)
+        if x.ndim != 3 or x.shape[2] != width:
+            raise SnnccError(f"calibration inputs must be (samples, steps, {width})", field="calibration")
+        return (x > 0).astype(np.uint8)
+    samples = int(opts.get("calibration_samples") or DEFAULT_CALIBRATION_SAMPLES)
+    steps = int(opts.get("time_steps") or DEFAULT_STEPS)
+    density = float(opts.get("density") or DEFAULT_DENSITY)
+    seed = int(opts.get("seed", 1))
+    if not 0 < density <= 1:
+        raise SnnccError(f"spike density must be in (0, 1], got {density}", field="--density")
+    return (np.random.default_rng(seed).random((samples, steps, width)) < density).astype(np.uint8)
+
+
+def _describe(opts: dict[str, Any], x: np.ndarray) -> str:
+    if opts.get("calibration") is not None:
+        return f"{x.shape[0]} given spike trains of {x.shape[1]} steps"
+    return (f"{x.shape[0]} seeded random spike trains (density {float(opts.get('density') or DEFAULT_DENSITY):g}, "
+            f"seed {int(opts.get('seed', 1))}), {x.shape[1]} steps (SYNTHETIC)")
