@@ -19,7 +19,8 @@ subtract is deployed and the change recorded); refractory 1; recurrent IR delay 
 ``timing.shifts`` steps late; the chip is fed ``input_pad`` zero steps before a sample and read from
 ``output_lag`` on. The rule (``rule``) places hidden populations ``direct`` or ``single``; ``auto``
 measures every candidate's argmax agreement with the float graph on calibration inputs (their
-second half; the first half fits) and keeps the best (ties: the first listed, the simpler).
+second half; the first half fits) and keeps the best (ties: the first listed, the simpler), then fits
+the chosen rule again on all of them.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ from snncc.targets.xylo.assemble import PopulationRecord, assemble, hidden_state
 from snncc.targets.xylo.chip_table import CHIPS
 from snncc.targets.xylo.identify import delayed
 from snncc.targets.xylo.structure import Population, populations
-from snncc.targets.xylo.timing import XyloTiming, projection_delay, refuse_refractory, solve_timing
+from snncc.targets.xylo.timing import XyloTiming, projection_delay, solve_timing
 from snncc.targets.xylo.twin import spec_graph
 
 RULES = ("auto", "direct", "single", "single-identified")
@@ -253,12 +254,8 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     g, fold = fold_linear(graph)
     pops = populations(g)
     _check_spike_rules(g, pops)
-    refuse_refractory(g, pops)
     ref, changes = _reset(g, pops, bool(opts.get("allow_reset_change", False)))
     design_rules.check_graph(ref, pops, CHIPS[chip])
-    if len(pops) < 2:
-        raise SnnccError("Xylo needs at least one hidden population before the readout population "
-                         "(inputs reach output neurons only through hidden neurons)", field="graph")
     timing = solve_timing(ref, pops)
     sources = _sources(ref, pops)
     n_in = ref.node(pops[0].pre).width
@@ -283,6 +280,13 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
         if best is None or agr.agreement > best[0].agreement:
             best = (agr, name, spec, records, twin)
     agr, name, spec, records, twin = best
+    if x.shape[0] > 1 and bool(opts.get("refit", True)):
+        # the chosen rule, fitted again on every calibration sample (the selection half too)
+        chosen = next(c for c in candidate_rules(sources, rule) if c[0] == name)
+        _calibrate(ref, sources, x)
+        spec, records = build_candidate(sources, n_in, chosen[1], chosen[2], chosen[3])
+        spec["dt"] = float(ref.dt)
+        twin = spec_graph(spec, ref.dt)
     design_rules.check_spec(spec, CHIPS[chip])
     notes = list(timing.notes) + fold.notes()
     if any(r.method == "direct" for r in records):

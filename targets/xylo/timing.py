@@ -75,11 +75,3 @@ def solve_timing(graph: Graph, pops: list[Population], readout_extra: int = 0) -
             f"the chip is fed {timing.input_pad} zero step(s) before a sample and its output is read from step "
             f"{timing.output_lag} on, so spike trains and counts equal the IR's")
     return timing
-
-
-def refuse_refractory(graph: Graph, pops: list[Population]) -> None:
-    for p in pops:
-        r = graph.node(p.lif).refractory
-        if r > 1:
-            raise SnnccError(f"a refractory period of {r} steps; Xylo neurons have none (refractory must be 1)",
-                             field=f"node '{p.lif}'.refractory")

@@ -1,0 +1,129 @@
+"""The Xylo lowering end to end on small chains: the spec contract, the rules' guarantees, refusals."""
+
+import numpy as np
+import pytest
+
+from snncc.errors import SnnccError
+from snncc.ir import LIF, LSTM, Dense, Graph, Input, Output, Readout
+from snncc.ir.simulate import simulate
+from snncc.targets.xylo import measure
+from snncc.targets.xylo.lowering import lower
+
+import xylosim_runner
+from xylo_models import chain, spikes
+
+QUICK = {"calibration_samples": 24, "time_steps": 80, "density": 0.15}
+SPEC_KEYS = {"weights_in": np.int8, "weights_rec": np.int8, "weights_out": np.int8, "dash_mem": np.uint8,
+             "dash_syn": np.uint8, "dash_syn_2": np.uint8, "dash_mem_out": np.uint8, "dash_syn_out": np.uint8,
+             "threshold": np.int16, "threshold_out": np.int16, "bias": np.int16, "bias_out": np.int16}
+
+
+def chip_counts(low, x):
+    out = xylosim_runner.run(low.spec, low.chip_input(x))
+    return low.read_output(out["output"], x.shape[1]).sum(axis=1), out
+
+
+def float_counts(g, x, node="out"):
+    return simulate(g, x, record="spikes").spikes[node].numpy().sum(axis=1)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return chain(np.random.default_rng(5), n_in=6, n_hidden=12, n_out=3, beta=0.85, alpha_o=0.45, beta_o=0.7)
+
+
+def test_spec_contract(model):
+    low = lower(model, dict(QUICK, rule="single"))
+    spec = low.spec
+    for key, dtype in SPEC_KEYS.items():
+        assert spec[key].dtype == dtype, key
+    assert spec["weights_in"].shape == (6, 12, 2) and spec["weights_rec"].shape == (12, 12, 2)
+    assert spec["weights_out"].shape == (12, 3) and spec["threshold_out"].shape == (3,)
+    assert all(isinstance(spec[k], int) and 0 <= spec[k] <= 8 for k in
+               ("weight_shift_in", "weight_shift_rec", "weight_shift_out"))
+    assert spec["aliases"] == [[] for _ in range(12)] and spec["dt"] == model.dt
+    assert set(SPEC_KEYS) | {"weight_shift_in", "weight_shift_rec", "weight_shift_out", "aliases", "dt"} == set(spec)
+    rec = low.record()
+    assert rec["rule"].startswith("single") and rec["populations"][0]["method"] == "single"
+
+
+def test_single_rule_fires_once_per_step_on_the_chip_and_follows_the_float_graph(model):
+    low = lower(model, dict(QUICK, rule="single-identified"))
+    assert np.all(low.spec["threshold"] >= 2 ** 14 + 1) and np.all(low.spec["dash_mem"] == 0)
+    x = spikes(np.random.default_rng(11), 60, 80, 6, 0.15)
+    counts, out = chip_counts(low, x)
+    assert out["hidden"].max() == 1                   # a 16-bit V cannot hold two thresholds
+    assert out["hidden"].sum() > 500                   # active
+    agr = measure.agreement(counts, float_counts(model, x))
+    assert agr.counted > 30 and agr.agreement >= 0.75, agr.line()
+
+
+def test_direct_rule_fires_several_spikes_per_step_and_says_so(model):
+    low = lower(model, dict(QUICK, rule="direct"))
+    x = spikes(np.random.default_rng(12), 20, 80, 6, 0.3)
+    _, out = chip_counts(low, x)
+    assert out["hidden"].max() > 1
+    assert low.twin.node("hidden").max_spikes == 31 and low.twin.node("hidden").fire_test == ">="
+    assert any("31 spikes per step" in n for n in low.notes)
+
+
+def test_auto_keeps_the_best_measured_candidate(model):
+    low = lower(model, dict(QUICK, rule="auto"))
+    scores = {k: v["agreement"] for k, v in low.candidates.items()}
+    assert len(scores) >= 3 and "direct" in scores
+    assert scores[low.rule] == max(scores.values())
+
+
+def test_zero_reset_is_refused_unless_allowed():
+    g = chain(np.random.default_rng(1), reset="zero")
+    with pytest.raises(SnnccError) as err:
+        lower(g, dict(QUICK, rule="direct"))
+    assert "cannot reset to zero" in str(err.value) and err.value.field == "node 'hidden'.reset"
+    low = lower(g, dict(QUICK, rule="direct", allow_reset_change=True))
+    assert low.changes == ["hidden: reset zero -> subtract (Xylo subtracts the threshold)",
+                           "out: reset zero -> subtract (Xylo subtracts the threshold)"]
+    assert low.reference.node("hidden").reset == "subtract" and g.node("hidden").reset == "zero"
+
+
+@pytest.mark.parametrize("mutate, match", [
+    (lambda g: setattr(g.node("hidden"), "refractory", 2), "refractory: 2 steps"),
+    (lambda g: setattr(g.node("input"), "signal", "analog"), "spike events"),
+    (lambda g: setattr(g.node("hidden"), "max_spikes", 3), "standard spike rule"),
+])
+def test_what_xylo_cannot_express_is_one_line(mutate, match):
+    g = chain(np.random.default_rng(2))
+    mutate(g)
+    with pytest.raises(SnnccError, match=match):
+        lower(g, dict(QUICK, rule="direct"))
+
+
+def test_lstm_and_a_readout_without_hidden_neurons_are_refused():
+    g = Graph(1e-3)
+    g.add("input", Input(4))
+    g.add("lstm", LSTM(np.zeros((8, 4)), np.zeros((8, 2))))
+    g.add("fc", Dense(np.zeros((2, 2))))
+    g.add("readout", Readout(2, mode="last"))
+    g.add("output", Output(2))
+    for u, v in (("input", "lstm"), ("lstm", "fc"), ("fc", "readout"), ("readout", "output")):
+        g.connect(u, v)
+    with pytest.raises(SnnccError, match="LSTM cannot run on Xylo"):
+        lower(g, QUICK)
+    g = Graph(1e-3)
+    g.add("input", Input(4))
+    g.add("w", Dense(np.ones((2, 4))))
+    g.add("out", LIF(2, 1e-2, 1e-2, 1.0, reset="subtract"))
+    g.add("readout", Readout(2))
+    g.add("output", Output(2))
+    for u, v in (("input", "w"), ("w", "out"), ("out", "readout"), ("readout", "output")):
+        g.connect(u, v)
+    with pytest.raises(SnnccError, match="only through hidden neurons"):
+        lower(g, QUICK)
+
+
+def test_calibration_inputs_and_options_are_checked(model):
+    with pytest.raises(SnnccError, match="calibration inputs must be"):
+        lower(model, {"calibration": np.zeros((4, 10, 5))})
+    with pytest.raises(SnnccError, match="rule must be one of"):
+        lower(model, {"rule": "fine"})
+    with pytest.raises(SnnccError, match="chip must be one of"):
+        lower(model, {"chip": "loihi"})
