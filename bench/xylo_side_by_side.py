@@ -1,0 +1,212 @@
+"""Xylo Audio 2 side by side on the NIR paper's Braille graphs: the float graph, Rockpool's own flow in
+XyloSim, and snncc's spec in XyloSim, on the same seeded inputs (not run in CI).
+
+For each Braille graph in tests/data/nir that fits the chip, on two input sets:
+    random   --samples seeded random spike trains x --steps steps, density --density (SYNTHETIC)
+    braille  snncc's synthetic Braille events (generator v2, SYNTHETIC) encoded like the NIR paper's
+             inputs: letters Space, A, E, I, O, U, Y; sigma-delta ON and OFF events at threshold 1 merged
+             per taxel into 12 channels; the 1.35 s record binned into --steps steps
+it reports, against the float graph (snncc's IR reference simulation; with a reset change, the graph as
+deployed), argmax agreement over the samples whose float output has one clear winner (a unique non-zero
+maximum; the others are counted beside it) with its 95 % Wilson interval, and the output-count
+correlation, for:
+    snncc <rule>     lower(graph, rule) for direct / single / single-identified, the spec run in XyloSim
+    snncc auto       what ``rule=auto`` picks (measured on its own calibration inputs, seed 1, never these)
+    rockpool         Rockpool 3.1's flow (bench/xylo_rockpool_flow.py, run in --rockpool-python)
+    decays rounded   the float graph with only its decays moved to the nearest 1 - 2^-dash (no chip)
+    noise 1 % / 0.3 %  the float graph against itself with every weight x (1 + noise N(0, 1)), mean of 3 draws
+
+    python bench/xylo_side_by_side.py [--samples 1000] [--steps 256] [--density 0.08] [--seed 0]
+        [--braille-reps 100] [--calibration 256] [--rockpool-python /work/venvs/rockpool/bin/python]
+        [--graphs NAME ...] [--out bench/results/xylo_side_by_side.json]
+
+Needs xylosim 0.1.3 in this environment and Rockpool in a separate one (its nir extra pins nir <= 1.0.4).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "xylo"))
+
+import xylosim_runner  # noqa: E402
+from snncc.errors import SnnccError  # noqa: E402
+from snncc.frontends import LoadOptions, load_model  # noqa: E402
+from snncc.ir.nodes import LIF  # noqa: E402
+from snncc.ir.simulate import simulate  # noqa: E402
+from snncc.targets.loihi.agreement import perturbed, random_inputs  # noqa: E402
+from snncc.targets.xylo import kernels, measure  # noqa: E402
+from snncc.targets.xylo.lowering import lower  # noqa: E402
+from snncc.threads import one_thread  # noqa: E402
+
+GRAPHS = {  # file -> (load options, allow_reset_change)
+    "braille_noDelay_noBias_subtract.nir": (dict(dt=1e-4, reset="subtract"), False),
+    "braille_zero_2023.nir": (dict(dt=1e-4, reset="zero"), True),
+    "braille_subgraph_2023.nir": (dict(dt=1e-4, reset="zero"), True),
+}
+LETTERS = ("Space", "A", "E", "I", "O", "U", "Y")
+RULES = ("direct", "single", "single-identified")
+
+
+def braille_inputs(reps: int, seed: int, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """(N, steps, 12) merged ON/OFF events of the 7 letters, and their labels (0..6). SYNTHETIC."""
+    from snncc.data.binning import record_ms
+    from snncc.data.letters import label_of
+    from snncc.data.sigma_delta import encode
+    from snncc.data.synth import generate
+
+    frames, labels = generate(repetitions=reps, seed=seed)
+    wanted = [label_of(k) for k in LETTERS]
+    keep = np.flatnonzero(np.isin(labels, wanted))
+    frames, labels = frames[keep], labels[keep]
+    ev = encode(frames, 1.0)
+    record_s = float(record_ms(frames.shape[1])) / 1000.0
+    b = np.minimum((ev.times / (record_s / steps)).astype(np.int64), steps - 1)
+    x = np.zeros((frames.shape[0], steps, ev.n_taxels), np.uint8)
+    x[ev.sample, b, ev.taxel] = 1
+    return x, np.array([wanted.index(v) for v in labels])
+
+
+def float_counts(g, x) -> np.ndarray:
+    last = [n for n, op in g.items() if isinstance(op, LIF)][-1]
+    with one_thread():
+        return simulate(g, x, record="spikes").spikes[last].numpy().sum(axis=1)
+
+
+def rounded_decays(g):
+    """The float graph with every LIF's decays moved to the nearest Xylo dash (Euler: tau = dt / 2^-d)."""
+    out = g.copy()
+    for name, op in out.items():
+        if isinstance(op, LIF):
+            a, b = op.decays(out.dt)
+            op.discretisation = "euler"
+            op.tau_syn = out.dt / np.maximum(1 - kernels.grid(kernels.nearest_dash(a)), 1e-300)
+            op.tau_mem = out.dt / np.maximum(1 - kernels.grid(kernels.nearest_dash(b)), 1e-300)
+    return out
+
+
+def xylosim_counts(low, x) -> tuple[np.ndarray, float]:
+    t0 = time.perf_counter()
+    out = xylosim_runner.run(low.spec, low.chip_input(x))["output"]
+    return low.read_output(out, x.shape[1]).sum(axis=1), time.perf_counter() - t0
+
+
+def rockpool_counts(python: str, graph: Path, dt: float, x: np.ndarray) -> tuple[np.ndarray | None, str]:
+    with tempfile.TemporaryDirectory() as tmp:
+        xin, xout = Path(tmp) / "x.npz", Path(tmp) / "counts.npz"
+        np.savez(xin, x=x)
+        proc = subprocess.run([python, str(ROOT / "bench" / "xylo_rockpool_flow.py"), str(graph), "--dt", str(dt),
+                               "--inputs", str(xin), "--out", str(xout)], capture_output=True, text=True)
+        if proc.returncode:
+            return None, (proc.stderr.strip().splitlines() or ["failed"])[-1]
+        data = np.load(xout, allow_pickle=False)
+        return data["counts"], (f"dashes mem {sorted(set(data['dash_mem'].tolist()))} syn "
+                                f"{sorted(set(data['dash_syn'].tolist()))} out mem "
+                                f"{sorted(set(data['dash_mem_out'].tolist()))} syn {sorted(set(data['dash_syn_out'].tolist()))}; "
+                                f"thresholds {int(data['threshold'].min())}..{int(data['threshold'].max())}")
+
+
+def ceiling(ref, x, base, noise: float, draws: int = 3) -> dict:
+    rows = [measure.agreement(float_counts(perturbed(ref, noise, 100 + k), x), base) for k in range(draws)]
+    return {"agreement": float(np.mean([r.agreement for r in rows])),
+            "count_correlation": float(np.mean([r.count_correlation for r in rows])),
+            "draws": [r.as_dict() for r in rows]}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=1000)
+    ap.add_argument("--steps", type=int, default=256)
+    ap.add_argument("--density", type=float, default=0.08)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--braille-reps", type=int, default=100)
+    ap.add_argument("--calibration", type=int, default=256)
+    ap.add_argument("--rockpool-python", default="/work/venvs/rockpool/bin/python")
+    ap.add_argument("--graphs", nargs="*", default=list(GRAPHS))
+    ap.add_argument("--out", default=str(ROOT / "bench" / "results" / "xylo_side_by_side.json"))
+    args = ap.parse_args()
+
+    inputs = {"random": random_inputs(args.samples, args.steps, 12, args.density, args.seed)}
+    bx, blabels = braille_inputs(args.braille_reps, args.seed, args.steps)
+    inputs["braille"] = bx
+    result = {"settings": vars(args), "inputs": {
+        "random": f"{args.samples} seeded random spike trains (density {args.density}, seed {args.seed}), {args.steps} "
+                  "steps (SYNTHETIC)",
+        "braille": f"{bx.shape[0]} synthetic Braille samples (generator v2, {args.braille_reps} repetitions, seed "
+                   f"{args.seed}; letters {', '.join(LETTERS)}), ON+OFF events at threshold 1 merged per taxel, "
+                   f"{args.steps} steps, density {bx.mean():.3f} (SYNTHETIC)"}, "graphs": {}}
+    emulate = lambda spec, xx: xylosim_runner.run(spec, xx)["output"]  # noqa: E731
+    for name in args.graphs:
+        path = ROOT / "tests" / "data" / "nir" / name
+        load, allow = GRAPHS[name]
+        entry: dict = {}
+        result["graphs"][name] = entry
+        try:
+            graph = load_model(path, LoadOptions(**load))
+        except SnnccError as err:
+            entry["skipped"] = f"cannot be read: {err}"
+            print(f"{name}: skipped ({err})", flush=True)
+            continue
+        lowered = {}
+        for rule in RULES + ("auto",):
+            t0 = time.perf_counter()
+            try:
+                lowered[rule] = lower(graph, {"rule": rule, "allow_reset_change": allow, "density": args.density,
+                                              "calibration_samples": args.calibration, "time_steps": args.steps,
+                                              "emulator": emulate})
+            except SnnccError as err:
+                entry[f"snncc {rule}"] = {"refused": str(err)}
+                continue
+            print(f"{name}: lowered '{rule}' -> {lowered[rule].rule} in {time.perf_counter() - t0:.0f} s", flush=True)
+        if not lowered:
+            print(f"{name}: refused by every rule: {entry}", flush=True)
+            continue
+        ref = next(iter(lowered.values())).reference
+        entry["reference"] = ("the float graph with reset by subtraction (deployed; trained with reset to zero)"
+                              if allow else "the float graph")
+        entry["auto_choice"] = lowered["auto"].rule if "auto" in lowered else None
+        entry["auto_candidates"] = lowered["auto"].candidates if "auto" in lowered else None
+        entry["changes"] = next(iter(lowered.values())).changes
+        for kind, x in inputs.items():
+            rows: dict = {}
+            entry[kind] = rows
+            base = float_counts(ref, x)
+            if allow:
+                rows["float as trained (reset to zero)"] = measure.agreement(float_counts(graph, x), base).as_dict()
+            for rule, low in lowered.items():
+                counts, seconds = xylosim_counts(low, x)
+                rows[f"snncc {rule}"] = dict(measure.agreement(counts, base).as_dict(), rule=low.rule,
+                                             xylosim_seconds=seconds)
+            counts, how = rockpool_counts(args.rockpool_python, path, float(graph.dt), x)
+            rows["rockpool"] = measure.agreement(counts, base).as_dict() | {"spec": how} if counts is not None \
+                else {"failed": how}
+            rows["decays rounded"] = measure.agreement(float_counts(rounded_decays(ref), x), base).as_dict()
+            rows["noise 1 %"] = ceiling(ref, x, base, 0.01)
+            rows["noise 0.3 %"] = ceiling(ref, x, base, 0.003)
+            print(f"\n{name}, {kind} inputs ({result['inputs'][kind]}):", flush=True)
+            for flow, r in rows.items():
+                if "agreement" in r and "low" in r:
+                    print(f"  {flow:28s} {measure.Agreement(**{k: r[k] for k in measure.Agreement.__dataclass_fields__}).line()}"
+                          + (f"   [{r['rule']}]" if "rule" in r else ""), flush=True)
+                elif "agreement" in r:
+                    print(f"  {flow:28s} {r['agreement']:.3f} (mean of {len(r['draws'])} draws), count correlation "
+                          f"{r['count_correlation']:.3f}", flush=True)
+                else:
+                    print(f"  {flow:28s} {r}", flush=True)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(result, indent=1, default=float))
+    print(f"\nwrote {out}")
+
+
+if __name__ == "__main__":
+    main()

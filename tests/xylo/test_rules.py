@@ -1,0 +1,121 @@
+"""Xylo design rules: each refuses in one line naming the rule and the numbers; valid inputs pass."""
+
+import numpy as np
+import pytest
+
+from snncc.errors import SnnccError
+from snncc.ir import Dense
+from snncc.targets.xylo import rules
+from snncc.targets.xylo.chip_table import AUDIO2, AUDIO3, CHIPS, IMU
+from snncc.targets.xylo.structure import populations
+
+from xylo_models import chain
+
+
+def pops_of(g):
+    return populations(g)
+
+
+def small_spec(n=10, n_in=4, n_out=3, syn=2):
+    rng = np.random.default_rng(0)
+    return dict(weights_in=rng.integers(-5, 5, (n_in, n, syn)).astype(np.int8),
+                weights_rec=rng.integers(-5, 5, (n, n, syn)).astype(np.int8),
+                weights_out=rng.integers(-5, 5, (n, n_out)).astype(np.int8),
+                dash_mem=np.full(n, 2, np.uint8), dash_syn=np.full(n, 2, np.uint8), dash_syn_2=np.full(n, 3, np.uint8),
+                dash_mem_out=np.full(n_out, 1, np.uint8), dash_syn_out=np.full(n_out, 1, np.uint8),
+                threshold=np.full(n, 100, np.int16), threshold_out=np.full(n_out, 50, np.int16),
+                bias=np.zeros(n, np.int16), bias_out=np.zeros(n_out, np.int16),
+                weight_shift_in=2, weight_shift_rec=2, weight_shift_out=2, aliases=[[] for _ in range(n)], dt=1e-3)
+
+
+def test_a_model_that_fits_passes_every_graph_rule():
+    g = chain(np.random.default_rng(0))
+    for chip in CHIPS.values():
+        rules.check_graph(g, pops_of(g), chip)
+
+
+@pytest.mark.parametrize("kwargs, chip, text", [
+    (dict(n_in=17), AUDIO2, "input channels: the model has 17, Xylo Audio 2 has 16"),
+    (dict(n_hidden=1001), AUDIO2, "hidden neurons: the model needs 1001 (hidden 1001), Xylo Audio 2 has 1000"),
+    (dict(n_hidden=497), IMU, "hidden neurons: the model needs 497 (hidden 497), Xylo IMU has 496"),
+    (dict(n_out=9), AUDIO2, "output neurons: the readout population has 9, Xylo Audio 2 has 8"),
+    (dict(n_out=33), AUDIO3, "output neurons: the readout population has 33, Xylo Audio 3 has 32"),
+    (dict(n_hidden=129), IMU, "input expansion: the first hidden population 'hidden' has 129 neurons fed by the "
+                              "inputs, Xylo IMU lets inputs reach 128"),
+    (dict(delays=(0, 2, 0)), AUDIO2, "delays: a recurrent projection with IR delay 2 steps"),
+])
+def test_graph_rules_name_the_numbers(kwargs, chip, text):
+    g = chain(np.random.default_rng(0), **kwargs)
+    with pytest.raises(SnnccError) as err:
+        rules.check_graph(g, pops_of(g), chip)
+    assert text in str(err.value) and "\n" not in str(err.value)
+
+
+def test_output_expansion_and_recurrent_outputs():
+    g = chain(np.random.default_rng(0), n_hidden=100)
+    rules.rule_output_expansion(g, pops_of(g), IMU)
+    g = chain(np.random.default_rng(0), n_hidden=120)
+    # Audio 3: the last hidden population (120 <= 128) may feed the outputs, but not 129 neurons
+    rules.rule_output_expansion(g, pops_of(g), AUDIO3)
+    g = chain(np.random.default_rng(0), n_hidden=200)
+    with pytest.raises(SnnccError, match="output expansion: the last hidden population 'hidden' has 200"):
+        rules.rule_output_expansion(g, pops_of(g), AUDIO3)
+    g = chain(np.random.default_rng(0))
+    g.add("w_out_rec", Dense(np.zeros((3, 3))))
+    g.connect("out", "w_out_rec", delay=1)
+    g.connect("w_out_rec", "out")
+    with pytest.raises(SnnccError, match="output neurons are not recurrent"):
+        rules.rule_output_not_recurrent(g, pops_of(g), AUDIO2)
+
+
+def test_refractory_period_is_refused():
+    g = chain(np.random.default_rng(0))
+    g.node("hidden").refractory = 3
+    with pytest.raises(SnnccError, match="refractory: 3 steps; Xylo Audio 2's neurons have none"):
+        rules.rule_refractory(g, pops_of(g), AUDIO2)
+
+
+def test_a_valid_spec_passes_and_each_spec_rule_refuses():
+    rules.check_spec(small_spec(), AUDIO2)
+    cases = [
+        (dict(weights_in=np.full((4, 10, 2), 200)), "weights must be int8, got values in [200, 200]"),
+        (dict(dash_mem=np.full(10, 16)), "dashes are 4-bit (0..15), got [16, 16]"),
+        (dict(threshold=np.zeros(10)), "thresholds are int16 and > 0, got [0.0, 0.0]"),
+        (dict(weight_shift_rec=9), "weight shift 9: 0..8"),
+        (dict(bias=np.full(10, 40000)), "biases are int16, got [40000, 40000]"),
+        (dict(weights_rec=np.zeros((9, 9, 2))), "must be (10, 10[, 2]), got (9, 9, 2)"),
+        (dict(aliases=[[12]] + [[] for _ in range(9)]), "neuron 0's alias 12 is not a hidden neuron (0..9)"),
+    ]
+    for change, text in cases:
+        spec = dict(small_spec(), **change)
+        with pytest.raises(SnnccError) as err:
+            rules.check_spec(spec, AUDIO2)
+        assert text in str(err.value), (text, str(err.value))
+
+
+def test_spec_rules_per_chip():
+    spec = small_spec(n=200, n_in=16, n_out=8)
+    rules.check_spec(spec, AUDIO2)
+    with pytest.raises(SnnccError, match="synapses per neuron: the spec uses a second synaptic current, Xylo IMU has 1"):
+        rules.check_spec(spec, IMU)
+    one = dict(spec, weights_in=spec["weights_in"][:, :, :1], weights_rec=spec["weights_rec"][:, :, :1])
+    with pytest.raises(SnnccError, match="input expansion: input weights reach hidden neuron 199, Xylo IMU lets "
+                                         "them reach the first 128"):
+        rules.check_spec(one, IMU)
+    with pytest.raises(SnnccError, match="hidden neurons: the spec has 1001, Xylo Audio 2 has 1000"):
+        rules.check_spec(small_spec(n=1001), AUDIO2)
+
+
+def test_cycles_grow_with_the_network_and_real_time_is_judged_against_dt():
+    small, big = small_spec(n=10), small_spec(n=400, n_in=16, n_out=8)
+    assert rules.cycles_per_step(small) < rules.cycles_per_step(big)
+    # quiet networks need fewer cycles than the worst case
+    assert rules.cycles_per_step(big, 0.05, 0.02, 0.01) < rules.cycles_per_step(big)
+    # hand count for the small spec (every operation once per step): inputs 4 * (10 * 3.5 + 1), recurrent
+    # 10 * (fan-out * 7 + 3), to the outputs 10 * (1 + 3 * 8), neurons 10 * (19 + 3) + 3 * 12
+    fan = np.mean(np.count_nonzero(small["weights_rec"].any(axis=2), axis=1))
+    assert rules.cycles_per_step(small) == pytest.approx(4 * 36 + 10 * (fan * 7 + 3) + 10 * 25 + 10 * 22 + 36)
+    fast = rules.real_time(small, dt=1e-3)
+    assert fast.real_time and "runs in real time" in fast.line()
+    slow = rules.real_time(big, dt=1e-5)
+    assert not slow.real_time and "does NOT run in real time" in slow.line() and slow.as_dict()["margin"] < 1
