@@ -69,6 +69,7 @@ class XyloLowered:
     changes: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     calibration: dict[str, Any] = field(default_factory=dict)
+    real_time: dict[str, Any] = field(default_factory=dict)
 
     def chip_input(self, x: np.ndarray) -> np.ndarray:
         """IR inputs (B, T, C) as the chip must be fed (``input_pad`` zero steps before, enough after)."""
@@ -81,7 +82,8 @@ class XyloLowered:
         """The quantization record (JSON-able)."""
         return {"chip": self.chip, "dt": self.dt, "rule": self.rule, "timing": self.timing.as_dict(),
                 "populations": [p.as_dict() for p in self.populations], "candidates": self.candidates,
-                "changes": list(self.changes), "notes": list(self.notes), "calibration": dict(self.calibration)}
+                "changes": list(self.changes), "notes": list(self.notes), "calibration": dict(self.calibration),
+                "real_time": dict(self.real_time)}
 
 
 @dataclass
@@ -289,14 +291,29 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
         twin = spec_graph(spec, ref.dt)
     design_rules.check_spec(spec, CHIPS[chip])
     notes = list(timing.notes) + fold.notes()
+    rates = {"input": float(np.mean(x > 0)),
+             "hidden": float(np.mean([np.mean(s.trains[s.pop.lif] > 0) for s in sources[:-1]])),
+             "output": float(np.mean(sources[-1].trains[sources[-1].pop.lif] > 0))}
+    rt = design_rules.real_time(spec, float(ref.dt), rates)
+    notes.append(rt.line())
+    for s in sources:
+        if timing.shifts.get(s.pop.lif, 0) and (np.any(s.bias_v) or np.any(s.bias_i)):
+            notes.append(f"{s.pop.lif}: its bias acts from the chip's first step, {timing.shifts[s.pop.lif]} step(s) "
+                         "before the population's IR step 0")
+        if np.any(s.bias_i) or (np.any(s.bias_v) and s.pop.lif != sources[-1].pop.lif and
+                                 any(r.method == "single" for r in records)):
+            notes.append(f"{s.pop.lif}: its biases enter the chip's membrane as the constant they settle to "
+                         "(the IR ramps them up through the current: the first steps of a sample differ)")
     if any(r.method == "direct" for r in records):
         notes.append("direct rule: a hidden neuron fires up to 31 spikes per step on the chip where the IR fires one "
                      "(the deployed graph states it: max_spikes 31, fire_test '>=')")
     return XyloLowered(spec=spec, chip=chip, dt=float(ref.dt), rule=name, timing=timing, populations=records,
                        trained=trained, reference=ref, twin=twin, candidates=candidates, changes=changes, notes=notes,
                        calibration={"inputs": _describe(opts, x), "fit_samples": int(fit_x.shape[0]),
-                                    "selection_samples": int(sel_x.shape[0]), "metric": "argmax agreement of the "
-                                    "spec's float twin with the float graph over clear-winner samples"})
+                                    "selection_samples": int(sel_x.shape[0]), "metric": "argmax agreement with the "
+                                    "float graph over clear-winner samples, of the spec run in "
+                                    + ("the given emulator" if emulator is not None else "its float twin")},
+                       real_time=rt.as_dict())
 
 
 def _calibration_inputs(opts: dict[str, Any], width: int) -> np.ndarray:
