@@ -16,8 +16,8 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.targets.xylo import identify, kernels
 from snncc.targets.xylo.chip_table import STATE_MAX, WEIGHT_MAX, WEIGHT_MIN
-from snncc.targets.xylo.quantize import (SINGLE_THRESHOLD, STATE_MARGIN, HiddenFloat, OutputFloat, choose_gains,
-                                         saturating_int16, to_int)
+from snncc.targets.xylo.quantize import (BIAS_SOURCE, SINGLE_THRESHOLD, STATE_MARGIN, HiddenFloat, OutputFloat,
+                                         choose_gains, saturating_int16, to_int)
 
 
 @dataclass
@@ -81,6 +81,10 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat, n_inputs: int, inpu
     for p in hidden:
         starts[p.name] = at
         at += p.n
+    source = any(BIAS_SOURCE in p.weights for p in hidden) or output.bias_source
+    if source:                       # the always-on neuron that carries biases: the last hidden neuron
+        starts[BIAS_SOURCE] = at
+        at += 1
     n = at
     # per hidden neuron, its largest |weight| (threshold units) in the input and the recurrent matrix
     w_in_max = np.zeros(n)
@@ -97,6 +101,9 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat, n_inputs: int, inpu
                 w_in_max[sl] = np.maximum(w_in_max[sl], m)
             else:
                 w_rec_max[sl] = np.maximum(w_rec_max[sl], m)
+    if source:
+        theta[starts[BIAS_SOURCE]] = 1.0
+        state[starts[BIAS_SOURCE]] = SINGLE_THRESHOLD - 1
     gains, (s_in, s_rec) = choose_gains(state, [w_in_max, w_rec_max])
     gains = np.floor(gains)
     spec: dict[str, Any] = {
@@ -156,6 +163,11 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat, n_inputs: int, inpu
             {"dash_syn": sorted({int(v) for v in p.dash_syn[:, 0]}), "dash_syn_2": sorted({int(v) for v in p.dash_syn[:, 1]}),
              "dash_mem": sorted({int(v) for v in p.dash_mem})},
             p.fit, rounding if p.hessians is not None else "nearest", _spread(gains[sl])))
+    if source:                       # no input, memoryless, V = bias = threshold: exactly one spike every step
+        k = starts[BIAS_SOURCE]
+        spec["threshold"][k] = SINGLE_THRESHOLD
+        spec["bias"][k] = SINGLE_THRESHOLD
+        records[-1].notes.append(f"hidden neuron {k} is the always-on bias source")
     # output neurons
     m = output.n
     o_max = np.abs(output.weight).max(axis=1) / output.theta
@@ -164,10 +176,14 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat, n_inputs: int, inpu
     g = o_gain / output.theta
     w_out = np.zeros((n, m), np.int8)
     src0 = starts[output.source]
+    n_src = output.weight.shape[1] - (1 if output.bias_source else 0)
     for j in range(m):
         st = np.full(output.weight.shape[1], 2.0 ** s_out / g[j])
         h = output.hessians[j] if (rounding == "feedback" and output.hessians is not None) else None
-        w_out[src0:src0 + output.weight.shape[1], j] = to_int(output.weight[j], st, h).astype(np.int8)
+        ints = to_int(output.weight[j], st, h).astype(np.int8)
+        w_out[src0:src0 + n_src, j] = ints[:n_src]
+        if output.bias_source:
+            w_out[starts[BIAS_SOURCE], j] = ints[n_src]
     spec.update({
         "weights_out": w_out, "weight_shift_out": int(s_out),
         "dash_syn_out": output.dash_syn.astype(np.uint8), "dash_mem_out": output.dash_mem.astype(np.uint8),

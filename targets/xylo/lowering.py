@@ -99,6 +99,7 @@ class _Source:
     w_ff: np.ndarray
     w_rec: np.ndarray | None
     d_ff: int
+    bias_lag: int | None = None        # IR step from which the always-on source's spikes arrive (None: not usable)
     trains: dict[str, np.ndarray] = field(default_factory=dict)
     v_pre: np.ndarray | None = None
 
@@ -130,7 +131,8 @@ def _reset(graph: Graph, pops: list[Population], allow: bool) -> tuple[Graph, li
     return g, changes
 
 
-def _sources(g: Graph, pops: list[Population]) -> list[_Source]:
+def _sources(g: Graph, pops: list[Population], timing: XyloTiming) -> list[_Source]:
+    """The source's spikes (chip steps 0, 1, ...) reach every population at chip step 1: IR step 1 - shift."""
     out = []
     for p in pops:
         op = g.node(p.lif)
@@ -141,7 +143,8 @@ def _sources(g: Graph, pops: list[Population]) -> list[_Source]:
             bias_i = bias_i + term.vector
         out.append(_Source(p, np.asarray(alpha, float), np.asarray(beta, float), op.threshold.astype(float),
                            np.asarray(bias_v, float), bias_i, g.node(p.ff).weight,
-                           None if p.rec is None else g.node(p.rec).weight, projection_delay(g, p.pre, p.ff, p.lif)))
+                           None if p.rec is None else g.node(p.rec).weight, projection_delay(g, p.pre, p.ff, p.lif),
+                           1 - timing.shifts[p.lif] if timing.shifts[p.lif] <= 1 else None))
     return out
 
 
@@ -155,8 +158,11 @@ def _calibrate(ref: Graph, sources: list[_Source], x: np.ndarray) -> None:
     trains = {sources[0].pop.pre: np.asarray(x, np.float64)}
     for s in sources:
         trains[s.pop.lif] = res.spikes[s.pop.lif].numpy()
+    ones = np.ones(np.shape(x)[:2] + (1,))
     for s in sources:
         s.trains = {s.pop.pre: delayed(trains[s.pop.pre], s.d_ff), s.pop.lif: delayed(trains[s.pop.lif], 1)}
+        if s.bias_lag is not None:
+            s.trains[quantize.BIAS_SOURCE] = delayed(ones, s.bias_lag)
         s.v_pre = res.voltage[s.pop.lif].numpy() + s.theta * trains[s.pop.lif]
 
 
@@ -185,7 +191,7 @@ def _hidden(s: _Source, method: str, dashes: tuple[int, int] | None) -> quantize
         srcs[s.pop.lif] = s.w_rec
     if method == "direct":
         return quantize.hidden_direct(s.pop.lif, s.alpha, s.beta, s.theta, srcs, s.bias_v, s.bias_i)
-    return quantize.hidden_single(s.pop.lif, s.alpha, s.beta, s.theta, srcs, dashes, s.bias_v, s.bias_i)
+    return quantize.hidden_single(s.pop.lif, s.alpha, s.beta, s.theta, srcs, dashes, s.bias_v, s.bias_i, s.bias_lag)
 
 
 def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: list[tuple[int, int]] | None,
@@ -203,14 +209,40 @@ def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: l
         hidden.append(pop)
     last = sources[-1]
     out = quantize.output_native(last.pop.lif, last.pop.pre, last.alpha, last.beta, last.theta, last.w_ff,
-                                 last.bias_v, last.bias_i)
+                                 last.bias_v, last.bias_i, bias_source=last.bias_lag == 0)
+    pre = last.trains[last.pop.pre]
+    if out.bias_source:
+        pre = np.concatenate([pre, last.trains[quantize.BIAS_SOURCE]], axis=2)
     if identified:
-        out = quantize.identify_output(out, last.trains[last.pop.pre], _own(last), last.v_pre, IDENTIFY_SCALE,
-                                       IDENTIFY_RIDGE)
+        out = quantize.identify_output(out, pre, _own(last), last.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
     limits = {p.name: hidden_state_limit(p, s.trains, s.v_pre) for p, s in zip(hidden, sources)}
-    out_limit = output_state_limit(out, last.trains[last.pop.pre], last.v_pre)
+    out_limit = output_state_limit(out, pre, last.v_pre)
     return assemble(hidden, out, n_inputs, sources[0].pop.pre, limits, out_limit,
                     "feedback" if method == "single" else "nearest")
+
+
+def _bias_notes(sources: list[_Source], records: list[PopulationRecord], timing: XyloTiming) -> list[str]:
+    """What the chip makes of each population's biases (exact, or how it differs)."""
+    out = []
+    method = {r.name: r.method for r in records}
+    for k, s in enumerate(sources):
+        if not (np.any(s.bias_v) or np.any(s.bias_i)):
+            continue
+        name, late = s.pop.lif, timing.shifts[s.pop.lif]
+        if k < len(sources) - 1 and method[name] == "single" and s.bias_lag is not None:
+            out.append(f"{name}: biases carried by its bias register (step 0) and the always-on source neuron "
+                       "(from step 1): exact up to the kernel fit")
+        elif k == len(sources) - 1 and s.bias_lag == 0:
+            if np.any(s.bias_i):
+                out.append(f"{name}: current bias carried by the always-on source neuron: exact")
+            if np.any(s.bias_v):
+                out.append(f"{name}: voltage bias register acts from the chip's first step, {late} step(s) before "
+                           "the population's IR step 0 (a decaying difference at the start of each sample)")
+        else:
+            out.append(f"{name}: biases enter as the constant voltage they settle to"
+                       + (f", from the chip's first step ({late} step(s) early)" if late else "")
+                       + ": the first steps of a sample differ")
+    return out
 
 
 def _own(s: _Source) -> np.ndarray:
@@ -259,7 +291,7 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     ref, changes = _reset(g, pops, bool(opts.get("allow_reset_change", False)))
     design_rules.check_graph(ref, pops, CHIPS[chip])
     timing = solve_timing(ref, pops)
-    sources = _sources(ref, pops)
+    sources = _sources(ref, pops, timing)
     n_in = ref.node(pops[0].pre).width
     x = _calibration_inputs(opts, n_in)
     half = max(1, x.shape[0] // 2)
@@ -296,14 +328,7 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
              "output": float(np.mean(sources[-1].trains[sources[-1].pop.lif] > 0))}
     rt = design_rules.real_time(spec, float(ref.dt), rates)
     notes.append(rt.line())
-    for s in sources:
-        if timing.shifts.get(s.pop.lif, 0) and (np.any(s.bias_v) or np.any(s.bias_i)):
-            notes.append(f"{s.pop.lif}: its bias acts from the chip's first step, {timing.shifts[s.pop.lif]} step(s) "
-                         "before the population's IR step 0")
-        if np.any(s.bias_i) or (np.any(s.bias_v) and s.pop.lif != sources[-1].pop.lif and
-                                 any(r.method == "single" for r in records)):
-            notes.append(f"{s.pop.lif}: its biases enter the chip's membrane as the constant they settle to "
-                         "(the IR ramps them up through the current: the first steps of a sample differ)")
+    notes += _bias_notes(sources, records, timing)
     if any(r.method == "direct" for r in records):
         notes.append("direct rule: a hidden neuron fires up to 31 spikes per step on the chip where the IR fires one "
                      "(the deployed graph states it: max_spikes 31, fire_test '>=')")

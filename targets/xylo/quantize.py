@@ -30,6 +30,7 @@ from snncc.targets.xylo import identify, kernels
 from snncc.targets.xylo.chip_table import SAFE_WEIGHT_SHIFT, STATE_MAX, WEIGHT_MAX, WEIGHT_MIN
 
 SINGLE_THRESHOLD = 2 ** 14 + 1    # 2 * 16385 > 32767: a 16-bit V cannot hold two thresholds
+BIAS_SOURCE = "bias source"       # an always-on hidden neuron (one spike every step) that carries biases
 STATE_MARGIN = 1.25               # headroom over the largest calibration state
 MIN_GAIN = 64.0                   # chip units per threshold the shift choice tries to keep (state resolution)
 MAX_GAIN = 4096.0
@@ -62,10 +63,11 @@ class OutputFloat:
     theta: np.ndarray
     dash_syn: np.ndarray                        # (n,)
     dash_mem: np.ndarray
-    weight: np.ndarray                          # (n, n_src) chip form: j <- a (j + w s)
-    bias: np.ndarray
+    weight: np.ndarray                          # (n, n_src [+ 1]) chip form: j <- a (j + w s); last column: the
+    bias: np.ndarray                            # bias source's weight when ``bias_source`` (then ``bias`` is b_V)
     fit: str = "kernel"
     hessians: list[np.ndarray] | None = None
+    bias_source: bool = False
 
     @property
     def n(self) -> int:
@@ -95,8 +97,15 @@ def hidden_direct(name: str, alpha, beta, theta, sources: dict[str, np.ndarray],
 
 
 def hidden_single(name: str, alpha, beta, theta, sources: dict[str, np.ndarray], dashes: tuple[int, int],
-                  bias_v, bias_i) -> HiddenFloat:
-    """Memoryless readout over two currents fitted to the IR kernel (per distinct (alpha, beta) pair)."""
+                  bias_v, bias_i, bias_lag: int | None = 1) -> HiddenFloat:
+    """Memoryless readout over two currents fitted to the IR kernel (per distinct (alpha, beta) pair).
+
+    Biases: the IR adds b_I to the current and b_V to the voltage every step from step 0, so V gains
+    b_I h(n) + b_V beta^n at step n. The bias register carries the step-0 term (b_I + b_V) and an always-on
+    source neuron, whose spikes reach the population from IR step ``bias_lag`` = 1 on, the rest through the
+    same kernel fits (w_k = b_I u_k a_k - b_V rho_k). With ``bias_lag`` 0 (the population runs one step
+    late) the source covers step 0 too and the register stays 0; otherwise (None) the register holds
+    the constant the biases settle to and the first steps differ."""
     n = theta.size
     u = np.zeros((2, n))
     rho = np.zeros((2, n))
@@ -107,14 +116,27 @@ def hidden_single(name: str, alpha, beta, theta, sources: dict[str, np.ndarray],
         rho[:, sel] = np.array(fit.rho)[:, None]
     w = {src: u[:, :, None] * m[None] for src, m in sources.items()}
     w[name] = w.get(name, np.zeros((2, n, n))) + np.stack([np.diag(rho[k] * theta) for k in range(2)])
+    register = np.zeros(n)
+    if np.any(bias_v) or np.any(bias_i):
+        a = kernels.grid(np.asarray(dashes))
+        if bias_lag == 1:
+            register = bias_i + bias_v
+            w[BIAS_SOURCE] = np.stack([bias_i * u[k] * a[k] - bias_v * rho[k] for k in range(2)])[:, :, None]
+        elif bias_lag == 0:
+            w[BIAS_SOURCE] = np.stack([bias_i * u[k] - bias_v * rho[k] / beta for k in range(2)])[:, :, None]
+        else:
+            register = steady_bias(alpha, beta, bias_v, bias_i)
     return HiddenFloat(name, "single", theta, np.tile(np.asarray(dashes), (n, 1)), np.zeros(n, np.int64), w,
-                       steady_bias(alpha, beta, bias_v, bias_i), columns=[(s, k) for k in range(2) for s in w])
+                       register, columns=[(s, k) for k in range(2) for s in w])
 
 
 def output_native(name: str, source: str, alpha, beta, theta, weight: np.ndarray, bias_v, bias_i,
-                  dashes: tuple[int, int] | None = None) -> OutputFloat:
+                  dashes: tuple[int, int] | None = None, bias_source: bool = False) -> OutputFloat:
     """Output neurons (one synapse, a membrane): dashes nearest (or given); the weight gain that best matches
-    the IR's voltage kernel h_{alpha,beta} with the chip's a * h_{a,b} (weighted least squares)."""
+    the IR's voltage kernel h_{alpha,beta} with the chip's a * h_{a,b} (weighted least squares). A voltage
+    bias is the output neuron's own register (exact); a current bias comes from the always-on source when
+    ``bias_source`` (its spikes reach the output from the population's IR step 0: w = b_I / a), else as the
+    constant voltage it settles to."""
     if dashes is None:
         d_syn, d_mem = kernels.nearest_dash(alpha), kernels.nearest_dash(beta)
     else:
@@ -130,8 +152,11 @@ def output_native(name: str, source: str, alpha, beta, theta, weight: np.ndarray
         chip = a[j] * kernels.lif_kernel(a[j], b[j], n_k) * lam
         ir = kernels.lif_kernel(alpha[j], beta[j], n_k) * lam
         gain[j] = float(chip @ ir / (chip @ chip))
-    return OutputFloat(name, source, theta, d_syn, d_mem, gain[:, None] * weight,
-                       bias_v + bias_i / np.maximum(1 - alpha, 1e-12))
+    w = gain[:, None] * weight
+    if bias_source and np.any(bias_i):
+        return OutputFloat(name, source, theta, d_syn, d_mem, np.concatenate([w, (bias_i / a)[:, None]], 1),
+                           np.asarray(bias_v, np.float64), bias_source=True)
+    return OutputFloat(name, source, theta, d_syn, d_mem, w, bias_v + bias_i / np.maximum(1 - alpha, 1e-12))
 
 
 # -- identification ------------------------------------------------------------------------------
@@ -182,8 +207,9 @@ def hidden_hessians(pop: HiddenFloat, trains: dict[str, np.ndarray], v_pre: np.n
 
 def identify_output(out: OutputFloat, pre: np.ndarray, own: np.ndarray, v_pre: np.ndarray, scale: float,
                     ridge: float) -> OutputFloat:
-    """Refit output weights: V_pre + theta sum_{m<t} b^(t-m) s[m] (the chip's own reset, moved to the target)
-    ~ membrane-filtered synaptic traces of the presynaptic spikes (``pre`` delayed as the IR delivers them)."""
+    """Refit output weights: V_pre + theta sum_{m<t} b^(t-m) s[m] (the chip's own reset, moved to the target;
+    the voltage-bias register's part taken out) ~ membrane-filtered synaptic traces of the presynaptic spikes
+    (``pre`` delayed as the IR delivers them; with ``bias_source``, its last column is the source's train)."""
     n = out.n
     new = out.weight.copy()
     hs = []
@@ -193,7 +219,8 @@ def identify_output(out: OutputFloat, pre: np.ndarray, own: np.ndarray, v_pre: n
         feat = _membrane(current, b)
         sel = np.flatnonzero((out.dash_syn == dash_pair[0]) & (out.dash_mem == dash_pair[1]))
         reset = _membrane(identify.delayed(own.astype(np.float64), 1), b) * b   # sum_{m<t} b^(t-m) s[m]
-        target = v_pre + out.theta[None, None, :] * reset
+        register = _membrane(np.ones(v_pre.shape[:2] + (1,)), b) * out.bias[None, None, :]   # the fixed b_V part
+        target = v_pre + out.theta[None, None, :] * reset - register
         d = identify.Design(feat.reshape(-1, feat.shape[2]), target.reshape(-1, n),
                             np.exp(-np.abs(v_pre.reshape(-1, n) - out.theta) / (scale * out.theta)))
         for j in sel:
@@ -202,7 +229,8 @@ def identify_output(out: OutputFloat, pre: np.ndarray, own: np.ndarray, v_pre: n
             new[j] = c
             hs.append((j, hr))
     hessians = [h for _, h in sorted(hs, key=lambda p: p[0])]
-    return OutputFloat(out.name, out.source, out.theta, out.dash_syn, out.dash_mem, new, out.bias, "identified", hessians)
+    return OutputFloat(out.name, out.source, out.theta, out.dash_syn, out.dash_mem, new, out.bias, "identified", hessians,
+                       out.bias_source)
 
 
 def _membrane(z: np.ndarray, b: float) -> np.ndarray:

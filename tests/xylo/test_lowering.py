@@ -130,3 +130,30 @@ def test_calibration_inputs_and_options_are_checked(model):
         lower(model, {"rule": "fine"})
     with pytest.raises(SnnccError, match="chip must be one of"):
         lower(model, {"chip": "loihi"})
+
+
+def test_biases_ride_on_the_register_and_an_always_on_source_neuron():
+    """Hidden current and voltage biases and an output current bias, with no input at all: the chip's spikes
+    come from the biases alone and follow the IR's ramp (decays on the grid: the kernels are exact)."""
+    rng = np.random.default_rng(8)
+    g = chain(rng, n_in=4, n_hidden=6, n_out=2, alpha=0.75, beta=0.875, alpha_o=0.5, beta_o=0.75,
+              bias=np.linspace(-0.02, 0.06, 6), rec_scale=0.05)
+    g.node("w_in").bias = np.linspace(0.01, 0.05, 6)
+    g.node("w_out").bias = np.array([0.2, 0.35])
+    x = np.zeros((2, 80, 4), np.uint8)
+    low = lower(g, dict(QUICK, rule="single"))
+    n = low.spec["threshold"].size
+    assert n == 7 and low.spec["bias"][6] == low.spec["threshold"][6]        # the source: last hidden neuron
+    assert any("always-on source neuron: exact" in note for note in low.notes)
+    counts, out = chip_counts(low, x)
+    ref = simulate(g, x, record="spikes")
+    assert out["hidden"][:, :, 6].min() == 1                                  # it fires every step
+    want_h = ref.spikes["hidden"].numpy()
+    got_h = out["hidden"][:, :80, :6]
+    assert want_h.sum() > 10
+    # the same spikes up to the rounding of small weights (G ~ 100 chip units per threshold): counts within one
+    # spike per neuron, first spikes within one step
+    assert np.abs(got_h.sum(axis=1) - want_h.sum(axis=1)).max() <= 1
+    first = lambda s: np.where(s.any(axis=1), s.argmax(axis=1), -1)  # noqa: E731
+    assert np.abs(first(got_h) - first(want_h)).max() <= 1
+    assert np.abs(counts - float_counts(g, x)).max() <= 1 and counts.sum() > 5
