@@ -15,9 +15,8 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.targets.xylo import identify, kernels
-from snncc.targets.xylo.chip_table import STATE_MAX, WEIGHT_MAX, WEIGHT_MIN
-from snncc.targets.xylo.quantize import (BIAS_SOURCE, SINGLE_THRESHOLD, STATE_MARGIN, HiddenFloat, OutputFloat,
-                                         choose_gains, saturating_int16, to_int)
+from snncc.targets.xylo.quantize import (BIAS_SOURCE, SINGLE_THRESHOLD, STATE_MARGIN, STATE_MAX, WEIGHT_MAX,
+                                         WEIGHT_MIN, HiddenFloat, OutputFloat, choose_gains, saturating_int16, to_int)
 
 
 @dataclass

@@ -18,7 +18,8 @@ hold (``structure.py``); subtract reset (a zero reset is refused unless ``allow_
 subtract is deployed and the change recorded); refractory 1; recurrent IR delay 1. Populations run
 ``timing.shifts`` steps late; the chip is fed ``input_pad`` zero steps before a sample and read from
 ``output_lag`` on. The rule (``rule``) places hidden populations ``direct`` or ``single``; ``auto``
-measures every candidate's argmax agreement with the float graph on calibration inputs (their
+measures every candidate's argmax agreement with the float graph, the spec run in snncc's bit-exact
+emulator, on calibration inputs (their
 second half; the first half fits) and keeps the best (ties: the first listed, the simpler), then fits
 the chosen rule again on all of them.
 """
@@ -37,7 +38,7 @@ from snncc.passes.current_bias import current_biases
 from snncc.passes.fold_linear import fold_linear
 from snncc.targets.xylo import kernels, measure, quantize
 from snncc.targets.xylo.assemble import PopulationRecord, assemble, hidden_state_limit, output_state_limit
-from snncc.targets.xylo.chip_table import CHIPS
+from snncc.targets.xylo.chip import CHIPS, XyloChip, get_chip
 from snncc.targets.xylo.identify import delayed
 from snncc.targets.xylo.structure import Population, populations
 from snncc.targets.xylo.timing import XyloTiming, projection_delay, solve_timing
@@ -70,6 +71,13 @@ class XyloLowered:
     notes: list[str] = field(default_factory=list)
     calibration: dict[str, Any] = field(default_factory=dict)
     real_time: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def xylo_spec(self):
+        """The spec as an ``XyloSpec`` (checked; ``save_npz`` writes spec.npz)."""
+        from snncc.targets.xylo.spec import XyloSpec
+
+        return XyloSpec(**self.spec)
 
     def chip_input(self, x: np.ndarray) -> np.ndarray:
         """IR inputs (B, T, C) as the chip must be fed (``input_pad`` zero steps before, enough after)."""
@@ -195,7 +203,7 @@ def _hidden(s: _Source, method: str, dashes: tuple[int, int] | None) -> quantize
 
 
 def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: list[tuple[int, int]] | None,
-                    identified: bool) -> tuple[dict, list[PopulationRecord]]:
+                    identified: bool, chip: XyloChip) -> tuple[dict, list[PopulationRecord]]:
     """A spec for one rule: hidden populations ``method`` (single: dash pair per population, kernel or
     identified weights, rounding with error feedback), the readout population on the output neurons."""
     hidden = []
@@ -217,8 +225,19 @@ def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: l
         out = quantize.identify_output(out, pre, _own(last), last.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
     limits = {p.name: hidden_state_limit(p, s.trains, s.v_pre) for p, s in zip(hidden, sources)}
     out_limit = output_state_limit(out, pre, last.v_pre)
-    return assemble(hidden, out, n_inputs, sources[0].pop.pre, limits, out_limit,
-                    "feedback" if method == "single" else "nearest")
+    spec, records = assemble(hidden, out, n_inputs, sources[0].pop.pre, limits, out_limit,
+                             "feedback" if method == "single" else "nearest")
+    if chip.synapses_per_hidden < 2:          # one synaptic current: the weights' last axis has one entry
+        spec["weights_in"], spec["weights_rec"] = spec["weights_in"][:, :, :1], spec["weights_rec"][:, :, :1]
+    return spec, records
+
+
+def _emulate(spec: dict, chip_x: np.ndarray) -> np.ndarray:
+    """Output spikes of ``spec`` in snncc's bit-exact emulator (``emulator.py``)."""
+    from snncc.targets.xylo.emulator import emulate
+    from snncc.targets.xylo.spec import XyloSpec
+
+    return emulate(XyloSpec(**spec), chip_x).output_spikes
 
 
 def _bias_notes(sources: list[_Source], records: list[PopulationRecord], timing: XyloTiming) -> list[str]:
@@ -253,8 +272,14 @@ def _own(s: _Source) -> np.ndarray:
     return out
 
 
-def candidate_rules(sources: list[_Source], rule: str) -> list[tuple[str, str, list | None, bool]]:
-    """(name, method, dash pairs per hidden population, identified) for ``rule``."""
+def candidate_rules(sources: list[_Source], rule: str, chip: XyloChip) -> list[tuple[str, str, list | None, bool]]:
+    """(name, method, dash pairs per hidden population, identified) for ``rule`` (``single`` needs two
+    synaptic currents per hidden neuron: not on Xylo IMU)."""
+    if chip.synapses_per_hidden < 2:
+        if rule not in ("auto", "direct"):
+            raise SnnccError(f"the {rule} rule needs two synaptic currents per hidden neuron; {chip.name} has "
+                             f"{chip.synapses_per_hidden} (use --rule direct)", field="--rule")
+        return [("direct", "direct", None, False)]
     hidden = sources[:-1]
     fits = [kernels.best_pairs(float(np.median(s.alpha)), float(np.median(s.beta)), PAIRS_TRIED) for s in hidden]
     out: list[tuple[str, str, list | None, bool]] = []
@@ -271,14 +296,16 @@ def candidate_rules(sources: list[_Source], rule: str) -> list[tuple[str, str, l
 
 
 def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
-    """Lower ``graph`` for a Xylo chip. Options: chip ("audio2"), rule (RULES), allow_reset_change,
-    calibration (an array (B, T, C) of 0/1 spikes) or calibration_samples / time_steps / density / seed;
-    emulator: a callable (spec, chip inputs) -> output spikes that measures candidates (default: the spec's
-    float twin, ``twin.py``, which ignores the chip's integer rounding; a bit-exact emulator is better)."""
+    """Lower ``graph`` for a Xylo chip. Options: chip (a key of ``chip.CHIPS``, default "syns61201"), rule
+    (RULES), allow_reset_change, calibration (an array (B, T, C) of 0/1 spikes) or calibration_samples /
+    time_steps / density / seed;
+    emulator: a callable (spec dict, chip inputs) -> output spikes that measures candidates (default: snncc's
+    bit-exact emulator)."""
     opts = dict(options or {})
-    chip = opts.get("chip") or "audio2"
-    if chip not in CHIPS:
-        raise SnnccError(f"chip must be one of {', '.join(CHIPS)}", field="--chip")
+    try:
+        chip = get_chip(opts.get("chip"))
+    except KeyError:
+        raise SnnccError(f"chip must be one of {', '.join(CHIPS)}", field="--chip") from None
     rule = opts.get("rule") or "auto"
     if rule not in RULES:
         raise SnnccError(f"rule must be one of {', '.join(RULES)}", field="--rule")
@@ -289,7 +316,7 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     pops = populations(g)
     _check_spike_rules(g, pops)
     ref, changes = _reset(g, pops, bool(opts.get("allow_reset_change", False)))
-    design_rules.check_graph(ref, pops, CHIPS[chip])
+    design_rules.check_graph(ref, pops, chip)
     timing = solve_timing(ref, pops)
     sources = _sources(ref, pops, timing)
     n_in = ref.node(pops[0].pre).width
@@ -301,14 +328,13 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     candidates: dict[str, dict[str, Any]] = {}
     emulator = opts.get("emulator")      # (spec, chip inputs (B, T', C)) -> output spikes (B, T', Nout); None: the twin
     best = None
-    for name, method, pairs, identified in candidate_rules(sources, rule):
-        spec, records = build_candidate(sources, n_in, method, pairs, identified)
+    for name, method, pairs, identified in candidate_rules(sources, rule, chip):
+        spec, records = build_candidate(sources, n_in, method, pairs, identified, chip)
         spec["dt"] = float(ref.dt)
         twin = spec_graph(spec, ref.dt)
-        counts = (twin_counts(twin, timing, sel_x) if emulator is None else
-                  measure.read_window(np.asarray(emulator(spec, measure.chip_window(sel_x, timing.input_pad,
-                                                                                   timing.output_lag))),
-                                      timing.output_lag, sel_x.shape[1]).sum(axis=1))
+        chip_x = measure.chip_window(sel_x, timing.input_pad, timing.output_lag)
+        out = emulator(spec, chip_x) if emulator is not None else _emulate(spec, chip_x)
+        counts = measure.read_window(np.asarray(out), timing.output_lag, sel_x.shape[1]).sum(axis=1)
         agr = measure.agreement(counts, float_sel)
         candidates[name] = agr.as_dict()
         if best is None or agr.agreement > best[0].agreement:
@@ -316,12 +342,12 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     agr, name, spec, records, twin = best
     if x.shape[0] > 1 and bool(opts.get("refit", True)):
         # the chosen rule, fitted again on every calibration sample (the selection half too)
-        chosen = next(c for c in candidate_rules(sources, rule) if c[0] == name)
+        chosen = next(c for c in candidate_rules(sources, rule, chip) if c[0] == name)
         _calibrate(ref, sources, x)
-        spec, records = build_candidate(sources, n_in, chosen[1], chosen[2], chosen[3])
+        spec, records = build_candidate(sources, n_in, chosen[1], chosen[2], chosen[3], chip)
         spec["dt"] = float(ref.dt)
         twin = spec_graph(spec, ref.dt)
-    design_rules.check_spec(spec, CHIPS[chip])
+    design_rules.check_spec(spec, chip)
     notes = list(timing.notes) + fold.notes()
     rates = {"input": float(np.mean(x > 0)),
              "hidden": float(np.mean([np.mean(s.trains[s.pop.lif] > 0) for s in sources[:-1]])),
@@ -332,12 +358,12 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     if any(r.method == "direct" for r in records):
         notes.append("direct rule: a hidden neuron fires up to 31 spikes per step on the chip where the IR fires one "
                      "(the deployed graph states it: max_spikes 31, fire_test '>=')")
-    return XyloLowered(spec=spec, chip=chip, dt=float(ref.dt), rule=name, timing=timing, populations=records,
+    return XyloLowered(spec=spec, chip=chip.key, dt=float(ref.dt), rule=name, timing=timing, populations=records,
                        trained=trained, reference=ref, twin=twin, candidates=candidates, changes=changes, notes=notes,
                        calibration={"inputs": _describe(opts, x), "fit_samples": int(fit_x.shape[0]),
                                     "selection_samples": int(sel_x.shape[0]), "metric": "argmax agreement with the "
                                     "float graph over clear-winner samples, of the spec run in "
-                                    + ("the given emulator" if emulator is not None else "its float twin")},
+                                    + ("the given emulator" if emulator is not None else "snncc's bit-exact emulator")},
                        real_time=rt.as_dict())
 
 

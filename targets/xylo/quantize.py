@@ -27,7 +27,11 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.targets.xylo import identify, kernels
-from snncc.targets.xylo.chip_table import SAFE_WEIGHT_SHIFT, STATE_MAX, WEIGHT_MAX, WEIGHT_MIN
+from snncc.targets.xylo.chip import CORE
+
+STATE_MAX = CORE.state_max
+WEIGHT_MAX, WEIGHT_MIN = CORE.weight_max, CORE.weight_min
+SAFE_WEIGHT_SHIFT = 8             # the largest left shift under which no int8 weight wraps in int16
 
 SINGLE_THRESHOLD = 2 ** 14 + 1    # 2 * 16385 > 32767: a 16-bit V cannot hold two thresholds
 BIAS_SOURCE = "bias source"       # an always-on hidden neuron (one spike every step) that carries biases

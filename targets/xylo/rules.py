@@ -1,8 +1,9 @@
 """Xylo design rules: small functions, each refusing in one line that names the rule and the numbers.
 
-``GRAPH_RULES`` run on the IR chain before lowering (``check_graph``), ``SPEC_RULES`` on a spec dict
-(``check_spec``: a spec snncc wrote, or one a user brings). The real-time check (``cycles_per_step``,
+``GRAPH_RULES`` run on the IR chain before lowering (``check_graph``); a spec is checked by
+``XyloSpec`` and its chip limits (``check_spec``). The real-time check (``cycles_per_step``,
 ``real_time``) estimates the core's clock cycles per time step and compares them with ``dt``.
+Chip limits come from ``chip.py`` (``XyloChip``).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import Input
-from snncc.targets.xylo.chip_table import SAFE_WEIGHT_SHIFT, XyloChip
+from snncc.targets.xylo.chip import XyloChip
 from snncc.targets.xylo.structure import Population
 
 
@@ -27,10 +28,10 @@ def _fail(rule: str, field: str) -> None:
 # -- on the IR chain ------------------------------------------------------------------------------
 
 def rule_input_channels(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
-    """At most ``chip.inputs`` input channels."""
+    """At most ``chip.max_inputs`` input channels."""
     width = graph.node(pops[0].pre).width
-    if width > chip.inputs:
-        _fail(f"input channels: the model has {width}, {chip.name} has {chip.inputs}", f"node '{pops[0].pre}'")
+    if width > chip.max_inputs:
+        _fail(f"input channels: the model has {width}, {chip.name} has {chip.max_inputs}", f"node '{pops[0].pre}'")
 
 
 def rule_hidden_layers(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
@@ -43,16 +44,17 @@ def rule_hidden_layers(graph: Graph, pops: list[Population], chip: XyloChip) -> 
 def rule_hidden_neurons(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
     """The hidden populations together fit the hidden neurons."""
     n = sum(graph.node(p.lif).n for p in pops[:-1])
-    if n > chip.hidden:
+    if n > chip.max_hidden:
         _fail(f"hidden neurons: the model needs {n} ({', '.join(f'{p.lif} {graph.node(p.lif).n}' for p in pops[:-1])}), "
-              f"{chip.name} has {chip.hidden}", "graph")
+              f"{chip.name} has {chip.max_hidden}", "graph")
 
 
 def rule_output_neurons(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
     """The readout population fits the output neurons."""
     n = graph.node(pops[-1].lif).n
-    if n > chip.outputs:
-        _fail(f"output neurons: the readout population has {n}, {chip.name} has {chip.outputs}", f"node '{pops[-1].lif}'")
+    if n > chip.max_outputs:
+        _fail(f"output neurons: the readout population has {n}, {chip.name} has {chip.max_outputs}",
+              f"node '{pops[-1].lif}'")
 
 
 def rule_output_not_recurrent(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
@@ -63,21 +65,37 @@ def rule_output_not_recurrent(graph: Graph, pops: list[Population], chip: XyloCh
 
 
 def rule_input_expansion(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
-    """Input weights reach at most ``chip.input_expansion`` hidden neurons (IMU, Audio 3: 128)."""
-    if chip.input_expansion is not None and len(pops) > 1:
+    """Input weights reach at most ``chip.max_input_expansion`` hidden neurons (IMU, Audio 3: 128)."""
+    if len(pops) > 1:
         n = graph.node(pops[0].lif).n
-        if n > chip.input_expansion:
+        if n > chip.max_input_expansion:
             _fail(f"input expansion: the first hidden population '{pops[0].lif}' has {n} neurons fed by the "
-                  f"inputs, {chip.name} lets inputs reach {chip.input_expansion}", f"node '{pops[0].lif}'")
+                  f"inputs, {chip.name} lets inputs reach {chip.max_input_expansion}", f"node '{pops[0].lif}'")
 
 
 def rule_output_expansion(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
-    """Output weights leave at most ``chip.output_expansion`` hidden neurons (IMU, Audio 3: 128)."""
-    if chip.output_expansion is not None and len(pops) > 1:
+    """Output weights leave at most ``chip.max_output_expansion`` hidden neurons (IMU, Audio 3: 128)."""
+    if len(pops) > 1:
         n = graph.node(pops[-2].lif).n
-        if n > chip.output_expansion:
+        if n > chip.max_output_expansion:
             _fail(f"output expansion: the last hidden population '{pops[-2].lif}' has {n} neurons feeding the "
-                  f"outputs, {chip.name} lets {chip.output_expansion} feed them", f"node '{pops[-2].lif}'")
+                  f"outputs, {chip.name} lets {chip.max_output_expansion} feed them", f"node '{pops[-2].lif}'")
+
+
+def rule_fanout(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
+    """A hidden neuron reaches at most ``chip.max_fanout`` hidden neurons (its recurrent targets and the next
+    hidden population's; Audio 2: 64). The spec check counts again, with what the lowering adds."""
+    for k, p in enumerate(pops[:-1]):
+        n = graph.node(p.lif).n
+        fan = np.zeros(n, np.int64)
+        if p.rec is not None:
+            fan += np.count_nonzero(graph.node(p.rec).weight, axis=0)
+        if k + 1 < len(pops) - 1:
+            fan += np.count_nonzero(graph.node(pops[k + 1].ff).weight, axis=0)
+        if fan.size and fan.max() > chip.max_fanout:
+            j = int(np.argmax(fan))
+            _fail(f"fan-out: neuron {j} of '{p.lif}' reaches {int(fan[j])} hidden neurons, {chip.name} allows "
+                  f"{chip.max_fanout}", f"node '{p.lif}'")
 
 
 def rule_delays(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
@@ -112,7 +130,8 @@ def rule_one_dt(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
 
 GRAPH_RULES: list[Callable[[Graph, list[Population], XyloChip], None]] = [
     rule_one_dt, rule_input_channels, rule_hidden_layers, rule_hidden_neurons, rule_output_neurons,
-    rule_output_not_recurrent, rule_input_expansion, rule_output_expansion, rule_delays, rule_refractory,
+    rule_output_not_recurrent, rule_input_expansion, rule_output_expansion, rule_fanout, rule_delays,
+    rule_refractory,
 ]
 
 
@@ -121,111 +140,15 @@ def check_graph(graph: Graph, pops: list[Population], chip: XyloChip) -> None:
         rule(graph, pops, chip)
 
 
-# -- on a spec dict ---------------------------------------------------------------------------------
-
-def _arr(spec: dict, key: str) -> np.ndarray:
-    if key not in spec:
-        _fail("missing from the spec", key)
-    return np.asarray(spec[key])
-
-
-def rule_spec_sizes(spec: dict, chip: XyloChip) -> None:
-    """Inputs, hidden and output neurons within the chip; shapes agree with each other."""
-    w_in, w_rec, w_out = _arr(spec, "weights_in"), _arr(spec, "weights_rec"), _arr(spec, "weights_out")
-    n = _arr(spec, "threshold").size
-    n_out = _arr(spec, "threshold_out").size
-    for what, got, cap, key in (("input channels", w_in.shape[0], chip.inputs, "weights_in"),
-                                ("hidden neurons", n, chip.hidden, "threshold"),
-                                ("output neurons", n_out, chip.outputs, "threshold_out")):
-        if got > cap:
-            _fail(f"{what}: the spec has {got}, {chip.name} has {cap}", key)
-    if w_in.ndim not in (2, 3) or w_in.shape[1] > n:
-        _fail(f"must be (Nin, N_ien <= {n}[, 2]), got {w_in.shape}", "weights_in")
-    if w_rec.shape[:2] != (n, n):
-        _fail(f"must be ({n}, {n}[, 2]), got {w_rec.shape}", "weights_rec")
-    if w_out.ndim != 2 or w_out.shape[1] != n_out or w_out.shape[0] > n:
-        _fail(f"must be (N_oen <= {n}, {n_out}), got {w_out.shape}", "weights_out")
-    for key, size in (("dash_mem", n), ("dash_syn", n), ("dash_syn_2", n), ("bias", n),
-                      ("dash_mem_out", n_out), ("dash_syn_out", n_out), ("bias_out", n_out)):
-        if key in spec and np.asarray(spec[key]).size != size:
-            _fail(f"must have {size} values, got {np.asarray(spec[key]).size}", key)
-
-
-def rule_spec_ranges(spec: dict, chip: XyloChip) -> None:
-    """int8 weights, 4-bit dashes, int16 thresholds (> 0) and biases, shifts 0..8 (no weight wraps)."""
-    for key in ("weights_in", "weights_rec", "weights_out"):
-        w = _arr(spec, key)
-        if w.size and (w.min() < -128 or w.max() > 127 or not np.all(np.equal(np.mod(w, 1), 0))):
-            _fail(f"weights must be int8, got values in [{w.min()}, {w.max()}]", key)
-    for key in ("dash_mem", "dash_syn", "dash_syn_2", "dash_mem_out", "dash_syn_out"):
-        if key in spec:
-            d = np.asarray(spec[key])
-            if d.size and (d.min() < 0 or d.max() > chip.dash_max):
-                _fail(f"dashes are 4-bit (0..{chip.dash_max}), got [{d.min()}, {d.max()}]", key)
-    for key in ("threshold", "threshold_out"):
-        t = _arr(spec, key)
-        if t.size and (t.min() < 1 or t.max() > 2 ** 15 - 1):
-            _fail(f"thresholds are int16 and > 0, got [{t.min()}, {t.max()}]", key)
-    for key in ("bias", "bias_out"):
-        if key in spec:
-            b = np.asarray(spec[key])
-            if b.size and (b.min() < -(2 ** 15) or b.max() > 2 ** 15 - 1):
-                _fail(f"biases are int16, got [{b.min()}, {b.max()}]", key)
-    for key in ("weight_shift_in", "weight_shift_rec", "weight_shift_out"):
-        s = int(spec.get(key, 0))
-        if not 0 <= s <= SAFE_WEIGHT_SHIFT:
-            _fail(f"weight shift {s}: 0..{SAFE_WEIGHT_SHIFT} (larger shifts wrap int8 weights in int16)", key)
-
-
-def rule_spec_synapses(spec: dict, chip: XyloChip) -> None:
-    """A second synapse per hidden neuron only where the chip has one (Audio 2, Audio 3; not IMU)."""
-    if chip.synapses >= 2:
-        return
-    for key in ("weights_in", "weights_rec"):
-        w = _arr(spec, key)
-        if w.ndim == 3 and w.shape[2] > 1 and np.any(w[:, :, 1:]):
-            _fail(f"synapses per neuron: the spec uses a second synaptic current, {chip.name} has {chip.synapses}",
-                  key)
-
-
-def rule_spec_expansion(spec: dict, chip: XyloChip) -> None:
-    """Input weights only to the first ``input_expansion`` and output weights only from the last
-    ``output_expansion`` hidden neurons (IMU, Audio 3: 128 each)."""
-    n = _arr(spec, "threshold").size
-    if chip.input_expansion is not None:
-        w_in = _arr(spec, "weights_in")
-        cols = np.flatnonzero(np.any(w_in.reshape(w_in.shape[0], w_in.shape[1], -1) != 0, axis=(0, 2)))
-        if cols.size and cols.max() >= chip.input_expansion:
-            _fail(f"input expansion: input weights reach hidden neuron {cols.max()}, {chip.name} lets them reach the "
-                  f"first {chip.input_expansion}", "weights_in")
-    if chip.output_expansion is not None:
-        w_out = _arr(spec, "weights_out")
-        rows = np.flatnonzero(np.any(w_out != 0, axis=1)) + (n - w_out.shape[0])
-        if rows.size and rows.min() < n - chip.output_expansion:
-            _fail(f"output expansion: output weights leave hidden neuron {rows.min()}, {chip.name} lets the last "
-                  f"{chip.output_expansion} (from {n - chip.output_expansion}) feed them", "weights_out")
-
-
-def rule_spec_aliases(spec: dict, chip: XyloChip) -> None:
-    """Aliases name hidden neurons."""
-    n = _arr(spec, "threshold").size
-    aliases = spec.get("aliases") or []
-    if aliases and len(aliases) != n:
-        _fail(f"must hold one list per hidden neuron ({n}), got {len(aliases)}", "aliases")
-    for j, targets in enumerate(aliases):
-        for t in targets:
-            if not 0 <= int(t) < n:
-                _fail(f"neuron {j}'s alias {t} is not a hidden neuron (0..{n - 1})", "aliases")
-
-
-SPEC_RULES: list[Callable[[dict, XyloChip], None]] = [
-    rule_spec_sizes, rule_spec_ranges, rule_spec_synapses, rule_spec_expansion, rule_spec_aliases,
-]
-
+# -- on a spec -------------------------------------------------------------------------------------
 
 def check_spec(spec: dict, chip: XyloChip) -> None:
-    for rule in SPEC_RULES:
-        rule(spec, chip)
+    """A spec dict as ``XyloSpec`` (its own consistency checks: dtypes, shapes, the core's ranges) within
+    ``chip``'s limits (``XyloSpec.chip_violations``: sizes, expansion neurons, synapses, fan-out, aliases);
+    the first broken rule as one ``SnnccError`` line."""
+    from snncc.targets.xylo.spec import XyloSpec
+
+    XyloSpec(**spec).check_chip(chip)
 
 
 # -- real time ----------------------------------------------------------------------------------------
@@ -278,11 +201,13 @@ def cycles_per_step(spec: dict, input_rate: float = 1.0, hidden_rate: float = 1.
     """Core cycles one step needs: input events scan the input-expansion neurons, each hidden spike its
     recurrent fan-out and the output neurons, then every hidden and output neuron updates. Rates are the
     probabilities that a channel / neuron has an event in a step (1: worst case)."""
-    w_in = np.asarray(spec["weights_in"])
-    w_rec = np.asarray(spec["weights_rec"])
+    get = spec.__getitem__ if isinstance(spec, dict) else lambda k: getattr(spec, k)   # a dict or an XyloSpec
+    w_in = np.asarray(get("weights_in"))
+    w_rec = np.asarray(get("weights_rec"))
+    w_rec = w_rec if w_rec.ndim == 3 else w_rec[:, :, None]
     n_in, n_ien = w_in.shape[:2]
     n = w_rec.shape[0]
-    n_out = np.asarray(spec["weights_out"]).shape[1]
+    n_out = np.asarray(get("weights_out")).shape[1]
     fanout = float(np.mean(np.count_nonzero(w_rec.reshape(n, n, -1).any(axis=2), axis=1))) if n else 0.0
     inputs = n_in * (input_rate * n_ien * CYCLES_INPUT_EVENT_PER_NEURON + CYCLES_INPUT_CHANNEL)
     recurrent = n * (hidden_rate * fanout * CYCLES_HIDDEN_SYNAPSE_EVENT + CYCLES_HIDDEN_NEURON_ISYN)

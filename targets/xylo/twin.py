@@ -27,7 +27,9 @@ import numpy as np
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense, Input, Output, Readout
-from snncc.targets.xylo.chip_table import STATE_MAX
+from snncc.targets.xylo.chip import CORE
+
+STATE_MAX = CORE.state_max
 
 HIDDEN_CAP = 31
 OUTPUT_CAP = 1

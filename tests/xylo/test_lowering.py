@@ -11,8 +11,7 @@ from snncc.ir.simulate import simulate
 from snncc.targets.xylo import measure
 from snncc.targets.xylo.lowering import lower
 
-import xylosim_runner
-from xylo_models import chain, spikes
+from xylo_models import chain, run_xylosim, spikes
 
 QUICK = {"calibration_samples": 24, "time_steps": 80, "density": 0.15}
 SPEC_KEYS = {"weights_in": np.int8, "weights_rec": np.int8, "weights_out": np.int8, "dash_mem": np.uint8,
@@ -21,8 +20,8 @@ SPEC_KEYS = {"weights_in": np.int8, "weights_rec": np.int8, "weights_out": np.in
 
 
 def chip_counts(low, x):
-    out = xylosim_runner.run(low.spec, low.chip_input(x))
-    return low.read_output(out["output"], x.shape[1]).sum(axis=1), out
+    out = run_xylosim(low.spec, low.chip_input(x), record=True)
+    return low.read_output(out.output_spikes, x.shape[1]).sum(axis=1), out
 
 
 def float_counts(g, x, node="out"):
@@ -55,8 +54,8 @@ def test_single_rule_fires_once_per_step_on_the_chip_and_follows_the_float_graph
     assert np.all(low.spec["threshold"] >= 2 ** 14 + 1) and np.all(low.spec["dash_mem"] == 0)
     x = spikes(np.random.default_rng(11), 60, 80, 6, 0.15)
     counts, out = chip_counts(low, x)
-    assert out["hidden"].max() == 1                   # a 16-bit V cannot hold two thresholds
-    assert out["hidden"].sum() > 500                   # active
+    assert out.spikes.max() == 1                   # a 16-bit V cannot hold two thresholds
+    assert out.spikes.sum() > 500                   # active
     agr = measure.agreement(counts, float_counts(model, x))
     assert agr.counted > 30 and agr.agreement >= 0.75, agr.line()
 
@@ -65,7 +64,7 @@ def test_direct_rule_fires_several_spikes_per_step_and_says_so(model):
     low = lower(model, dict(QUICK, rule="direct"))
     x = spikes(np.random.default_rng(12), 20, 80, 6, 0.3)
     _, out = chip_counts(low, x)
-    assert out["hidden"].max() > 1
+    assert out.spikes.max() > 1
     assert low.twin.node("hidden").max_spikes == 31 and low.twin.node("hidden").fire_test == ">="
     assert any("31 spikes per step" in n for n in low.notes)
 
@@ -147,9 +146,9 @@ def test_biases_ride_on_the_register_and_an_always_on_source_neuron():
     assert any("always-on source neuron: exact" in note for note in low.notes)
     counts, out = chip_counts(low, x)
     ref = simulate(g, x, record="spikes")
-    assert out["hidden"][:, :, 6].min() == 1                                  # it fires every step
+    assert out.spikes[:, :, 6].min() == 1                                  # it fires every step
     want_h = ref.spikes["hidden"].numpy()
-    got_h = out["hidden"][:, :80, :6]
+    got_h = out.spikes[:, :80, :6]
     assert want_h.sum() > 10
     # the same spikes up to the rounding of small weights (G ~ 100 chip units per threshold): counts within one
     # spike per neuron, first spikes within one step

@@ -11,8 +11,7 @@ from snncc.targets.xylo.structure import populations
 from snncc.targets.xylo.timing import solve_timing
 from snncc.targets.xylo.twin import spec_graph
 
-import xylosim_runner
-from xylo_models import chain, spikes
+from xylo_models import chain, run_xylosim, spikes
 
 
 def impulse_spec():
@@ -28,17 +27,17 @@ def test_twin_equals_xylosim_step_for_step_on_an_exact_impulse():
     spec = impulse_spec()
     x = np.zeros((1, 6, 1), np.uint8)
     x[0, 0] = 1
-    chip = xylosim_runner.run(spec, x, record=True)
+    chip = run_xylosim(spec, x, record=True)
     twin = simulate(spec_graph(spec, 1e-3), x, record="all")
     # input delivered and integrated in the same step (i = a (i + w)): 256 -> 128, 128 -> 64, V = 192 >= 150
-    assert chip["isyn"][0, :2, 0].tolist() == [128, 32] and chip["vmem"][0, 0, 0] == 42
+    assert chip.isyn[0, :2, 0].tolist() == [128, 32] and chip.vmem[0, 0, 0] == 42
     # the spike of step 0 comes back through the recurrent weight (-64) in step 1, reaches the output in step 1
-    assert chip["hidden"][0, 0, 0] == 1 and chip["output"][0, :2, 0].tolist() == [0, 1]
+    assert chip.spikes[0, 0, 0] == 1 and chip.output_spikes[0, :2, 0].tolist() == [0, 1]
     for twin_key, chip_key in (("syn0", "isyn"), ("syn1", "isyn2"), ("hidden", "vmem"), ("output", "vmem_out")):
         # exact while every decayed value is even (85 >> 1 rounds down on the chip from step 2 on)
-        np.testing.assert_array_equal(twin.voltage[twin_key][0, :2, 0].numpy(), chip[chip_key][0, :2, 0])
-    np.testing.assert_array_equal(twin.spikes["hidden"][0, :4, 0].numpy(), chip["hidden"][0, :4, 0])
-    np.testing.assert_array_equal(twin.spikes["output"][0, :4, 0].numpy(), chip["output"][0, :4, 0])
+        np.testing.assert_array_equal(twin.voltage[twin_key][0, :2, 0].numpy(), getattr(chip, chip_key)[0, :2, 0])
+    np.testing.assert_array_equal(twin.spikes["hidden"][0, :4, 0].numpy(), chip.spikes[0, :4, 0])
+    np.testing.assert_array_equal(twin.spikes["output"][0, :4, 0].numpy(), chip.output_spikes[0, :4, 0])
 
 
 def test_twin_follows_xylosim_on_random_specs():
@@ -52,13 +51,13 @@ def test_twin_follows_xylosim_on_random_specs():
                 threshold_out=rng.integers(2000, 3000, m), bias=rng.integers(-20, 20, n), bias_out=np.zeros(m, int),
                 weight_shift_in=5, weight_shift_rec=5, weight_shift_out=5)
     x = spikes(rng, 4, 120, n_in, 0.2)
-    chip = xylosim_runner.run(spec, x)
+    chip = run_xylosim(spec, x, record=True)
     twin = simulate(spec_graph(spec, 1e-3), x, record="spikes")
     hidden = twin.spikes["hidden"].numpy()
-    assert chip["hidden"].max() >= 2 and chip["hidden"].sum() > 100          # active, with multi-spikes
-    assert np.mean(hidden == chip["hidden"]) > 0.95                           # integer rounding aside
+    assert chip.spikes.max() >= 2 and chip.spikes.sum() > 100          # active, with multi-spikes
+    assert np.mean(hidden == chip.spikes) > 0.95                           # integer rounding aside
     late = np.roll(hidden, 1, axis=1)                                         # one step off is far worse
-    assert np.mean(late == chip["hidden"]) < np.mean(hidden == chip["hidden"]) - 0.02
+    assert np.mean(late == chip.spikes) < np.mean(hidden == chip.spikes) - 0.02
 
 
 def hand_spec(g, timing):

@@ -34,3 +34,13 @@ def chain(rng, n_in=6, n_hidden=12, n_out=3, *, alpha=0.75, beta=0.875, alpha_o=
 
 def spikes(rng, batch=6, steps=80, channels=6, p=0.15) -> np.ndarray:
     return (rng.random((batch, steps, channels)) < p).astype(np.uint8)
+
+
+def run_xylosim(spec: dict, x: np.ndarray, record: bool = False):
+    """A spec dict run in the vendor's simulator (``tests/xylo/oracle.py``): an ``XyloResult``."""
+    from snncc.targets.xylo.spec import XyloSpec
+    from tests.xylo.oracle import XyloSimOracle
+
+    n = np.asarray(spec["threshold"]).size
+    full = {"aliases": [[] for _ in range(n)], "dt": 1e-3, **spec}     # hand-made specs may leave these out
+    return XyloSimOracle(XyloSpec(**full)).run(np.asarray(x), record=record)
