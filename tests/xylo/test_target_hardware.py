@@ -1,0 +1,46 @@
+"""Xylo's ``hardware`` capability (what snncc hpo costs a trial with): neurons, feasibility, real-time margin."""
+
+import numpy as np
+import torch
+
+from snncc.frontends import graph_from_object
+from snncc.frontends.checkpoint import save_checkpoint
+from snncc.hpo.hardware import hardware_figures
+from snncc.models import SNNConfig, SpikingClassifier
+from snncc.targets import capability, get_target
+
+QUICK = {"rule": "direct", "calibration_samples": 8, "time_steps": 32, "allow_reset_change": True}
+
+
+def small_rsnn(n_hidden=24):
+    torch.manual_seed(0)
+    model = SpikingClassifier(SNNConfig(n_inputs=12, input_copies=1, n_hidden=n_hidden, n_outputs=7, order="loihi"))
+    model.reset_parameters(fwd_weight_scale=3.0, weight_scale_factor=0.2)
+    return model
+
+
+def test_objectives_name_keys_of_the_figures():
+    costs = capability(get_target("xylo"), "hardware")()
+    assert set(costs.objectives) == {"neurons", "feasible", "real_time_margin", "emulated_accuracy"}
+    assert dict(costs.published) == {} and "ESTIMATE" in costs.label
+    g = graph_from_object(small_rsnn())
+    x = (np.random.default_rng(0).random((6, 32, 12)) < 0.2).astype(np.uint8)
+    y = np.arange(6) % 7
+    fig = costs.figures(g, x, y, QUICK, emulate_samples=6).as_dict()
+    for objective in costs.objectives.values():
+        assert objective.key in fig
+    assert fig["feasible"] == 1 and fig["hidden_neurons"] == 24 and fig["output_neurons"] == 7
+    assert fig["real_time_margin"] > 1 and fig["synapses"] > 0 and fig["emulated_on"] == 6
+    assert 0 <= fig["emulated_accuracy"] <= 100
+
+
+def test_a_model_the_chip_cannot_hold_is_infeasible_not_an_error(tmp_path):
+    path = tmp_path / "rsnn.pt"
+    save_checkpoint(small_rsnn(), path, {"dt": 0.005})       # resets to zero: refused without the change allowed
+    x = np.zeros((2, 16, 12), np.uint8)
+    fig = hardware_figures(path, x, np.zeros(2, int), target="xylo").as_dict()
+    assert fig["feasible"] == 0 and "reset" in fig["refusal"] and fig["hidden_neurons"] == 24
+    costs = capability(get_target("xylo"), "hardware")()
+    big = costs.figures(graph_from_object(small_rsnn(n_hidden=130)), x, np.zeros(2, int),
+                        dict(QUICK, chip="syns63300")).as_dict()
+    assert big["feasible"] == 0 and "128" in big["refusal"] and big["chip"] == "syns63300"
