@@ -187,6 +187,8 @@ class RealTime:
         d = asdict(self)
         d.update(step_time_worst_s=self.step_time_worst, real_time=self.real_time,
                  margin=self.dt / self.step_time_worst if self.step_time_worst else math.inf,
+                 margin_expected=(self.dt * self.clock_hz / self.cycles_expected if self.cycles_expected
+                                  else math.inf),
                  note="ESTIMATE from per-operation cycle costs (SynSense, Rockpool 3.1 Audio 2 model); not measured")
         return d
 

@@ -116,8 +116,8 @@ class XyloUsage:
         rt = self.real_time
         console.print(f"real time: {'yes' if rt['real_time'] else 'NO'}: at most {rt['cycles_worst']:,.0f} core cycles "
                       f"per step ({rt['step_time_worst_s'] * 1e6:.1f} us at {rt['clock_hz'] / 1e6:g} MHz) against dt "
-                      f"{self.dt * 1e6:g} us, margin {rt['margin']:.2f}x; {rt['cycles_expected']:,.0f} cycles at the "
-                      f"event rates of {self.rates_from} (ESTIMATE, not measured)", markup=False, soft_wrap=True)
+                      f"{self.dt * 1e6:g} us, margin {rt['margin']:.2f}x; {rt['cycles_expected']:,.0f} cycles (margin "
+                      f"{rt['margin_expected']:.2f}x) at the event rates of {self.rates_from} (ESTIMATE, not measured)", markup=False, soft_wrap=True)
         console.print(self.energy, markup=False, soft_wrap=True)
         for note in self.notes:
             console.print(f"note: {note}", markup=False, soft_wrap=True)
