@@ -57,11 +57,6 @@ class XyloOptions(TargetOptions):
     seed: int = 1
 
 
-def lowering_settings(options: XyloOptions) -> dict[str, object]:
-    """The options as the settings ``lowering.lower`` reads (None: its default)."""
-    return {k: v for k, v in options.as_dict().items() if k != "source" and v is not None}
-
-
 class XyloTarget:
     """Capabilities: lower, emulate, map, estimate (report), hardware (hpo)."""
 
@@ -78,7 +73,7 @@ class XyloTarget:
 
     def lower(self, model: Model, options: Given = None, *, progress: PhaseProgress | None = None) -> Artefact:
         from snncc.ir.graph import Graph
-        from snncc.targets.xylo.lowering import lower
+        from snncc.targets.xylo.lowering import lower, lowering_settings
         from snncc.targets.xylo.package import package
 
         opts = self._options(options, "lower")

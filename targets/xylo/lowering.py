@@ -295,6 +295,11 @@ def candidate_rules(sources: list[_Source], rule: str, chip: XyloChip) -> list[t
     return out
 
 
+def lowering_settings(options: Any) -> dict[str, Any]:
+    """A target option record (``capabilities.XyloOptions``) as the settings ``lower`` reads (None: its default)."""
+    return {k: v for k, v in options.as_dict().items() if k != "source" and v is not None}
+
+
 def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     """Lower ``graph`` for a Xylo chip. Options: chip (a key of ``chip.CHIPS``, default "syns61201"), rule
     (RULES), allow_reset_change, calibration (an array (B, T, C) of 0/1 spikes) or calibration_samples /

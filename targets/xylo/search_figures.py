@@ -78,9 +78,8 @@ class XyloHardware:
         """Lower ``graph`` for the chip of ``options``; ``emulate_samples`` > 0: the emulated accuracy on the
         first that many of ``inputs`` (B, T, C) and ``labels`` (``estimate_samples`` is unused: nothing is
         estimated from inputs)."""
-        from snncc.targets.xylo.capabilities import lowering_settings
         from snncc.targets.xylo.chip import get_chip
-        from snncc.targets.xylo.lowering import lower
+        from snncc.targets.xylo.lowering import lower, lowering_settings
         from snncc.targets.xylo.rules import real_time
 
         started = time.perf_counter()
