@@ -62,6 +62,7 @@ def run_command(
     device: str = typer.Option("auto", "--device", help="auto (CUDA when available), cpu, cuda or cuda:N."),
     threads: int = typer.Option(1, "--threads", help="Torch CPU threads."),
     heartbeat: int = typer.Option(30, "--heartbeat", help="Seconds between a running trial's heartbeats; a trial silent for 2x+1 is re-queued."),
+    target: str = typer.Option("loihi", "--target", "-t", help="Target whose hardware figures cost each trial (its objectives: loihi energy, cores, ...; xylo neurons, feasible, real_time_margin)."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bars."),
     json_out: bool = typer.Option(False, "--json", help="Print the run summary as JSON."),
 ) -> None:
@@ -77,7 +78,7 @@ def run_command(
                      subset=subset, seed=seed, val_fraction=val_fraction, select=select, hidden=hidden,
                      batch_size=batch_size, energy_samples=energy_samples, emulate=emulate, pruner=pruner,
                      startup=startup, preset=preset, storage=storage, workdir=workdir, device=device,
-                     threads=threads, heartbeat=heartbeat,
+                     threads=threads, heartbeat=heartbeat, target=target,
                      view=None if (quiet or json_out) else RichStudyView(err_console))
     if json_out:
         print_json(result.as_dict())

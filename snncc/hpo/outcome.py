@@ -17,18 +17,21 @@ from snncc.errors import SnnccError
 ALIASES = {"pareto": ("accuracy", "energy", "cores")}
 
 
-def directions() -> dict[str, str]:
+def directions(target: str | None = None) -> dict[str, str]:
     """Objective -> "maximize" | "minimize": accuracy, and the search target's hardware objectives
-    (``hardware.hardware_costs().objectives``: Loihi's emulated_accuracy, energy, cores, synops, delay)."""
-    from snncc.hpo.hardware import hardware_costs
+    (``hardware.hardware_costs(target).objectives``; None: ``hardware.SEARCH_TARGET``, Loihi's
+    emulated_accuracy, energy, cores, synops, delay; Xylo's neurons, feasible, real_time_margin, ...)."""
+    from snncc.hpo.hardware import SEARCH_TARGET, hardware_costs
 
-    return {"accuracy": "maximize", **{name: o.direction for name, o in hardware_costs().objectives.items()}}
+    costs = hardware_costs(target or SEARCH_TARGET)
+    return {"accuracy": "maximize", **{name: o.direction for name, o in costs.objectives.items()}}
 
 
-def parse_objectives(text: str) -> tuple[str, ...]:
-    """``"accuracy,energy,cores"`` (or ``"pareto"``) -> the objective names, first one primary."""
+def parse_objectives(text: str, target: str | None = None) -> tuple[str, ...]:
+    """``"accuracy,energy,cores"`` (or ``"pareto"``) -> the objective names, first one primary; the
+    hardware objectives are ``target``'s (None: ``hardware.SEARCH_TARGET``)."""
     names: list[str] = []
-    known = directions()
+    known = directions(target)
     for part in (p.strip() for p in text.split(",")):
         for name in ALIASES.get(part, (part,)):
             if name not in known:
@@ -59,6 +62,7 @@ class TrialOutcome:
     worker: str
     train_seconds: float
     notes: list = field(default_factory=list)
+    target: str = "loihi"                # whose hardware figures ``hardware`` holds (studies before it: Loihi)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -69,7 +73,7 @@ class TrialOutcome:
         hw = self.hardware or {}
         if name == "accuracy":
             return float(self.accuracy)
-        v = hw.get(hardware_costs().objectives[name].key)
+        v = hw.get(hardware_costs(self.target).objectives[name].key)
         if v is None:
             raise SnnccError(f"objective {name!r} needs the hardware figures"
                              + (" with --emulate > 0" if name == "emulated_accuracy" else ""), field="--objectives")

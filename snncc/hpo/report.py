@@ -117,7 +117,7 @@ class HpoReport:
         from snncc.hpo.hardware import hardware_costs
         from snncc.log_axis import readable_log_axis
 
-        published = hardware_costs().published     # a measurement to show beside the trials, if any
+        published = hardware_costs(self.plan.get("target") or "loihi").published     # a measurement to show beside the trials, if any
 
         done = [r for r in self.rows if r.accuracy is not None and r.energy_uj is not None]
         front = [r for r in done if r.number in set(self.front)]

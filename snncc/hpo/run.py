@@ -51,6 +51,7 @@ class HpoRequest:
     workdir: str = "hpo"
     device: str = "auto"
     heartbeat: int = 30
+    target: str = "loihi"             # whose hardware figures cost each trial
 
 
 def _anneal_plan(req: HpoRequest, source) -> StudyPlan:
@@ -67,7 +68,7 @@ def _anneal_plan(req: HpoRequest, source) -> StudyPlan:
                      subset=req.subset, seed=req.seed, val_fraction=req.val_fraction, select=req.select,
                      batch_size=req.batch_size, n_hidden=req.n_hidden, energy_samples=req.energy_samples,
                      emulate_samples=req.emulate_samples, pruner=req.pruner, n_startup=req.n_startup,
-                     enqueue_preset=req.enqueue_preset)
+                     enqueue_preset=req.enqueue_preset, target=req.target)
 
 
 def check_request(req: HpoRequest) -> None:

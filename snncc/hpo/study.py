@@ -61,6 +61,7 @@ class StudyPlan:
     n_startup: int = 3                # anneal: prior draws after each (re)initialisation
     enqueue_preset: bool = True       # anneal: the paper's preset for the threshold as trial 0
     from_study: str | None = None     # grid: the step-1 study it is centred on
+    target: str = "loihi"             # whose ``hardware`` capability costs each trial (its objectives)
 
     # fields a rerun may change without changing the study
     RUNTIME = ("n_trials",)
@@ -81,7 +82,7 @@ class StudyPlan:
 
     @property
     def directions(self) -> list[str]:
-        known = directions()
+        known = directions(self.target)
         return [known[o] for o in self.objectives]
 
     @property
@@ -267,7 +268,7 @@ def best_params(study, objective: str = "accuracy") -> dict:
         if not o:
             continue
         v = TrialOutcome(**o).value(objective)
-        sign = 1 if directions()[objective] == "maximize" else -1
+        sign = 1 if directions(plan.target if plan is not None else None)[objective] == "maximize" else -1
         if best is None or sign * v > best[0]:
             best = (sign * v, o["params"])
     if best is None:

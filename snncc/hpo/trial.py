@@ -90,9 +90,9 @@ class TrialObjective:
         inputs = data.inputs[held].numpy()
         labels = data.labels[held].numpy()
         if self.view is not None:
-            self.view.trial_phase("compiling for Loihi, estimating energy"
+            self.view.trial_phase(f"compiling for {plan.target}, measuring its hardware figures"
                                   + (", emulating" if plan.emulate_samples else ""))
-        hw = hardware_figures(ckpt, inputs, labels, plan.energy_samples, plan.emulate_samples)
+        hw = hardware_figures(ckpt, inputs, labels, plan.energy_samples, plan.emulate_samples, target=plan.target)
         accuracy = h["val_accuracy"] if plan.select == "val" else h["test_accuracy"]
         outcome = TrialOutcome(
             params=hp.as_dict(), accuracy=float(accuracy), selected_on=plan.select,
@@ -100,7 +100,7 @@ class TrialObjective:
             epochs_run=int(h["epochs_run"]), hardware=hw.as_dict(), checkpoint=str(ckpt),
             synthetic_data=bool(self.source.synthetic), worker=self.worker, train_seconds=train_seconds,
             notes=(["SYNTHETIC data"] if self.source.synthetic else [])
-            + (["selected on TEST (optimistic)"] if plan.select == "test" else []))
+            + (["selected on TEST (optimistic)"] if plan.select == "test" else []), target=plan.target)
         trial.set_user_attr("outcome", outcome.as_dict())
         values_out = [outcome.value(o) for o in plan.objectives]
         if self.view is not None:

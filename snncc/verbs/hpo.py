@@ -50,12 +50,14 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
             seed: int = 0, val_fraction: float = 0.2, select: str = "val", hidden: int | None = None,
             batch_size: int = 128, energy_samples: int = 16, emulate: int = 0, pruner: str = "median",
             startup: int = 3, preset: bool = True, storage: str | None = None, workdir: str | os.PathLike = "hpo",
-            device: str = "auto", threads: int = 1, heartbeat: int = 30, view: StudyView | None = None) -> HpoRunResult:
+            device: str = "auto", threads: int = 1, heartbeat: int = 30, target: str = "loihi",
+            view: StudyView | None = None) -> HpoRunResult:
     """Run or resume the search ``name`` (step 2's study is NAME-grid) in this worker (see docs/hpo.md).
 
     ``objectives``: a comma list or sequence (``pareto`` = accuracy,energy,cores); ``ranges``:
     ``KEY=LOW:HIGH`` / ``KEY=VALUE`` overrides (``--range``); ``workdir`` is ``--dir``;
-    ``storage`` an Optuna URL (default: SQLite in ``workdir``). ``view``: the search's progress
+    ``storage`` an Optuna URL (default: SQLite in ``workdir``); ``target``: whose ``hardware`` capability
+    costs each trial (its objectives are the hardware objectives ``objectives`` may name). ``view``: the search's progress
     callbacks, a ``snncc.hpo.progress.StudyView`` (study_start, study_update, waiting,
     trial_start, trial_epoch, trial_phase, trial_done, trial_error, close; the CLI draws them as
     rich bars); None: silent. Ctrl-C re-queues the running trial and raises
@@ -75,11 +77,11 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
     if not isinstance(objectives, str):
         objectives = ",".join(objectives)
     req = HpoRequest(name=name, data=str(data), threshold=threshold, step=step, trials=trials, restarts=restarts,
-                     grid_span=grid_span, objectives=parse_objectives(objectives), ranges=list(ranges or []),
+                     grid_span=grid_span, objectives=parse_objectives(objectives, target), ranges=list(ranges or []),
                      kind=model, epochs=epochs, subset=subset, seed=seed, val_fraction=val_fraction, select=select,
                      batch_size=batch_size, n_hidden=hidden, energy_samples=energy_samples, emulate_samples=emulate,
                      pruner=pruner, n_startup=startup, enqueue_preset=preset, storage=storage, workdir=str(workdir),
-                     device=device, heartbeat=heartbeat)
+                     device=device, heartbeat=heartbeat, target=target)
     before = torch.get_num_threads()
     torch.set_num_threads(threads)
     try:

@@ -100,6 +100,7 @@ def test_two_workers_share_one_study(braille_dir, tmp_path):
     (["--storage", "sqlite:////no/such/dir/x.db"], "--storage"),
     (["--range", "tau_mem=0.2:0.01"], "--range"),
     (["--objectives", "speed"], "--objectives"),
+    (["--target", "xylo", "--objectives", "accuracy,energy"], "unknown objective 'energy' (known: accuracy, neurons"),
     (["--select", "train"], "--select"),
     (["--hidden", "1000000000"], "--hidden: 1,000,000,000 hidden neurons: the input weights"),   # not 192 GB
 ])

@@ -44,3 +44,23 @@ def test_a_model_the_chip_cannot_hold_is_infeasible_not_an_error(tmp_path):
     big = costs.figures(graph_from_object(small_rsnn(n_hidden=130)), x, np.zeros(2, int),
                         dict(QUICK, chip="syns63300")).as_dict()
     assert big["feasible"] == 0 and "128" in big["refusal"] and big["chip"] == "syns63300"
+
+
+def test_a_study_takes_the_xylo_targets_objectives():
+    import pytest
+
+    from snncc.errors import SnnccError
+    from snncc.hpo.outcome import TrialOutcome, directions, parse_objectives
+    from snncc.hpo.study import StudyPlan
+
+    assert parse_objectives("accuracy,feasible,real_time_margin", "xylo") == ("accuracy", "feasible", "real_time_margin")
+    assert directions("xylo")["neurons"] == "minimize" and directions()["energy"] == "minimize"   # default: Loihi
+    with pytest.raises(SnnccError, match="unknown objective 'energy'"):
+        parse_objectives("accuracy,energy", "xylo")
+    plan = StudyPlan(name="s", step="anneal", data="d", threshold=1, objectives=("accuracy", "neurons"), target="xylo")
+    assert plan.directions == ["maximize", "minimize"]
+    assert StudyPlan.from_dict({k: v for k, v in plan.as_dict().items() if k != "target"}).target == "loihi"
+    out = TrialOutcome(params={}, accuracy=0.5, selected_on="val", val_accuracy=0.5, test_accuracy=0.5, best_epoch=1,
+                       epochs_run=1, hardware={"hidden_neurons": 24, "feasible": 1}, checkpoint="c",
+                       synthetic_data=True, worker="w", train_seconds=0.0, target="xylo")
+    assert out.value("neurons") == 24 and out.value("feasible") == 1
