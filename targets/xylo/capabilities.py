@@ -4,6 +4,8 @@ capabilities, each importing its work on use.
 This module imports nothing heavy (not even numpy): listing or choosing the target is instant.
 
     lower    -> XyloArtefact  (lowering.py, package.py: spec.npz + manifest.json + README + board script)
+    check    -> XyloCheckRecord (check.py: the written artefact vs the float model on labelled data, loss by cause)
+    agree    -> XyloCheckRecord (check.py: the same without labels: agreement per stage, the float ceiling)
     emulate  -> XyloEmulation (run_artefact.py: a written artefact on inputs, bit-exact, the manifest's feed)
     map      -> XyloUsage     (usage.py: neurons, synapses, fan-out against each chip's limits; real time)
     estimate -> XyloUsage     (usage.py: the same with event rates measured on the given inputs; no energy)
@@ -19,18 +21,21 @@ from typing import TYPE_CHECKING
 from snncc.errors import SnnccError
 from snncc.progress import Progress as PhaseProgress
 from snncc.targets.base import (
-    Artefact, CoreMap, Emulation, Given, HardwareCosts, Progress, Record, TargetOptions, option, target_options,
+    AgreementOptions, Artefact, CoreMap, Emulation, Given, HardwareCosts, Progress, Record, TargetOptions,
+    capability_options, option, target_options,
 )
 
 if TYPE_CHECKING:
     import numpy as np
 
+    from snncc.ir.graph import Graph
     from snncc.targets.base import Model
 
 CHIP_KEYS = ("syns61201", "syns63300", "syns65302")            # = chip.CHIPS (tested)
 RULES = ("auto", "direct", "single", "single-identified")      # = lowering.RULES (tested)
 MODEL_VERBS = ("lower", "check", "agree", "map")
-RANDOM_STEPS = 256                                             # steps of report's random samples
+RANDOM_STEPS = 256                                             # steps of report's and agree's random samples
+DEFAULT_AGREEMENT_SAMPLES = 1000                               # a 95 % interval of about +-0.03
 
 
 @dataclass(frozen=True)
@@ -58,7 +63,7 @@ class XyloOptions(TargetOptions):
 
 
 class XyloTarget:
-    """Capabilities: lower, emulate, map, estimate (report), hardware (hpo)."""
+    """Capabilities: lower, check, agree, emulate, map, estimate (report), hardware (hpo)."""
 
     name = "xylo"
     description = "SynSense Xylo (Audio 2, IMU, Audio 3): spec.npz for XyloSim/samna, checked by a bit-exact emulator"
@@ -90,6 +95,54 @@ class XyloTarget:
         found: Artefact = package(low, opts.source)
         if progress is not None:
             progress(2, 2, "done")
+        return found
+
+    def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
+              artefact: Path | None = None, data: str | None = None, synthetic: bool = False,
+              progress: Progress | None = None) -> Record:
+        """The written artefact ``artefact`` (None: the one compile would write, in a temporary directory)
+        against the float model on a labelled data set: accuracy and agreement per stage, loss by cause."""
+        from snncc.targets.xylo.check import check_written, open_or_compile
+
+        opts = self._options(options, "check")
+        written, tmp = open_or_compile(graph, artefact, lambda: self.lower(graph, opts))
+        try:
+            what = f"{len(labels)} labelled samples of {data or 'the data set'}" + (" (SYNTHETIC)" if synthetic else "")
+            found: Record = check_written(graph, written, inputs, labels, what)
+        finally:
+            if tmp is not None:
+                tmp.cleanup()
+        if progress is not None:
+            progress(len(labels))
+        return found
+
+    def agree(self, graph: Graph, inputs: np.ndarray | None, options: Given = None,
+              agreement: AgreementOptions | None = None, *, artefact: Path | None = None, data: str | None = None,
+              progress: Progress | None = None) -> Record:
+        """The written artefact's agreement with the float model without labels, per stage, with the float
+        model's own ceiling under ``agreement.noise``; no inputs: seeded random spikes (SYNTHETIC)."""
+        from snncc.targets.xylo.check import check_written, open_or_compile
+
+        how = agreement or capability_options(AgreementOptions)
+        opts = self._options(options, "agree")
+        written, tmp = open_or_compile(graph, artefact, lambda: self.lower(graph, opts))
+        try:
+            if inputs is None:
+                import numpy as np
+
+                samples = how.samples or DEFAULT_AGREEMENT_SAMPLES
+                x = (np.random.default_rng(0).random((samples, RANDOM_STEPS, written.spec.n_in))
+                     < how.density).astype(np.uint8)
+                what = (f"{samples} seeded random spike trains (density {how.density:g}, seed 0), {RANDOM_STEPS} steps "
+                        "(SYNTHETIC)")
+            else:
+                x, what = inputs, f"{len(inputs)} samples of {data or 'the given inputs'} (no labels used)"
+            found: Record = check_written(graph, written, x, None, what, noise=how.noise)
+        finally:
+            if tmp is not None:
+                tmp.cleanup()
+        if progress is not None:
+            progress(int(len(x)))
         return found
 
     def emulate(self, bundle: Path, inputs: np.ndarray, *, record: str = "outputs", stream: bool = False,
