@@ -38,8 +38,17 @@ class TrialRow:
     checkpoint: str | None = None
     worker: str | None = None
     error: str | None = None
+    hardware: dict | None = None            # the target's figures as recorded (HardwareFigures.as_dict())
+    target: str = "loihi"
 
     def value(self, name: str) -> float | None:
+        if self.target != "loihi":          # another target's objectives: keys of its figures
+            from snncc.hpo.hardware import hardware_costs
+
+            if name == "accuracy":
+                return self.accuracy
+            v = (self.hardware or {}).get(hardware_costs(self.target).objectives[name].key)
+            return None if v is None else float(v)
         return {"accuracy": self.accuracy, "energy": self.energy_uj, "cores": self.cores, "synops": self.synops,
                 "delay": self.delay_ms, "emulated_accuracy": self.emulated_accuracy}[name]
 
@@ -191,6 +200,7 @@ def trial_row(t) -> TrialRow:
         row.energy_uj, row.delay_ms = hw.get("energy_uj_per_sample"), hw.get("delay_ms_per_sample")
         row.emulated_accuracy, row.epochs_run = hw.get("emulated_accuracy"), out.epochs_run
         row.checkpoint, row.worker = out.checkpoint, out.worker
+        row.hardware, row.target = dict(hw), out.target
     if t.intermediate_values:
         row.last_intermediate = float(t.intermediate_values[max(t.intermediate_values)])
     elif attrs.get("epoch_metric"):
@@ -205,9 +215,9 @@ def front_of(rows: list[TrialRow]) -> list[int]:
     return sorted(r.number for r, k in zip(ok, ranks) if k == 0)
 
 
-def best_of(rows: list[TrialRow]) -> dict[str, int]:
+def best_of(rows: list[TrialRow], target: str | None = None) -> dict[str, int]:
     out = {}
-    for name, direction in directions().items():
+    for name, direction in directions(target).items():
         cand = [r for r in rows if r.value(name) is not None]
         if cand:
             sign = -1.0 if direction == "maximize" else 1.0
@@ -237,6 +247,7 @@ def study_report(storage, name: str, storage_label: str = "") -> HpoReport:
     counts = {"complete": b.complete, "pruned": b.pruned, "failed": b.failed, "killed and re-queued": b.retried,
               "running": b.running, "waiting": b.waiting, "budget": b.n_trials,
               "cancelled over budget": b.cancelled}
-    return HpoReport(study=name, storage=storage_label, plan=plan_d, counts=counts, rows=rows, best=best_of(rows),
+    return HpoReport(study=name, storage=storage_label, plan=plan_d, counts=counts, rows=rows,
+                     best=best_of(rows, plan_d.get("target")),
                      front=front_of(rows), paper_presets={th: p.as_dict() for th, p in PRESETS.items()},
                      synthetic_data=synthetic, notes=notes)

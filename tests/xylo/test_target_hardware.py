@@ -64,3 +64,13 @@ def test_a_study_takes_the_xylo_targets_objectives():
                        epochs_run=1, hardware={"hidden_neurons": 24, "feasible": 1}, checkpoint="c",
                        synthetic_data=True, worker="w", train_seconds=0.0, target="xylo")
     assert out.value("neurons") == 24 and out.value("feasible") == 1
+
+
+def test_the_report_reads_a_xylo_studys_figures():
+    from snncc.hpo.report import TrialRow, best_of
+
+    rows = [TrialRow(number=k, state="COMPLETE", params={}, accuracy=acc, target="xylo",
+                     hardware={"hidden_neurons": n, "feasible": f, "real_time_margin": m})
+            for k, (acc, n, f, m) in enumerate([(0.6, 40, 1, 3.0), (0.7, 450, 0, 0.0), (0.5, 24, 1, 5.0)])]
+    assert rows[0].value("neurons") == 40 and rows[1].value("feasible") == 0
+    assert best_of(rows, "xylo") == {"accuracy": 1, "neurons": 2, "feasible": 0, "real_time_margin": 2}
