@@ -8,7 +8,7 @@ to the graph's dt (from_nir guesses dt per layer from r = tau / dt) -> ``syns612
 
     /work/venvs/rockpool/bin/python bench/xylo_rockpool_flow.py GRAPH.nir --dt 1e-4 --inputs x.npz --out counts.npz
 
-``x.npz`` holds ``x`` (B, T, C) spike counts; ``counts.npz`` gets ``counts`` (B, Nout) and the spec's
+``x.npz`` holds ``x`` (B, T, C) spike counts; ``counts.npz`` gets ``counts`` (B, Nout) and the network spec's
 dashes and thresholds. ``rockpool.devices.xylo``'s package import needs samna (not installable):
 the package is bound bare and only ``syns61201`` is imported.
 """

@@ -98,7 +98,7 @@ def deployed_graph(graph: Graph, manifest: dict[str, Any]) -> Graph:
 
 
 def twin_counts(spec, x: np.ndarray, pad: int, lag: int, capped: bool = True) -> np.ndarray:
-    """Output counts of the spec's float twin (``twin.py``); ``capped`` False: its hidden neurons may fire any
+    """Output counts of the network spec's float twin (``twin.py``); ``capped`` False: its hidden neurons may fire any
     number of events per step (only where the twin allows several: a rule that fires at most once by design
     keeps its cap, which then clips nothing the chip would not)."""
     from snncc.ir.simulate import simulate

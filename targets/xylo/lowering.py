@@ -18,7 +18,7 @@ hold (``structure.py``); subtract reset (a zero reset is refused unless ``allow_
 subtract is deployed and the change recorded); refractory 1; recurrent IR delay 1. Populations run
 ``timing.shifts`` steps late; the chip is fed ``input_pad`` zero steps before a sample and read from
 ``output_lag`` on. The rule (``rule``) places hidden populations ``direct`` or ``single``; ``auto``
-measures every candidate's argmax agreement with the float graph, the spec run in snncc's bit-exact
+measures every candidate's argmax agreement with the float graph, the network spec run in snncc's bit-exact
 emulator, on calibration inputs (their
 second half; the first half fits) and keeps the best (ties: the first listed, the simpler), then fits
 the chosen rule again on all of them.
@@ -55,7 +55,7 @@ PAIRS_TRIED = 2
 
 @dataclass
 class XyloLowered:
-    """What lowering produced: the spec, how the float graph maps onto it, and how well it agrees."""
+    """What lowering produced: the network spec, how the float graph maps onto it, and how well it agrees."""
 
     spec: dict[str, Any]
     chip: str
@@ -65,7 +65,7 @@ class XyloLowered:
     populations: list[PopulationRecord]
     trained: Graph                       # the model as given
     reference: Graph                     # the float graph deployed (its reset changed if allowed)
-    twin: Graph                          # the spec as an IR graph (chip time)
+    twin: Graph                          # the network spec as an IR graph (chip time)
     candidates: dict[str, dict[str, Any]] = field(default_factory=dict)   # rule -> selection agreement
     changes: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
@@ -74,7 +74,7 @@ class XyloLowered:
 
     @property
     def xylo_spec(self):
-        """The spec as an ``XyloSpec`` (checked; ``save_npz`` writes spec.npz)."""
+        """The network spec as an ``XyloSpec`` (checked; ``save_npz`` writes spec.npz)."""
         from snncc.targets.xylo.spec import XyloSpec
 
         return XyloSpec(**self.spec)
@@ -183,7 +183,7 @@ def _float_counts(ref: Graph, x: np.ndarray, last: str) -> np.ndarray:
 
 
 def twin_counts(twin: Graph, timing: XyloTiming, x: np.ndarray) -> np.ndarray:
-    """Output spike counts of the spec's float twin over the IR's T steps of ``x``."""
+    """Output spike counts of the network spec's float twin over the IR's T steps of ``x``."""
     from snncc.ir.simulate import simulate
     from snncc.threads import one_thread
 
@@ -367,7 +367,7 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
                        trained=trained, reference=ref, twin=twin, candidates=candidates, changes=changes, notes=notes,
                        calibration={"inputs": _describe(opts, x), "fit_samples": int(fit_x.shape[0]),
                                     "selection_samples": int(sel_x.shape[0]), "metric": "argmax agreement with the "
-                                    "float graph over clear-winner samples, of the spec run in "
+                                    "float graph over clear-winner samples, of the network spec run in "
                                     + ("the given emulator" if emulator is not None else "snncc's bit-exact emulator")},
                        real_time=rt.as_dict())
 

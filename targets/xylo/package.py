@@ -1,6 +1,6 @@
 """A lowered Xylo model (``lowering.XyloLowered``) -> its artefact files (``artefact.XyloArtefact``).
 
-Before anything is written, the spec is serialised to spec.npz bytes, read back with
+Before anything is written, the network spec is serialised to spec.npz bytes, read back with
 ``XyloSpec.load_npz`` (``np.load(allow_pickle=False)``) and run in snncc's bit-exact emulator
 beside the in-memory spec on seeded inputs: the file must give the same output spikes, else the
 compilation fails.

@@ -4,7 +4,7 @@ Per trial the model is lowered like ``snncc compile --target xylo``. A model tha
 of the chip is not an error here but a figure: ``feasible`` 0 with the rule's line, the neurons counted
 from the graph. A feasible one gives the hidden and output neurons and synapses it uses, and the
 real-time margin (dt over the worst-case step time from per-operation cycle costs: an ESTIMATE, not a
-measurement), and, with ``emulate_samples`` > 0, the accuracy of the spec in snncc's bit-exact emulator
+measurement), and, with ``emulate_samples`` > 0, the accuracy of the network spec in snncc's bit-exact emulator
 on that many labelled samples. No energy figure: none is published for these networks.
 """
 

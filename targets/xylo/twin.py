@@ -1,6 +1,6 @@
 """A Xylo spec as an IR graph: the chip's order and delays with its decays read as 1 - 2^-dash.
 
-The float twin of a spec dict (``lowering.py``'s contract) says what the spec means in the IR's
+The float twin of a spec dict (``lowering.py``'s contract) says what the network spec means in the IR's
 terms; it equals the chip except for the chip's integer rounding of decays (x >> d rounds toward
 -inf, and a non-zero state decays by at least 1) and its 16-bit saturation:
 
