@@ -116,7 +116,10 @@ compare (its test suite runs XyloSim as the oracle).
 cannot be installed here. What differs on the board: samna's `config_from_specification` names the
 hidden bias `bias_hidden` (it accepts any keyword, so `bias=` would be dropped silently), and the
 Xylo Audio 2 board configuration takes `weights_out` with one row per hidden neuron (the script pads).
-These names were read for Xylo Audio 2 only.
+Rockpool 3.1's `config_from_specification` of all three chips names the hidden bias `bias_hidden`;
+the padding of `weights_out` was read for Xylo Audio 2 (Xylo IMU and Xylo Audio 3 keep only the last
+128 rows, so a network there must read its outputs from at most 128 hidden neurons, as snncc's design
+rules require).
 """
 
 
