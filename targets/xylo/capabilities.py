@@ -4,6 +4,7 @@ capabilities, each importing its work on use.
 This module imports nothing heavy (not even numpy): listing or choosing the target is instant.
 
     lower    -> XyloArtefact  (lowering.py, package.py: spec.npz + manifest.json + README + board script)
+    identify -> ArtefactIdentity (written.py: is this directory a Xylo artefact, from which model)
     check    -> XyloCheckRecord (check.py: the written artefact vs the float model on labelled data, loss by cause)
     agree    -> XyloCheckRecord (check.py: the same without labels: agreement per stage, the float ceiling)
     emulate  -> XyloEmulation (run_artefact.py: a written artefact on inputs, bit-exact, the manifest's feed)
@@ -28,6 +29,7 @@ from snncc.targets.base import (
 if TYPE_CHECKING:
     import numpy as np
 
+    from snncc.artefacts import ArtefactIdentity
     from snncc.ir.graph import Graph
     from snncc.targets.base import Model
 
@@ -95,6 +97,12 @@ class XyloTarget:
         found: Artefact = package(low, opts.source)
         if progress is not None:
             progress(2, 2, "done")
+        return found
+
+    def identify(self, path: Path) -> ArtefactIdentity | None:
+        from snncc.targets.xylo.written import identify_artefact
+
+        found: ArtefactIdentity | None = identify_artefact(path)
         return found
 
     def check(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,

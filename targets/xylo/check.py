@@ -145,7 +145,7 @@ class Stage:
 class XyloCheckRecord:
     """What the written artefact loses against the float model, stage by stage, and why (module doc)."""
 
-    artefact: str
+    artefact_path: str
     chip: str
     rule: str
     inputs: str
@@ -162,7 +162,7 @@ class XyloCheckRecord:
         return asdict(self)
 
     def render_text(self, console) -> None:
-        console.print(f"Xylo artefact {self.artefact} ({self.chip}, rule {self.rule}) on {self.inputs}", markup=False,
+        console.print(f"Xylo artefact {self.artefact_path} ({self.chip}, rule {self.rule}) on {self.inputs}", markup=False,
                       soft_wrap=True)
         for s in self.stages:
             a = measure.Agreement(**{k: s.agreement[k] for k in measure.Agreement.__dataclass_fields__})

@@ -68,3 +68,19 @@ def read_artefact(path: str | Path) -> WrittenXylo:
         raise SnnccError("its SHA-256 differs from the one manifest.json records (the file was changed)",
                          file=str(spec_path), field=SPEC)
     return WrittenXylo(path, manifest, XyloSpec.load_npz(spec_path))
+
+
+def identify_artefact(path: str | Path):
+    """``snncc.artefacts.ArtefactIdentity`` of the Xylo artefact at ``path`` (its four files, the source model's
+    hash it records), or None when ``path`` is no directory with an snncc Xylo manifest. Reads the manifest only."""
+    from snncc.artefacts import ArtefactIdentity
+    from snncc.targets.xylo.artefact import FILES
+
+    manifest = read_manifest(path)
+    if manifest is None:
+        return None
+    source = manifest.get("source") if isinstance(manifest.get("source"), dict) else {}
+    chip = manifest.get("chip") if isinstance(manifest.get("chip"), dict) else {}
+    return ArtefactIdentity(target="xylo", path=str(path), files=sorted(FILES),
+                            source_sha256=source.get("sha256") or None, source_file=source.get("file") or None,
+                            description=f"Xylo artefact ({chip.get('name', 'Xylo')}: spec.npz for XyloSim / samna)")

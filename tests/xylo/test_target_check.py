@@ -58,3 +58,27 @@ def test_check_with_labels_measures_a_written_artefact(tmp_path, capsys):
         if isinstance(op, LIF):
             a, b = op.decays(dep.dt)
             assert np.allclose(a, kernels.grid(kernels.nearest_dash(a))) and np.allclose(b, kernels.grid(kernels.nearest_dash(b)))
+
+
+def test_check_measures_the_artefact_given_and_names_its_hash(tmp_path, capsys):
+    """--artefact: the Xylo target recognises its directory (identify), the hash is compile's, and an artefact
+    compiled from another model is refused in one line."""
+    from snncc.ir.serialize import save_graph
+
+    from xylo_models import chain
+
+    model, other = tmp_path / "a.snnir", tmp_path / "b.snnir"
+    save_graph(chain(np.random.default_rng(0)), model)
+    save_graph(chain(np.random.default_rng(1)), other)
+    art = tmp_path / "a.xylo"
+    code, out, err = run_cli(["compile", model, "-o", art, "--rule", "direct", "--calibration-samples", "12",
+                              "--time-steps", "48", "--json"], capsys)
+    assert code == 0, err
+    sha = json.loads(out)["sha256"]
+    code, out, err = run_cli(["check", model, "--artefact", art, "--samples", "30", "--json"], capsys)
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["artefact"]["target"] == "xylo" and d["artefact"]["sha256"] == sha and not d["artefact"]["compiled_by_check"]
+    assert [s["name"] for s in d["stages"]] == list(STAGES)
+    code, _, err = run_cli(["check", other, "--artefact", art, "--samples", "30"], capsys)
+    assert code == 2 and "was compiled from another model" in err and len(err.strip().splitlines()) == 1
