@@ -83,6 +83,21 @@ def identify_own(target: Any, path: str | Path) -> ArtefactIdentity | None:
     return found if isinstance(found, ArtefactIdentity) else None
 
 
+def target_for(path: str | Path, target: str | None, default: str = "loihi") -> Any:
+    """The target ``target`` names; None: the one installed target that recognises the artefact at ``path``
+    (capability ``identify``), else ``default`` (whose reader then says what the file is not)."""
+    from snncc.targets import get_target, loaded_targets
+
+    if target is not None:
+        return get_target(target)
+    path = Path(path)
+    if path.exists():
+        found = [t for t in loaded_targets() if identify_own(t, path) is not None]
+        if len(found) == 1:
+            return found[0]
+    return get_target(default)
+
+
 def identify(path: str | Path, target: str | None = None) -> tuple[Any, ArtefactIdentity]:
     """(target object, identity) of the artefact at ``path``, asking every installed target that offers
     ``identify``. ``target`` (the user's --target) must agree with the artefact's, else one line."""

@@ -31,7 +31,7 @@ def emulate_command(
     record: str = typer.Option("outputs", "--record", help="'outputs' or 'all' (every layer's spikes, voltage, current)."),
     stream: bool = typer.Option(False, "--stream", help="The paper's protocol: one continuous run, --gap blank steps between samples."),
     gap: Optional[int] = typer.Option(None, "--gap", help="Blank steps between samples in --stream mode (default 100)."),
-    target: str = typer.Option("loihi", "--target", "-t", help="Target whose emulator runs the bundle."),
+    target: Optional[str] = typer.Option(None, "--target", "-t", help="Target whose emulator runs the bundle (default: the target whose artefact it is, else loihi)."),
     json_out: bool = typer.Option(False, "--json", help="Print a summary as JSON."),
 ) -> None:
     """Run a Loihi bundle bit-exactly (integer u, v; truncating decays; wrap and clip counted)."""

@@ -20,7 +20,7 @@ from snncc.cli.target_flags import with_target_flags
 def map_command(
     source: Path = typer.Argument(..., help="Loihi bundle (HDF5) or a model file (.pt/.pth/.ckpt/.snnir/.nir), lowered with the Loihi target first."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw utilisation per core as a PNG (written atomically)."),
-    target: str = typer.Option("loihi", "--target", "-t", help="Target whose cores to map onto."),
+    target: Optional[str] = typer.Option(None, "--target", "-t", help="Target whose cores to map onto (default: the target whose artefact it is, else loihi)."),
     json_out: bool = typer.Option(False, "--json", help="Print the core map as JSON."),
     target_options: dict = {},
 ) -> None:

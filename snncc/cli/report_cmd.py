@@ -24,7 +24,7 @@ def report_command(
     samples: Optional[int] = typer.Option(None, "--samples", help="Without data: how many random input samples (default 8)."),
     rate: Optional[float] = typer.Option(None, "--rate", help="Without data: spike probability per input channel and step (default 0.05)."),
     seed: Optional[int] = typer.Option(None, "--seed", help="Without data: random seed (default 0)."),
-    target: str = typer.Option("loihi", "--target", "-t", help="Target whose energy to estimate."),
+    target: Optional[str] = typer.Option(None, "--target", "-t", help="Target whose energy to estimate (default: the target whose artefact it is, else loihi)."),
     json_out: bool = typer.Option(False, "--json", help="Print the report as JSON."),
 ) -> None:
     """ESTIMATE (not a measurement) of energy and delay per sample, beside the paper's measurement."""

@@ -65,18 +65,19 @@ class EmulateRecord:
         console.print(f"wrote {one_line(self.output)}", markup=False)
 
 
-def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path, target: str = "loihi",
+def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path, target: str | None = None,
                    record: str = "outputs", stream: bool = False, gap: int | None = None,
                    progress: VerbProgress | None = None) -> EmulateRecord:
     """Emulate ``bundle`` on the spikes in ``input`` (.npy) and write the results to ``output`` (.npz,
     atomically). ``stream``: one continuous run with ``gap`` blank steps (default 100) between samples."""
     from snncc.atomic import write_npz_atomic
     from snncc.inputs import load_array
-    from snncc.targets import capability, get_target
+    from snncc.artefacts import target_for
+    from snncc.targets import capability
 
     if record not in ("outputs", "all"):
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
-    emulate = capability(get_target(target), "emulate")
+    emulate = capability(target_for(bundle, target), "emulate")
     x = load_array(input, npz_inputs=False)
     total = int(x.shape[0]) if x.ndim in (3, 5) else 1   # (B, T, C) or (B, T, C, H, W) frames
     emulation = emulate(Path(bundle), x, record=record, stream=stream, gap=gap, source=str(input),

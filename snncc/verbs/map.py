@@ -29,14 +29,15 @@ class MapRecord:
             console.print(f"wrote {one_line(self.plot)}", markup=False)
 
 
-def map_cores(source: str | Path, *, target: str = "loihi", plot: str | Path | None = None,
+def map_cores(source: str | Path, *, target: str | None = None, plot: str | Path | None = None,
               **options: object) -> MapRecord:
     """The core map of ``source``; ``plot`` also draws utilisation per core as a PNG (atomically).
     ``options``: the target's for ``map`` (Loihi: ``timing``, ``scale``: they apply only when ``source``
     is a model file, lowered first)."""
-    from snncc.targets import capability, get_target, verb_options
+    from snncc.artefacts import target_for
+    from snncc.targets import capability, verb_options
 
-    tgt = get_target(target)
+    tgt = target_for(source, target)
     mapped = capability(tgt, "map")
     cmap = mapped(Path(source), verb_options(tgt, options, "map").target)
     if plot is not None:

@@ -16,14 +16,15 @@ if TYPE_CHECKING:
     from snncc.targets.base import Record
 
 
-def report_energy(bundle: str | Path, *, target: str = "loihi", energy: bool = False, data: str | Path | None = None,
+def report_energy(bundle: str | Path, *, target: str | None = None, energy: bool = False, data: str | Path | None = None,
                   input: str | Path | None = None, limit: int | None = None, samples: int | None = None,
                   rate: float | None = None, seed: int | None = None, progress: VerbProgress | None = None) -> Record:
     """The target's energy report (``as_dict``, ``render_text``) for ``bundle``. Inputs: ``data`` (a data
     set .npz), ``input`` (a spike .npy), or ``samples`` seeded random samples (default 8) with spike
     probability ``rate`` (default 0.05) per channel and step, ``seed`` (default 0)."""
     from snncc.inputs import RandomSpikes, load_array
-    from snncc.targets import capability, get_target
+    from snncc.artefacts import target_for
+    from snncc.targets import capability
 
     if not energy:
         raise SnnccError("nothing to report without it: pass --energy", field="--energy")
@@ -35,7 +36,7 @@ def report_energy(bundle: str | Path, *, target: str = "loihi", energy: bool = F
         for flag, value in (("--samples", samples), ("--rate", rate), ("--seed", seed)):
             if value is not None:
                 raise SnnccError("applies only to random inputs, not with --data or --input", field=flag)
-    estimate = capability(get_target(target), "estimate")
+    estimate = capability(target_for(bundle, target), "estimate")
     x: np.ndarray | RandomSpikes
     if data is not None:
         from snncc.data.dataset_file import load_dataset

@@ -197,3 +197,17 @@ def test_declared_choices_are_the_chips_and_rules():
     from snncc.targets.xylo.lowering import RULES as LOWERING_RULES
 
     assert CHIP_KEYS == tuple(CHIPS) and RULES == LOWERING_RULES
+
+
+def test_emulate_map_and_report_find_the_target_from_the_artefact(compiled, tmp_path, capsys):
+    _, out, x_path = compiled
+    code, _, err = run_cli(["emulate", out, "--input", x_path, "-o", tmp_path / "e.npz"], capsys)
+    assert code == 0, err
+    with np.load(tmp_path / "e.npz", allow_pickle=False) as got:
+        assert got["output_spikes"].shape == (5, 40, 3)
+    code, text, err = run_cli(["map", out, "--json"], capsys)
+    assert code == 0 and json.loads(text)["target"] == "xylo", err
+    code, text, err = run_cli(["report", out, "--energy", "--input", x_path, "--json"], capsys)
+    assert code == 0 and "no energy" in json.loads(text)["energy"], err
+    code, _, err = run_cli(["emulate", tmp_path / "nothing.xylo", "--input", x_path, "-o", tmp_path / "f.npz"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and not (tmp_path / "f.npz").exists()
