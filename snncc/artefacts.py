@@ -83,16 +83,25 @@ def identify_own(target: Any, path: str | Path) -> ArtefactIdentity | None:
     return found if isinstance(found, ArtefactIdentity) else None
 
 
-def target_for(path: str | Path, target: str | None, default: str = "loihi") -> Any:
-    """The target ``target`` names; None: the one installed target that recognises the artefact at ``path``
-    (capability ``identify``), else ``default`` (whose reader then says what the file is not)."""
+def target_for(path: str | Path, target: str | None, capability: str, default: str = "loihi") -> Any:
+    """The target ``target`` names; None: the one installed target that has ``capability`` and recognises the
+    artefact at ``path`` (capability ``identify``), else ``default`` (whose reader then says in one line what
+    the file is, or is not)."""
     from snncc.targets import get_target, loaded_targets
 
     if target is not None:
         return get_target(target)
     path = Path(path)
     if path.exists():
-        found = [t for t in loaded_targets() if identify_own(t, path) is not None]
+        found = []
+        for t in loaded_targets():
+            if not callable(getattr(t, capability, None)):
+                continue
+            try:
+                if identify_own(t, path) is not None:
+                    found.append(t)
+            except SnnccError:            # a damaged file: the default reader names it in its refusal
+                continue
         if len(found) == 1:
             return found[0]
     return get_target(default)

@@ -77,7 +77,7 @@ def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path,
 
     if record not in ("outputs", "all"):
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
-    emulate = capability(target_for(bundle, target), "emulate")
+    emulate = capability(target_for(bundle, target, "emulate"), "emulate")
     x = load_array(input, npz_inputs=False)
     total = int(x.shape[0]) if x.ndim in (3, 5) else 1   # (B, T, C) or (B, T, C, H, W) frames
     emulation = emulate(Path(bundle), x, record=record, stream=stream, gap=gap, source=str(input),

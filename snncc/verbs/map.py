@@ -37,7 +37,7 @@ def map_cores(source: str | Path, *, target: str | None = None, plot: str | Path
     from snncc.artefacts import target_for
     from snncc.targets import capability, verb_options
 
-    tgt = target_for(source, target)
+    tgt = target_for(source, target, "map")
     mapped = capability(tgt, "map")
     cmap = mapped(Path(source), verb_options(tgt, options, "map").target)
     if plot is not None:

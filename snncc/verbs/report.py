@@ -36,7 +36,7 @@ def report_energy(bundle: str | Path, *, target: str | None = None, energy: bool
         for flag, value in (("--samples", samples), ("--rate", rate), ("--seed", seed)):
             if value is not None:
                 raise SnnccError("applies only to random inputs, not with --data or --input", field=flag)
-    estimate = capability(target_for(bundle, target), "estimate")
+    estimate = capability(target_for(bundle, target, "estimate"), "estimate")
     x: np.ndarray | RandomSpikes
     if data is not None:
         from snncc.data.dataset_file import load_dataset
