@@ -26,6 +26,8 @@ keeps that cap in ``uncapped`` (lifting it in float arithmetic, where V does not
 be the chip), so its multi-spike clipping is 0. How often each lossy rule of the core acted is counted by the literal emulator
 (``emulator.reference_run(count=True)``) on the first samples: current and membrane saturations,
 hidden and output neuron-steps whose events were clipped at the cap (31, 1), inputs clipped at 15.
+Liveness (``snncc.ir.liveness``): every float population's activity, and the chip's hidden and output
+neurons' in the emulator; a model silent in float is said in one line.
 """
 
 from __future__ import annotations
@@ -114,10 +116,20 @@ def twin_counts(spec, x: np.ndarray, pad: int, lag: int, capped: bool = True) ->
     return measure.read_window(out, lag, x.shape[1]).sum(axis=1)
 
 
-def chip_counts(written, x: np.ndarray) -> np.ndarray:
+def chip_run(written, x: np.ndarray):
+    """The artefact on ``x`` in snncc's emulator, states recorded (``run_artefact.XyloEmulation``)."""
     from snncc.targets.xylo.run_artefact import emulate_written
 
-    return emulate_written(written, x).output_spikes.sum(axis=1, dtype=np.int64)
+    return emulate_written(written, x, record=True)
+
+
+def chip_liveness(run) -> dict[str, Any]:
+    """Activity of the chip's hidden and output neurons (``snncc.ir.liveness``; hidden counts may exceed 1 per step)."""
+    from snncc.ir.liveness import activity_from_counts
+
+    steps = run.steps
+    return {"hidden (chip)": activity_from_counts(run.states["spikes"].sum(axis=1, dtype=np.int64), steps).as_dict(),
+            "output (chip)": activity_from_counts(run.output_spikes.sum(axis=1, dtype=np.int64), steps).as_dict()}
 
 
 def rule_events(written, x: np.ndarray) -> dict[str, int]:
@@ -156,6 +168,7 @@ class XyloCheckRecord:
     events: dict[str, int]
     overall: dict[str, Any]            # the chip against the float graph as trained
     ceiling: dict[str, Any] | None = None
+    liveness: dict[str, Any] = field(default_factory=dict)   # float populations and chip neurons: activity
     notes: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
@@ -181,6 +194,11 @@ class XyloCheckRecord:
         if self.ceiling:
             console.print(f"ceiling: the float graph against itself under {self.ceiling['noise']:g} weight noise: "
                           f"{self.ceiling['agreement']:.3f}", markup=False)
+        for where, pops in self.liveness.items():
+            for name, a in pops.items():
+                console.print(f"liveness {where} {name}: {a['status']}, {a['spikes']} spikes ({a['rate']:.4f} per "
+                              f"neuron and step), {a['silent_neurons']}/{a['neurons']} neurons silent", markup=False,
+                              soft_wrap=True)
         for note in self.notes:
             console.print(f"note: {note}", markup=False, soft_wrap=True)
 
@@ -190,14 +208,17 @@ def check_written(graph: Graph, written, x: np.ndarray, labels: np.ndarray | Non
     """The stages and losses of the artefact ``written`` (``written.read_artefact``) on inputs ``x`` (N, T, C)."""
     from snncc.targets.xylo.run_artefact import _inputs
 
+    from snncc.ir import liveness
+
     x = _inputs(x, written.spec.n_in, None)
     deployed = deployed_graph(graph, written.manifest)
+    run = chip_run(written, x)
     counts = {"trained": float_counts(graph, x),
               "deployed": float_counts(deployed, x) if deployed is not graph else None,
               "decays": float_counts(rounded_decays(deployed), x),
               "uncapped": twin_counts(written.spec, x, written.input_pad, written.output_lag, capped=False),
               "twin": twin_counts(written.spec, x, written.input_pad, written.output_lag),
-              "chip": chip_counts(written, x)}
+              "chip": run.output_spikes.sum(axis=1, dtype=np.int64)}
     if counts["deployed"] is None:
         counts["deployed"] = counts["trained"]
     what = {"trained": "the float graph as given", "deployed": "the float graph as deployed (reset changes applied)",
@@ -227,10 +248,13 @@ def check_written(graph: Graph, written, x: np.ndarray, labels: np.ndarray | Non
         draws = [measure.agreement(float_counts(perturbed(deployed, noise, 100 + k), x), counts["deployed"]).agreement
                  for k in range(3)]
         ceiling = {"noise": noise, "agreement": float(np.mean(draws)), "draws": draws}
-    notes = ["reset change: " + "; ".join(written.manifest["quantization"]["changes"])
+    activity = liveness.population_activity(deployed, np.asarray(x, np.float32))
+    alive = {"float (deployed)": liveness.as_dicts(activity), "chip": chip_liveness(run)}
+    silent = liveness.silence_warning(deployed, activity, inputs, int(x.shape[1]))
+    notes = ([silent] if silent else []) + ["reset change: " + "; ".join(written.manifest["quantization"]["changes"])
              if written.manifest["quantization"].get("changes") else "no reset change: the model resets by subtraction"]
     return XyloCheckRecord(str(written.path), written.chip, written.manifest["quantization"]["rule"], inputs,
-                           int(x.shape[0]), int(x.shape[1]), stages, losses, events, overall, ceiling, notes)
+                           int(x.shape[0]), int(x.shape[1]), stages, losses, events, overall, ceiling, alive, notes)
 
 
 def open_or_compile(graph: Graph, artefact: Path | None, lower_artefact) -> tuple[Any, tempfile.TemporaryDirectory | None]:

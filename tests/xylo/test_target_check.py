@@ -82,3 +82,14 @@ def test_check_measures_the_artefact_given_and_names_its_hash(tmp_path, capsys):
     assert [s["name"] for s in d["stages"]] == list(STAGES)
     code, _, err = run_cli(["check", other, "--artefact", art, "--samples", "30"], capsys)
     assert code == 2 and "was compiled from another model" in err and len(err.strip().splitlines()) == 1
+
+
+def test_check_reports_liveness_in_float_and_on_the_chip(capsys):
+    code, out, err = run_cli(["check", BRAILLE, "--target", "xylo", "--rule", "direct", "--dt", "1e-4", "--reset",
+                              "subtract", "--samples", "20", "--calibration-samples", "16", "--time-steps", "64",
+                              "--json"], capsys)
+    assert code == 0, err
+    live = json.loads(out)["liveness"]
+    assert set(live) == {"float (deployed)", "chip"} and set(live["chip"]) == {"hidden (chip)", "output (chip)"}
+    assert live["chip"]["hidden (chip)"]["neurons"] == 40 and live["chip"]["output (chip)"]["spikes"] > 0
+    assert all(a["status"] in ("active", "silent", "saturated") for a in live["float (deployed)"].values())
