@@ -515,6 +515,21 @@ class Objective:
     unit: str
 
 
+@dataclass(frozen=True)
+class Figure:
+    """A figure a search report shows for each trial: ``key`` in the figures' ``as_dict()``; ``heading``, its
+    table column (unit included, EST. where it is an ESTIMATE); ``axis``, its plot axis label (default: the
+    heading); shown value = stored value x ``scale`` (a fraction shown in %: 100); ``log``: plotted on a log
+    axis; ``field``: its name in the report's JSON rows (default: the column's name)."""
+
+    key: str
+    heading: str
+    axis: str = ""
+    scale: float = 1.0
+    log: bool = False
+    field: str = ""
+
+
 class HardwareFigures(Protocol):
     def as_dict(self) -> Mapping[str, object]:
         """Plain data, stored with each trial; the keys of ``HardwareCosts.objectives`` among them."""
@@ -525,11 +540,20 @@ class HardwareCosts(Protocol):
 
     ``objectives``: name -> ``Objective`` (Loihi: energy, delay, synops, cores, emulated_accuracy; a
     target with another budget declares its own, e.g. neurons used or real-time margin);
-    ``published``: a published measurement shown beside the trials (figure keys and ``accuracy`` in
-    %, ``label``), or empty; ``label``: what the figures are (ESTIMATE wording)."""
+    ``columns``: name -> ``Figure``, the figures a search report shows, in column order (those named
+    in ``objectives`` are objectives); ``front``: the objectives the report's Pareto front weighs
+    beside accuracy, the figure plotting accuracy against the first two;
+    ``published``: a published measurement shown beside the trials (objective names and ``accuracy``
+    in %, ``label``), or empty; ``label``: what the figures are (ESTIMATE wording)."""
 
     @property
     def objectives(self) -> Mapping[str, Objective]: ...
+
+    @property
+    def columns(self) -> Mapping[str, Figure]: ...
+
+    @property
+    def front(self) -> tuple[str, ...]: ...
 
     @property
     def published(self) -> Mapping[str, float | str]: ...

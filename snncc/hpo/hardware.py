@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from snncc.targets.base import HardwareCosts, HardwareFigures
+    from snncc.targets.base import Figure, HardwareCosts, HardwareFigures
 
 SEARCH_TARGET = "loihi"     # the target every study is costed on (its figures are the report's columns)
 
@@ -27,6 +27,28 @@ def hardware_costs(target: str = SEARCH_TARGET) -> HardwareCosts:
     from snncc.targets import capability, get_target
 
     return capability(get_target(target), "hardware")()
+
+
+def report_columns(target: str = SEARCH_TARGET) -> dict[str, Figure]:
+    """Name -> ``Figure``: the figures ``target``'s ``hardware`` capability declares for a report, in column
+    order (a target that declares none: one column per objective, headed by its name and unit)."""
+    from snncc.targets.base import Figure
+
+    costs = hardware_costs(target)
+    declared = getattr(costs, "columns", None)
+    if declared:
+        return dict(declared)
+    return {name: Figure(o.key, f"{name} {o.unit}") for name, o in costs.objectives.items()}
+
+
+def front_objectives(target: str = SEARCH_TARGET) -> tuple[str, ...]:
+    """The hardware objectives ``target``'s Pareto front weighs beside accuracy (declared by its ``hardware``
+    capability; a target that declares none: every objective but emulated accuracy)."""
+    costs = hardware_costs(target)
+    declared = getattr(costs, "front", None)
+    if declared:
+        return tuple(declared)
+    return tuple(name for name in costs.objectives if name != "emulated_accuracy")
 
 
 def hardware_figures(checkpoint: str | Path, inputs: np.ndarray, labels: np.ndarray, energy_samples: int = 16,

@@ -14,7 +14,12 @@ from dataclasses import asdict, dataclass, field
 
 from snncc.errors import SnnccError
 
-ALIASES = {"pareto": ("accuracy", "energy", "cores")}
+
+def aliases(target: str | None = None) -> dict[str, tuple[str, ...]]:
+    """``pareto``: accuracy and the front the search target declares (Loihi: accuracy, energy, cores)."""
+    from snncc.hpo.hardware import SEARCH_TARGET, front_objectives
+
+    return {"pareto": ("accuracy", *front_objectives(target or SEARCH_TARGET))}
 
 
 def directions(target: str | None = None) -> dict[str, str]:
@@ -32,8 +37,9 @@ def parse_objectives(text: str, target: str | None = None) -> tuple[str, ...]:
     hardware objectives are ``target``'s (None: ``hardware.SEARCH_TARGET``)."""
     names: list[str] = []
     known = directions(target)
+    alias = aliases(target)
     for part in (p.strip() for p in text.split(",")):
-        for name in ALIASES.get(part, (part,)):
+        for name in alias.get(part, (part,)):
             if name not in known:
                 raise SnnccError(f"unknown objective {name!r} (known: {', '.join(known)}, or pareto)",
                                  field="--objectives")

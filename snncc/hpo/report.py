@@ -1,21 +1,27 @@
 """``snncc hpo report STUDY``: every trial, the best per objective, the hardware-aware Pareto front.
 
-The front: COMPLETE trials not dominated on (accuracy: higher, ESTIMATED energy per sample:
-lower, Loihi cores: lower). Rendered as a table, as JSON (same record) and as a figure
-(accuracy vs energy and vs cores, the front highlighted, trials run with the paper's presets
-starred, and the paper's own Loihi measurement -- real data, RSNN th 1 -- for scale).
+The columns are the study's target's: the figures its ``hardware`` capability declares (``columns``:
+key, heading, unit scale), the objectives among them, and the objectives its front weighs
+(``front``). The front: COMPLETE trials not dominated on accuracy (higher) and those objectives, each
+in its direction (Loihi: ESTIMATED energy per sample, lower; cores, lower. Xylo: hidden neurons,
+lower; real-time margin, higher; feasible, higher). Rendered as a table, as JSON (same record, each
+row's figures by name) and as a figure (accuracy vs the front's first two objectives, the front
+highlighted, trials run with the paper's presets starred, and the target's published measurement,
+if any -- Loihi: the paper's, real data, RSNN th 1 -- for scale).
 """
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from snncc.hpo.annealing import pareto_ranks
 from snncc.hpo.outcome import TrialOutcome, directions
 from snncc.training.presets import PRESETS
 
-FRONT_AXES = ("accuracy", "energy", "cores")
+if TYPE_CHECKING:
+    from snncc.targets.base import Figure
 
 
 @dataclass
@@ -26,11 +32,6 @@ class TrialRow:
     accuracy: float | None = None
     selected_on: str | None = None
     test_accuracy: float | None = None
-    cores: int | None = None
-    synops: float | None = None
-    energy_uj: float | None = None          # ESTIMATE
-    delay_ms: float | None = None           # ESTIMATE
-    emulated_accuracy: float | None = None
     epochs_run: int | None = None
     last_intermediate: float | None = None  # pruned trials: the last reported accuracy
     paper_preset: int | None = None         # the threshold whose preset this trial ran
@@ -42,15 +43,20 @@ class TrialRow:
     target: str = "loihi"
 
     def value(self, name: str) -> float | None:
-        if self.target != "loihi":          # another target's objectives: keys of its figures
-            from snncc.hpo.hardware import hardware_costs
+        """``accuracy``, or the figure the target's objective or report column ``name`` names (None: not measured)."""
+        from snncc.hpo.hardware import hardware_costs, report_columns
 
-            if name == "accuracy":
-                return self.accuracy
-            v = (self.hardware or {}).get(hardware_costs(self.target).objectives[name].key)
-            return None if v is None else float(v)
-        return {"accuracy": self.accuracy, "energy": self.energy_uj, "cores": self.cores, "synops": self.synops,
-                "delay": self.delay_ms, "emulated_accuracy": self.emulated_accuracy}[name]
+        if name == "accuracy":
+            return self.accuracy
+        objectives = hardware_costs(self.target).objectives
+        key = objectives[name].key if name in objectives else report_columns(self.target)[name].key
+        v = (self.hardware or {}).get(key)
+        return None if v is None else float(v)
+
+    def figures(self, columns: dict[str, Figure]) -> dict[str, object]:
+        """The row's figures as stored, by the columns' JSON names (None where not measured)."""
+        hw = self.hardware or {}
+        return {fig.field or name: hw.get(fig.key) for name, fig in columns.items()}
 
 
 @dataclass
@@ -61,13 +67,20 @@ class HpoReport:
     counts: dict
     rows: list[TrialRow]
     best: dict                   # objective -> trial number
-    front: list[int]             # trial numbers on the (accuracy, energy, cores) front
+    front: list[int]             # trial numbers on the front (accuracy and ``front_axes``)
     paper_presets: dict
     synthetic_data: bool
     notes: list = field(default_factory=list)
+    target: str = "loihi"        # whose hardware figures the trials hold (its columns are the report's)
+    columns: dict = field(default_factory=dict)     # name -> Figure (the target's declared report columns)
+    front_axes: list = field(default_factory=list)  # the hardware objectives the front weighs beside accuracy
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        """The record as plain data; each row also carries its figures by the columns' JSON names."""
+        d = asdict(self)
+        for row, out in zip(self.rows, d["rows"]):
+            out.update(row.figures(self.columns))
+        return d
 
     def row(self, number: int) -> TrialRow:
         return next(r for r in self.rows if r.number == number)
@@ -81,17 +94,24 @@ class HpoReport:
         console.print("trials: " + ", ".join(f"{k} {v}" for k, v in self.counts.items()))
         for note in self.notes:
             console.print(f"note: {note}")
+        shown_front = [name for name in self.columns if name in self.front_axes]
         best = Table(title="best trial per objective")
-        for col in ("objective", "trial", "value", "accuracy %", "cores", "energy uJ/sample (EST.)"):
+        for col in ("objective", "trial", "value", "accuracy %", *(self.columns[n].heading for n in shown_front)):
             best.add_column(col, justify="right")
         for name, number in self.best.items():
             r = self.row(number)
             v = r.value(name)
-            shown = f"{100 * v:.2f} %" if name in ("accuracy", "emulated_accuracy") else f"{v:,.4g}"
-            best.add_row(name, str(number), shown, _pct(r.accuracy), str(r.cores), _num(r.energy_uj))
+            if name == "accuracy":
+                shown = f"{100 * v:.2f} %"
+            else:
+                shown = _cell(v, self.columns[name]) if name in self.columns else _num(v)
+                shown += " %" if shown != "-" and shown_in_percent(self.columns.get(name)) else ""
+            best.add_row(name, str(number), shown, _pct(r.accuracy),
+                         *(_cell(r.value(n), self.columns[n]) for n in shown_front))
         console.print(best)
-        console.print(self._table("Pareto front: accuracy (max) vs ESTIMATED energy (min) vs cores (min)",
-                                  [self.row(n) for n in self.front]))
+        directions = self._directions()
+        axes = " vs ".join(f"{n.replace('_', ' ')} ({directions[n][:3]})" for n in ("accuracy", *self.front_axes))
+        console.print(self._table(f"Pareto front: {axes}", [self.row(n) for n in self.front]))
         presets = Table(title="hyper-parameters: the best trial per objective beside the paper's presets")
         keys = list(next(iter(PRESETS.values())).as_dict())
         cols = [(f"best {name} (#{n})", self.row(n).params) for name, n in self.best.items()]
@@ -107,17 +127,21 @@ class HpoReport:
         from rich.table import Table
 
         t = Table(title=title)
-        for col in ("trial", "accuracy %", "cores", "synops/sample", "energy uJ (EST.)", "delay ms (EST.)",
-                    "emulated %", "time_bin_size", "nb_input_copies"):
+        for col in ("trial", "accuracy %", *(f.heading for f in self.columns.values()), "time_bin_size",
+                    "nb_input_copies"):
             t.add_column(col, justify="right")
         for r in rows:
-            t.add_row(str(r.number) + (" *" if r.paper_preset else ""), _pct(r.accuracy), str(r.cores),
-                      _num(r.synops), _num(r.energy_uj), _num(r.delay_ms), _pct(r.emulated_accuracy),
+            t.add_row(str(r.number) + (" *" if r.paper_preset else ""), _pct(r.accuracy),
+                      *(_cell(r.value(n), f) for n, f in self.columns.items()),
                       _g(r.params.get("time_bin_size")), _g(r.params.get("nb_input_copies")))
         return t
 
+    def _directions(self) -> dict[str, str]:
+        return directions(self.target)
+
     def figure(self):
-        """Accuracy vs energy (log axis) and vs cores, the front highlighted: a matplotlib Figure (Agg)."""
+        """Accuracy vs each of the front's first two objectives (the target's declared axes, log where
+        declared), the front highlighted: a matplotlib Figure (Agg)."""
         import matplotlib
 
         matplotlib.use("Agg", force=True)
@@ -126,34 +150,40 @@ class HpoReport:
         from snncc.hpo.hardware import hardware_costs
         from snncc.log_axis import readable_log_axis
 
-        published = hardware_costs(self.plan.get("target") or "loihi").published     # a measurement to show beside the trials, if any
-
-        done = [r for r in self.rows if r.accuracy is not None and r.energy_uj is not None]
+        published = hardware_costs(self.target).published     # a measurement to show beside the trials, if any
+        plotted = [n for n in self.front_axes if n in self.columns][:2]
+        done = [r for r in self.rows if r.accuracy is not None and all(r.value(n) is not None for n in plotted)]
         front = [r for r in done if r.number in set(self.front)]
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-        for ax, (attr, label) in zip(axes, (("energy_uj", "energy per sample, uJ (ESTIMATE)"),
-                                            ("cores", "Loihi cores"))):
-            ax.scatter([getattr(r, attr) for r in done], [100 * r.accuracy for r in done], s=18, c="0.6",
-                       label="trials")
-            fr = sorted(front, key=lambda r: getattr(r, attr))
-            ax.scatter([getattr(r, attr) for r in fr], [100 * r.accuracy for r in fr], s=36, c="tab:red",
-                       label="Pareto front (acc., energy, cores)")
+        fig, axes = plt.subplots(1, max(1, len(plotted)), figsize=(5.5 * max(1, len(plotted)), 4.2), squeeze=False)
+        for ax, name in zip(axes[0], plotted):
+            column = self.columns[name]
+
+            def x(r, name=name, column=column):
+                return r.value(name) * column.scale
+
+            ax.scatter([x(r) for r in done], [100 * r.accuracy for r in done], s=18, c="0.6", label="trials")
+            fr = sorted(front, key=x)
+            ax.scatter([x(r) for r in fr], [100 * r.accuracy for r in fr], s=36, c="tab:red",
+                       label=f"Pareto front (acc., {', '.join(self.front_axes)})")
             pre = [r for r in done if r.paper_preset]
             if pre:
-                ax.scatter([getattr(r, attr) for r in pre], [100 * r.accuracy for r in pre], marker="*", s=160,
+                ax.scatter([x(r) for r in pre], [100 * r.accuracy for r in pre], marker="*", s=160,
                            c="tab:blue", label="paper's preset, trained here")
-            axis = "energy" if attr == "energy_uj" else "cores"
-            if axis in published and "accuracy" in published:
-                ax.scatter([published[axis]], [published["accuracy"]], marker="D", s=40, c="k",
+            if name in published and "accuracy" in published:
+                ax.scatter([published[name]], [published["accuracy"]], marker="D", s=40, c="k",
                            label=str(published.get("label", "published measurement")))
-            if attr == "energy_uj":
+            if column.log:
                 readable_log_axis(ax, "x")
-            ax.set_xlabel(label)
+            ax.set_xlabel(column.axis or column.heading)
             ax.set_ylabel(f"accuracy % ({self.plan.get('select', 'val')} split)")
             ax.grid(alpha=0.3)
-        axes[0].legend(fontsize=7, loc="lower right")
-        fig.suptitle(f"snncc hpo: study {self.study}" + (" -- SYNTHETIC data" if self.synthetic_data else ""),
-                     fontsize=10)
+        if plotted:
+            axes[0][0].legend(fontsize=7, loc="lower right")
+        else:
+            axes[0][0].text(0.5, 0.5, f"target {self.target} declares no front to plot", ha="center",
+                            transform=axes[0][0].transAxes)
+        fig.suptitle(f"snncc hpo: study {self.study} (target {self.target})"
+                     + (" -- SYNTHETIC data" if self.synthetic_data else ""), fontsize=10)
         return fig
 
     def plot(self, path: str | Path) -> Path:
@@ -183,6 +213,18 @@ def _g(v) -> str:
     return "-" if v is None else f"{v:.3g}"
 
 
+def shown_in_percent(column: Figure | None) -> bool:
+    """A column whose heading ends in % is shown with two decimals (its value x its scale)."""
+    return column is not None and column.heading.endswith("%")
+
+
+def _cell(v, column: Figure) -> str:
+    """A figure as a table shows it: stored value x the column's scale."""
+    if v is None:
+        return "-"
+    return f"{v * column.scale:.2f}" if shown_in_percent(column) else _num(v * column.scale)
+
+
 def trial_row(t) -> TrialRow:
     from optuna.trial import TrialState
 
@@ -196,9 +238,7 @@ def trial_row(t) -> TrialRow:
         hw = out.hardware or {}
         row.params = dict(out.params)
         row.accuracy, row.selected_on, row.test_accuracy = out.accuracy, out.selected_on, out.test_accuracy
-        row.cores, row.synops = hw.get("cores"), hw.get("synaptic_ops_per_sample")
-        row.energy_uj, row.delay_ms = hw.get("energy_uj_per_sample"), hw.get("delay_ms_per_sample")
-        row.emulated_accuracy, row.epochs_run = hw.get("emulated_accuracy"), out.epochs_run
+        row.epochs_run = out.epochs_run
         row.checkpoint, row.worker = out.checkpoint, out.worker
         row.hardware, row.target = dict(hw), out.target
     if t.intermediate_values:
@@ -208,10 +248,16 @@ def trial_row(t) -> TrialRow:
     return row
 
 
-def front_of(rows: list[TrialRow]) -> list[int]:
-    """Numbers of the rows not dominated on (accuracy max, energy min, cores min)."""
-    ok = [r for r in rows if r.accuracy is not None and r.energy_uj is not None and r.cores is not None]
-    ranks = pareto_ranks([(-r.accuracy, r.energy_uj, float(r.cores)) for r in ok])
+def front_of(rows: list[TrialRow], target: str | None = None) -> list[int]:
+    """Numbers of the rows not dominated on accuracy (max) and the front objectives ``target`` declares,
+    each in its direction (None: ``hardware.SEARCH_TARGET``; Loihi: energy min, cores min)."""
+    from snncc.hpo.hardware import SEARCH_TARGET, front_objectives
+
+    target = target or SEARCH_TARGET
+    sign = {name: (-1.0 if d == "maximize" else 1.0) for name, d in directions(target).items()}
+    names = ("accuracy", *front_objectives(target))
+    ok = [r for r in rows if all(r.value(n) is not None for n in names)]
+    ranks = pareto_ranks([tuple(sign[n] * float(r.value(n)) for n in names) for r in ok])
     return sorted(r.number for r, k in zip(ok, ranks) if k == 0)
 
 
@@ -236,7 +282,10 @@ def study_report(storage, name: str, storage_label: str = "") -> HpoReport:
     b = budget(study, plan.n_trials if plan else len(rows))
     synthetic = any(TrialOutcome(**t.user_attrs["outcome"]).synthetic_data for t in study.get_trials(deepcopy=False)
                     if t.user_attrs.get("outcome"))
-    notes = ["energy and delay are ESTIMATES (Davies 2018 Table 2 costs, dynamic energy only), not measurements"]
+    from snncc.hpo.hardware import SEARCH_TARGET, front_objectives, hardware_costs, report_columns
+
+    target = plan_d.get("target") or SEARCH_TARGET
+    notes = [f"hardware figures ({target}): {hardware_costs(target).label}"]
     if synthetic:
         notes.append("trained on SYNTHETIC data: these accuracies are not the paper's")
     if plan_d.get("select") == "test":
@@ -248,6 +297,7 @@ def study_report(storage, name: str, storage_label: str = "") -> HpoReport:
               "running": b.running, "waiting": b.waiting, "budget": b.n_trials,
               "cancelled over budget": b.cancelled}
     return HpoReport(study=name, storage=storage_label, plan=plan_d, counts=counts, rows=rows,
-                     best=best_of(rows, plan_d.get("target")),
-                     front=front_of(rows), paper_presets={th: p.as_dict() for th, p in PRESETS.items()},
-                     synthetic_data=synthetic, notes=notes)
+                     best=best_of(rows, target), front=front_of(rows, target),
+                     paper_presets={th: p.as_dict() for th, p in PRESETS.items()}, synthetic_data=synthetic,
+                     notes=notes, target=target, columns=report_columns(target),
+                     front_axes=list(front_objectives(target)))

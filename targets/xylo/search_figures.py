@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.targets.base import Given, Objective
+from snncc.targets.base import Figure, Given, Objective
 
 if TYPE_CHECKING:
     from snncc.ir.graph import Graph
@@ -33,6 +33,18 @@ OBJECTIVES = {
     "real_time_margin": Objective("real_time_margin", "maximize", "dt / worst-case step time (ESTIMATE)"),
     "emulated_accuracy": Objective("emulated_accuracy", "maximize", "%"),
 }
+
+# what a search report shows per trial, in column order; the front weighs accuracy, neurons, margin, feasibility
+COLUMNS = {
+    "neurons": Figure("hidden_neurons", "hidden neurons"),
+    "output_neurons": Figure("output_neurons", "output neurons"),
+    "synapses": Figure("synapses", "synapses"),
+    "feasible": Figure("feasible", "feasible (1/0)"),
+    "real_time_margin": Figure("real_time_margin", "real-time margin (EST.)",
+                               axis="real-time margin: dt / worst-case step time (ESTIMATE)"),
+    "emulated_accuracy": Figure("emulated_accuracy", "emulated %"),                 # stored in %
+}
+FRONT = ("neurons", "real_time_margin", "feasible")
 
 
 @dataclass
@@ -67,6 +79,8 @@ class XyloHardware:
     """The ``hardware`` capability's answer: objectives and per-trial figures (nothing published to show)."""
 
     objectives: Mapping[str, Objective] = OBJECTIVES
+    columns: Mapping[str, Figure] = COLUMNS
+    front: tuple[str, ...] = FRONT
     label = LABEL
     published: Mapping[str, float | str] = {}
 

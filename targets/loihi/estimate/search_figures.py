@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from snncc.targets.base import Given, Objective
+from snncc.targets.base import Figure, Given, Objective
 
 if TYPE_CHECKING:
     from snncc.ir.graph import Graph
@@ -31,6 +31,17 @@ OBJECTIVES = {
     "synops": Objective("synaptic_ops_per_sample", "minimize", "synaptic ops/sample"),
     "delay": Objective("delay_ms_per_sample", "minimize", "ms/sample (ESTIMATE)"),
 }
+
+# what a search report shows per trial, in column order; the front weighs accuracy, energy and cores
+COLUMNS = {
+    "cores": Figure("cores", "cores", axis="Loihi cores"),
+    "synops": Figure("synaptic_ops_per_sample", "synops/sample"),
+    "energy": Figure("energy_uj_per_sample", "energy uJ (EST.)", axis="energy per sample, uJ (ESTIMATE)", log=True,
+                     field="energy_uj"),
+    "delay": Figure("delay_ms_per_sample", "delay ms (EST.)", field="delay_ms"),
+    "emulated_accuracy": Figure("emulated_accuracy", "emulated %", scale=100.0),    # stored as a fraction
+}
+FRONT = ("energy", "cores")
 
 
 @dataclass
@@ -78,6 +89,8 @@ class LoihiHardware:
     """The ``hardware`` capability's answer: objectives, the paper's measurement, and per-trial figures."""
 
     objectives: Mapping[str, Objective] = OBJECTIVES
+    columns: Mapping[str, Figure] = COLUMNS
+    front: tuple[str, ...] = FRONT
     label = ESTIMATE_LABEL
 
     def __init__(self, target: LoihiTarget) -> None:
