@@ -42,7 +42,7 @@ def run_command(
     trials: int = typer.Option(600, "--trials", help="Step 1's budget of trials (paper: 600)."),
     restarts: int = typer.Option(2, "--restarts", help="Evenly spaced re-initialisations of the annealing tuner (paper: 2)."),
     grid_span: int = typer.Option(1, "--grid-span", help="Step 2: rungs either side of step 1's best (1: a 3 x 3 grid)."),
-    objectives: str = typer.Option("accuracy", "--objectives", help="Comma list of accuracy, energy, cores, synops, delay, emulated_accuracy; 'pareto' = accuracy,energy,cores."),
+    objectives: str = typer.Option("accuracy", "--objectives", help="Comma list of accuracy, energy, cores, synops, delay, emulated_accuracy; 'pareto' = accuracy and the target's front (loihi: energy, cores)."),
     ranges: Optional[List[str]] = typer.Option(None, "--range", help="Override a range, KEY=LOW:HIGH (or KEY=VALUE to fix it); repeatable."),
     model: str = typer.Option("rsnn", "--model", help="rsnn or ffsnn."),
     epochs: int = typer.Option(300, "--epochs", help="Epochs per trial (paper: 300)."),
