@@ -52,12 +52,13 @@ class RichStudyView(StudyView):
             self.progress.update(self.trial_task, description=f"trial: {text}")
 
     def trial_done(self, number: int, outcome) -> None:
-        hw = outcome.hardware or {}
+        from snncc.hpo.hardware import hardware_summary
+
         if self.trial_task is not None:
             self.progress.update(self.trial_task, advance=1, description=f"trial {number}: done")
-        self.console.print(f"trial {number}: accuracy {100 * outcome.accuracy:.2f} % ({outcome.selected_on}), "
-                           f"{hw.get('cores')} cores, {hw.get('synaptic_ops_per_sample', 0):,.0f} synops/sample, "
-                           f"{hw.get('energy_uj_per_sample', 0):.3g} uJ/sample (ESTIMATE)")
+        figures = hardware_summary(outcome.hardware, outcome.target)     # headed as the target's report columns
+        self.console.print(f"trial {number}: accuracy {100 * outcome.accuracy:.2f} % ({outcome.selected_on})"
+                           + (f"; {outcome.target}: {figures}" if figures else ""))
 
     def trial_error(self, number: int, line: str) -> None:
         self.console.print(f"trial {number} failed: {line}")

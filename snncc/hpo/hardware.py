@@ -12,9 +12,9 @@ from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 if TYPE_CHECKING:
+    import numpy as np
+
     from snncc.targets.base import Figure, HardwareCosts, HardwareFigures
 
 SEARCH_TARGET = "loihi"     # the target every study is costed on (its figures are the report's columns)
@@ -49,6 +49,23 @@ def front_objectives(target: str = SEARCH_TARGET) -> tuple[str, ...]:
     if declared:
         return tuple(declared)
     return tuple(name for name in costs.objectives if name != "emulated_accuracy")
+
+
+def shown_figure(value: float | None, column: Figure) -> str:
+    """A figure as the report shows it: stored value x the column's scale; a heading in % with two
+    decimals, others with four significant digits; "-" when not measured."""
+    if value is None:
+        return "-"
+    v = float(value) * column.scale
+    return f"{v:.2f}" if column.heading.endswith("%") else f"{v:,.4g}"
+
+
+def hardware_summary(hardware: dict | None, target: str = SEARCH_TARGET) -> str:
+    """One line of a trial's measured figures, headed as ``target``'s report columns (what ``hpo run``
+    prints per trial): ``cores 2, synops/sample 1,000, energy uJ (EST.) 1.5``."""
+    hw = hardware or {}
+    return ", ".join(f"{column.heading} {shown_figure(hw[column.key], column)}"
+                     for column in report_columns(target).values() if hw.get(column.key) is not None)
 
 
 def hardware_figures(checkpoint: str | Path, inputs: np.ndarray, labels: np.ndarray, energy_samples: int = 16,

@@ -219,10 +219,10 @@ def shown_in_percent(column: Figure | None) -> bool:
 
 
 def _cell(v, column: Figure) -> str:
-    """A figure as a table shows it: stored value x the column's scale."""
-    if v is None:
-        return "-"
-    return f"{v * column.scale:.2f}" if shown_in_percent(column) else _num(v * column.scale)
+    """A figure as a table shows it (``hardware.shown_figure``)."""
+    from snncc.hpo.hardware import shown_figure
+
+    return shown_figure(v, column)
 
 
 def trial_row(t) -> TrialRow:
