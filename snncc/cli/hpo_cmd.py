@@ -9,6 +9,7 @@ import typer
 
 from snncc.cli.app import app
 from snncc.cli.paths import declares_paths
+from snncc.cli.target_flags import with_target_flags
 
 hpo_app = typer.Typer(
     help=(
@@ -33,6 +34,7 @@ def _hpo_group(ctx: typer.Context) -> None:
 
 
 @hpo_app.command("run")
+@with_target_flags("lower")
 @declares_paths(inputs=("data",), outputs=("workdir",), study_storage=("storage", "workdir"))
 def run_command(
     name: str = typer.Argument(..., help="Study name (step 2's study is NAME-grid). Rerun to resume."),
@@ -65,8 +67,12 @@ def run_command(
     target: str = typer.Option("loihi", "--target", "-t", help="Target whose hardware figures cost each trial (its objectives: loihi energy, cores, ...; xylo neurons, feasible, real_time_margin)."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bars."),
     json_out: bool = typer.Option(False, "--json", help="Print the run summary as JSON."),
+    target_options: dict = {},
 ) -> None:
-    """Run or resume the search (step 1, step 2 or both) in one worker; start more workers on the same storage."""
+    """Run or resume the search (step 1, step 2 or both) in one worker; start more workers on the same storage.
+
+    The target options below are declared by the targets that take them; each trial is compiled with
+    them (stored with the study's plan)."""
     from snncc.api import hpo_run
     from snncc.cli.hpo_view import RichStudyView
     from snncc.cli.output import console, err_console, print_json
@@ -78,7 +84,7 @@ def run_command(
                      subset=subset, seed=seed, val_fraction=val_fraction, select=select, hidden=hidden,
                      batch_size=batch_size, energy_samples=energy_samples, emulate=emulate, pruner=pruner,
                      startup=startup, preset=preset, storage=storage, workdir=workdir, device=device,
-                     threads=threads, heartbeat=heartbeat, target=target,
+                     threads=threads, heartbeat=heartbeat, target=target, target_options=target_options,
                      view=None if (quiet or json_out) else RichStudyView(err_console))
     if json_out:
         print_json(result.as_dict())

@@ -13,6 +13,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     import numpy as np
 
     from snncc.targets.base import Figure, HardwareCosts, HardwareFigures
@@ -69,11 +71,13 @@ def hardware_summary(hardware: dict | None, target: str = SEARCH_TARGET) -> str:
 
 
 def hardware_figures(checkpoint: str | Path, inputs: np.ndarray, labels: np.ndarray, energy_samples: int = 16,
-                     emulate_samples: int = 0, target: str = SEARCH_TARGET) -> HardwareFigures:
-    """Lower ``checkpoint`` for ``target``; its figures on the first ``energy_samples`` of ``inputs``
-    (B, T, C), ordered by the caller; ``emulate_samples`` > 0: also the deployed accuracy on that many."""
+                     emulate_samples: int = 0, target: str = SEARCH_TARGET,
+                     options: Mapping[str, object] | None = None) -> HardwareFigures:
+    """Lower ``checkpoint`` for ``target`` with its lower ``options`` (compile's flags, e.g.
+    ``allow_reset_change``); its figures on the first ``energy_samples`` of ``inputs`` (B, T, C), ordered by
+    the caller; ``emulate_samples`` > 0: also the deployed accuracy on that many."""
     from snncc.frontends import load_model
 
     graph = load_model(Path(checkpoint))
-    return hardware_costs(target).figures(graph, inputs, labels, {"source": str(checkpoint)},
+    return hardware_costs(target).figures(graph, inputs, labels, {**(options or {}), "source": str(checkpoint)},
                                           estimate_samples=energy_samples, emulate_samples=emulate_samples)

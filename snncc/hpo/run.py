@@ -52,6 +52,7 @@ class HpoRequest:
     device: str = "auto"
     heartbeat: int = 30
     target: str = "loihi"             # whose hardware figures cost each trial
+    target_options: dict = field(default_factory=dict)   # its lower options (compile's flags), given values only
 
 
 def _anneal_plan(req: HpoRequest, source) -> StudyPlan:
@@ -68,7 +69,8 @@ def _anneal_plan(req: HpoRequest, source) -> StudyPlan:
                      subset=req.subset, seed=req.seed, val_fraction=req.val_fraction, select=req.select,
                      batch_size=req.batch_size, n_hidden=req.n_hidden, energy_samples=req.energy_samples,
                      emulate_samples=req.emulate_samples, pruner=req.pruner, n_startup=req.n_startup,
-                     enqueue_preset=req.enqueue_preset, target=req.target)
+                     enqueue_preset=req.enqueue_preset, target=req.target,
+                     target_options=dict(req.target_options))
 
 
 def check_request(req: HpoRequest) -> None:

@@ -62,6 +62,7 @@ class StudyPlan:
     enqueue_preset: bool = True       # anneal: the paper's preset for the threshold as trial 0
     from_study: str | None = None     # grid: the step-1 study it is centred on
     target: str = "loihi"             # whose ``hardware`` capability costs each trial (its objectives)
+    target_options: dict = field(default_factory=dict)   # the target's lower options each trial compiles with
 
     # fields a rerun may change without changing the study
     RUNTIME = ("n_trials",)
@@ -108,6 +109,11 @@ class StudyPlan:
             raise SnnccError("objective emulated_accuracy needs --emulate N (N > 0)", field="--objectives")
         if self.pruner not in ("median", "none"):
             raise SnnccError("must be median or none", field="--pruner")
+        if self.target_options:
+            from snncc.targets import get_target
+            from snncc.targets.base import target_options
+
+            target_options(get_target(self.target), self.target_options, "lower")   # refuses what it does not take
         if self.kind not in ("rsnn", "ffsnn"):
             raise SnnccError("the search trains spiking models: rsnn or ffsnn", field="--model")
 

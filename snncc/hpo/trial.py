@@ -92,7 +92,8 @@ class TrialObjective:
         if self.view is not None:
             self.view.trial_phase(f"compiling for {plan.target}, measuring its hardware figures"
                                   + (", emulating" if plan.emulate_samples else ""))
-        hw = hardware_figures(ckpt, inputs, labels, plan.energy_samples, plan.emulate_samples, target=plan.target)
+        hw = hardware_figures(ckpt, inputs, labels, plan.energy_samples, plan.emulate_samples, target=plan.target,
+                              options=plan.target_options)
         accuracy = h["val_accuracy"] if plan.select == "val" else h["test_accuracy"]
         outcome = TrialOutcome(
             params=hp.as_dict(), accuracy=float(accuracy), selected_on=plan.select,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 from snncc.errors import one_line
 
@@ -51,13 +51,16 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
             batch_size: int = 128, energy_samples: int = 16, emulate: int = 0, pruner: str = "median",
             startup: int = 3, preset: bool = True, storage: str | None = None, workdir: str | os.PathLike = "hpo",
             device: str = "auto", threads: int = 1, heartbeat: int = 30, target: str = "loihi",
-            view: StudyView | None = None) -> HpoRunResult:
+            target_options: Mapping[str, object] | None = None, view: StudyView | None = None) -> HpoRunResult:
     """Run or resume the search ``name`` (step 2's study is NAME-grid) in this worker (see docs/hpo.md).
 
     ``objectives``: a comma list or sequence (``pareto`` = accuracy,energy,cores); ``ranges``:
     ``KEY=LOW:HIGH`` / ``KEY=VALUE`` overrides (``--range``); ``workdir`` is ``--dir``;
     ``storage`` an Optuna URL (default: SQLite in ``workdir``); ``target``: whose ``hardware`` capability
-    costs each trial (its objectives are the hardware objectives ``objectives`` may name). ``view``: the search's progress
+    costs each trial (its objectives are the hardware objectives ``objectives`` may name);
+    ``target_options``: that target's ``lower`` options each trial compiles with, as ``snncc compile``'s
+    keywords (e.g. ``{"allow_reset_change": True}`` for Xylo, whose chip cannot reset to zero), stored with
+    the study's plan. ``view``: the search's progress
     callbacks, a ``snncc.hpo.progress.StudyView`` (study_start, study_update, waiting,
     trial_start, trial_epoch, trial_phase, trial_done, trial_error, close; the CLI draws them as
     rich bars); None: silent. Ctrl-C re-queues the running trial and raises
@@ -81,7 +84,8 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
                      kind=model, epochs=epochs, subset=subset, seed=seed, val_fraction=val_fraction, select=select,
                      batch_size=batch_size, n_hidden=hidden, energy_samples=energy_samples, emulate_samples=emulate,
                      pruner=pruner, n_startup=startup, enqueue_preset=preset, storage=storage, workdir=str(workdir),
-                     device=device, heartbeat=heartbeat, target=target)
+                     device=device, heartbeat=heartbeat, target=target,
+                     target_options={k: v for k, v in (target_options or {}).items() if v is not None and v is not False})
     before = torch.get_num_threads()
     torch.set_num_threads(threads)
     try:

@@ -140,3 +140,37 @@ def test_a_tiny_xylo_study_reports_its_figures_from_the_command_line(braille_dir
     assert "hidden neurons" in text and "real-time margin" in text and "feasible" in text
     for word in LOIHI_TEXT:
         assert word not in text, word
+
+
+def test_a_xylo_study_compiles_each_trial_with_the_target_options_it_was_given(braille_dir, tmp_path, capsys):
+    """``hpo run --target xylo --chip syns65302 --allow-reset-change``: the options are stored with the plan
+    and every trial is lowered with them (here Xylo Audio 3, whose 16 input channels cannot hold the Braille
+    RSNN's 24: the trial is recorded infeasible with that rule's line, not the reset's)."""
+    from snncc.cli.main import run as cli
+    from snncc.hpo.storage import default_url, open_storage
+    from snncc.hpo.study import load_study, stored_plan
+
+    work = tmp_path / "w"
+    base = ["hpo", "run", "xo", "--step", "anneal", "--trials", "1", "--epochs", "1", "--target", "xylo",
+            "--objectives", "accuracy,feasible", *tiny_args(braille_dir, work)]
+    assert cli([*base, "--chip", "syns65302", "--allow-reset-change", "--json"]) == 0
+    capsys.readouterr()
+    assert cli(["hpo", "report", "xo", "--dir", str(work), "--json", "--no-plot"]) == 0
+    (row,) = json.loads(capsys.readouterr().out)["rows"]
+    hw = row["hardware"]
+    assert hw["chip"] == "syns65302" and hw["feasible"] == 0
+    assert "Xylo Audio 3 has 16" in hw["refusal"] and "reset" not in hw["refusal"]
+    plan = stored_plan(load_study(open_storage(default_url(work), 1), "xo"))
+    assert plan.target_options == {"chip": "syns65302", "allow_reset_change": True}
+
+
+def test_hpo_run_refuses_a_target_option_its_target_does_not_take(braille_dir, tmp_path, capsys):
+    from snncc.cli.main import run as cli
+
+    work = tmp_path / "w"
+    args = ["hpo", "run", "xr", "--step", "anneal", "--trials", "1", "--epochs", "1", "--target", "xylo",
+            "--scale", "global", *tiny_args(braille_dir, work)]
+    assert cli(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("snncc: error: ") and "--scale" in err[0] and "xylo" in err[0]
+    assert not work.exists()
