@@ -42,13 +42,12 @@ sys.path.insert(0, str(ROOT))
 from tests.xylo.oracle import XyloSimOracle  # noqa: E402   (xylosim 0.1.3, driven directly)
 from snncc.errors import SnnccError  # noqa: E402
 from snncc.frontends import LoadOptions, load_model  # noqa: E402
-from snncc.ir.nodes import LIF, Dense  # noqa: E402
-from snncc.ir.simulate import simulate  # noqa: E402
+from snncc.ir.nodes import Dense  # noqa: E402
 from snncc.targets.loihi.checks.agreement import perturbed, random_inputs  # noqa: E402   (target-neutral helpers)
-from snncc.targets.xylo import kernels, measure  # noqa: E402
+from snncc.targets.xylo import measure  # noqa: E402
+from snncc.targets.xylo.check import float_counts, rounded_decays  # noqa: E402   (what check measures)
 from snncc.targets.xylo.lowering import lower  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
-from snncc.threads import one_thread  # noqa: E402
 
 GRAPHS = {  # file -> (load options, allow_reset_change)
     "braille_noDelay_noBias_subtract.nir": (dict(dt=1e-4, reset="subtract"), False),
@@ -78,24 +77,6 @@ def braille_inputs(reps: int, seed: int, steps: int) -> tuple[np.ndarray, np.nda
     return x, np.array([wanted.index(v) for v in labels])
 
 
-def float_counts(g, x) -> np.ndarray:
-    last = [n for n, op in g.items() if isinstance(op, LIF)][-1]
-    with one_thread():
-        return simulate(g, x, record="spikes").spikes[last].numpy().sum(axis=1)
-
-
-def rounded_decays(g):
-    """The float graph with every LIF's decays moved to the nearest Xylo dash (Euler: tau = dt / 2^-d)."""
-    out = g.copy()
-    for name, op in out.items():
-        if isinstance(op, LIF):
-            a, b = op.decays(out.dt)
-            op.discretisation = "euler"
-            op.tau_syn = out.dt / np.maximum(1 - kernels.grid(kernels.nearest_dash(a)), 1e-300)
-            op.tau_mem = out.dt / np.maximum(1 - kernels.grid(kernels.nearest_dash(b)), 1e-300)
-    return out
-
-
 def xylosim_counts(low, x) -> tuple[np.ndarray, float]:
     t0 = time.perf_counter()
     out = XyloSimOracle(XyloSpec(**low.spec)).run(low.chip_input(x)).output_spikes
@@ -106,8 +87,11 @@ def rockpool_counts(python: str, graph: Path, dt: float, x: np.ndarray) -> tuple
     with tempfile.TemporaryDirectory() as tmp:
         xin, xout = Path(tmp) / "x.npz", Path(tmp) / "counts.npz"
         np.savez(xin, x=x)
-        proc = subprocess.run([python, str(ROOT / "bench" / "xylo_rockpool_flow.py"), str(graph), "--dt", str(dt),
-                               "--inputs", str(xin), "--out", str(xout)], capture_output=True, text=True)
+        try:
+            proc = subprocess.run([python, str(ROOT / "bench" / "xylo_rockpool_flow.py"), str(graph), "--dt", str(dt),
+                                   "--inputs", str(xin), "--out", str(xout)], capture_output=True, text=True)
+        except OSError as err:           # no such interpreter: the row says so, the other rows still run
+            return None, f"--rockpool-python {python}: {err.strerror}"
         if proc.returncode:
             return None, (proc.stderr.strip().splitlines() or ["failed"])[-1]
         data = np.load(xout, allow_pickle=False)
