@@ -11,6 +11,8 @@ This module imports nothing heavy (not even numpy): listing or choosing the targ
     map      -> XyloUsage     (usage.py: neurons, synapses, fan-out against each chip's limits; real time)
     estimate -> XyloUsage     (usage.py: the same with event rates measured on the given inputs; no energy)
     hardware -> XyloHardware  (search_figures.py: a search trial's neurons used, feasibility, real-time margin)
+    finetune -> XyloFinetunedArtefact (finetune.py: the lowered spec trained through Xylo Audio 2's integer
+                arithmetic towards the float graph as trained; docs/finetune.md)
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ from typing import TYPE_CHECKING
 from snncc.errors import SnnccError
 from snncc.progress import Progress as PhaseProgress
 from snncc.targets.base import (
-    AgreementOptions, Artefact, CoreMap, Emulation, Given, HardwareCosts, Progress, Record, TargetOptions,
-    capability_options, option, target_options,
+    AgreementOptions, Artefact, CoreMap, Emulation, FinetunedArtefact, FinetuneOptions, Given, HardwareCosts,
+    Progress, Record, TargetOptions, capability_options, option, target_options,
 )
 
 if TYPE_CHECKING:
@@ -65,7 +67,7 @@ class XyloOptions(TargetOptions):
 
 
 class XyloTarget:
-    """Capabilities: lower, check, agree, emulate, map, estimate (report), hardware (hpo)."""
+    """Capabilities: lower, check, agree, emulate, map, estimate (report), hardware (hpo), finetune."""
 
     name = "xylo"
     description = "SynSense Xylo (Audio 2, IMU, Audio 3): spec.npz for XyloSim/samna, checked by a bit-exact emulator"
@@ -215,6 +217,22 @@ class XyloTarget:
         from snncc.targets.xylo.search_figures import XyloHardware
 
         return XyloHardware(self)
+
+    def finetune(self, model: Model, inputs: np.ndarray | None, options: Given = None,
+                 finetuning: FinetuneOptions | None = None, *, labels: np.ndarray | None = None,
+                 data: str | None = None, progress: PhaseProgress | None = None) -> FinetunedArtefact:
+        """Lower as ``lower`` does, then train the spec's weights, thresholds and biases through Xylo Audio 2's
+        integer arithmetic towards the float graph as trained (no labels); ``--finetune-out`` is refused."""
+        from snncc.ir.graph import Graph
+        from snncc.targets.xylo.finetune import finetune_artefact
+
+        opts = self._options(options, "lower")
+        if not isinstance(model, Graph):
+            raise SnnccError("Xylo fine-tunes IR graphs only (model_kinds)", field="--finetune")
+        found: FinetunedArtefact = finetune_artefact(model, inputs, opts,
+                                                     finetuning or capability_options(FinetuneOptions),
+                                                     labels=labels, data=data, progress=progress)
+        return found
 
 
 target = XyloTarget()

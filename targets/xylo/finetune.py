@@ -9,19 +9,36 @@
 
 What connects a spec to the graph's populations is the Xylo lowering's: ``hidden`` maps each hidden IR
 population to the hidden neurons that carry it (model neurons, in order), ``output`` names the population
-Xylo's output neurons carry. The integrator calls ``finetune_xylo`` from the Xylo target's ``finetune``
-capability after lowering, and writes ``result.spec`` as it writes any spec.
+Xylo's output neurons carry.
+
+The target's ``finetune`` capability (``snncc compile --target xylo --finetune``) is ``finetune_artefact``:
+lower as ``compile`` does, fine-tune the lowered spec in the model's own time (``lowered_student.py``: the
+lowering's feed and population shifts, its synapse layout and bias source kept), check that the emulator
+equals the differentiable forward pass on the exported integers, then package it as every Xylo artefact
+(``package.py``: spec.npz read back and run beside the in-memory spec) with a ``finetune`` entry in
+manifest.json. ``--finetune-out`` is refused: a Xylo spec has no faithful float NIR reading (below).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import json
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from snncc.errors import InternalError, SnnccError
 from snncc.ir.graph import Graph
 from snncc.targets.xylo.spec import XyloSpec
+
+# Step sizes in register units (int8 weights, threshold and bias units): Adam moves a shadow about this far per
+# step. Loihi's defaults (0.03 / 0.05 / 0.1) are far too small for Xylo's units (thresholds of 10^3 .. 10^4).
+XYLO_LR = {"weights": 0.3, "thresholds": 10.0, "decays": 0.0, "biases": 3.0}
+FORWARD_CHECK_SAMPLES = 8
+FINETUNE_OUT_REFUSAL = ("a fine-tuned Xylo spec has no faithful float NIR reading (its bit-shift decays, 16-bit "
+                        "saturation, multi-spike events and the chip's feed timing have no NIR form); the fine-tuned "
+                        "network is the artefact's spec.npz")
 
 
 @dataclass
@@ -62,3 +79,166 @@ def finetune_xylo(spec: XyloSpec, teacher: Graph, split, *, hidden: dict[str, An
     student, record = finetune(student, teacher, split, config=config, deployed_counts=deployed_counts,
                                task_sets=list(task_sets), progress=progress)
     return XyloFinetuned(student.export(), record)
+
+
+# -- the lowered model: compile --finetune ------------------------------------------------------------------
+@dataclass
+class XyloLoweredFinetuned:
+    """The lowering with the fine-tuned spec, the student it came from, and the engine's record."""
+
+    lowered: Any                 # lowering.XyloLowered with the fine-tuned spec (its twin rebuilt)
+    before: Any                  # lowering.XyloLowered as lowered
+    student: Any                 # lowered_student.ChipTimeStudent with the kept parameters
+    record: Any                  # snncc.finetune.engine.FinetuneRecord
+    forward_check: str = ""      # the emulator against the differentiable forward pass, on the exported integers
+
+    def metadata(self) -> dict:
+        return XyloFinetuned(self.lowered.xylo_spec, self.record).metadata()
+
+
+def lowered_student(low, steps: int, *, learn=("weights", "thresholds", "biases"), slope: float = 5.0, device=None):
+    """The differentiable arithmetic of a ``lowering.XyloLowered`` in the model's time (``lowered_student.py``)."""
+    import numpy as np
+
+    from snncc.targets.xylo.lowered_student import ChipTimeStudent
+
+    hidden = {r.name: np.arange(r.neurons[0], r.neurons[1]) for r in low.populations if r.role == "hidden"}
+    output = next(r.name for r in low.populations if r.role == "output")
+    return ChipTimeStudent(low.xylo_spec, steps, hidden, output, input_pad=low.timing.input_pad,
+                           output_lag=low.timing.output_lag, shifts=low.timing.shifts, learn=learn, slope=slope,
+                           device=device)
+
+
+def lowered_counts(low):
+    """``(student, x) -> counts``: the student's exported spec run by the bit-exact emulator on the chip's window
+    of ``x``, output counts over the model's steps."""
+    from snncc.targets.xylo.emulator import emulate
+    from snncc.targets.xylo.measure import chip_window, read_window
+
+    def run(student, x: np.ndarray) -> np.ndarray:
+        out = emulate(student.export(), chip_window(np.asarray(x), low.timing.input_pad, low.timing.output_lag))
+        return read_window(out.output_spikes, low.timing.output_lag, x.shape[1]).sum(axis=1, dtype=np.int64)
+
+    return run
+
+
+def forward_equals_emulator(student, x: np.ndarray) -> str:
+    """The student's forward pass (chip time, every hidden and output event) against the bit-exact emulator on
+    the exported spec; a difference is an internal error."""
+    import torch
+
+    from snncc.targets.xylo.emulator import emulate
+
+    chip_x = student.chip_input(torch.as_tensor(np.asarray(x), dtype=torch.float64))
+    with torch.no_grad():
+        run = student.core(chip_x, record=True)
+    em = emulate(student.export(), chip_x.numpy().astype(np.int64), record=True)
+    mine = {"output_spikes": run.states["output_spikes"], "spikes": run.states["spikes"],
+            "vmem": run.states["vmem"], "vmem_out": run.states["vmem_out"]}
+    for name, value in mine.items():
+        if not np.array_equal(np.rint(value.numpy()).astype(np.int64), np.asarray(getattr(em, name)).astype(np.int64)):
+            raise InternalError(f"the fine-tuned spec's {name} in the emulator differs from the differentiable "
+                                "forward pass it was trained with")
+    return (f"the emulator equals the differentiable forward pass on the exported integers (output and hidden "
+            f"events, membranes) on {x.shape[0]} held-out samples of {chip_x.shape[1]} chip steps")
+
+
+def finetune_lowered(low, split, *, config=None, task_sets=(), progress=None,
+                     learn=("weights", "thresholds", "biases"), slope: float = 5.0) -> XyloLoweredFinetuned:
+    """Fine-tune the lowered spec of ``low`` (``lowering.lower``) towards the graph as trained (``low.trained``,
+    its own reset) on ``split``; the kept spec is checked against the forward pass and its twin rebuilt."""
+    from snncc.finetune.engine import FinetuneConfig, finetune
+    from snncc.targets.xylo.twin import spec_graph
+    from snncc.training.device import resolve_device
+
+    config = config or FinetuneConfig(lr=dict(XYLO_LR))
+    device = resolve_device(config.device)
+    steps = int(split.x.shape[1])
+    student = lowered_student(low, steps, learn=learn, slope=slope, device=device)
+    student, record = finetune(student, low.trained, split, config=config, deployed_counts=lowered_counts(low),
+                               task_sets=list(task_sets), progress=progress)
+    student = student.cpu()
+    checked = forward_equals_emulator(student, split.x[split.held_out[:FORWARD_CHECK_SAMPLES]])
+    spec = student.export()
+    kwargs = spec.kwargs()
+    tuned = dataclasses.replace(low, spec=kwargs, twin=spec_graph(kwargs, low.dt))
+    if low.changes:
+        record.notes.append("the teacher is the graph as trained (its own reset); Xylo runs it with reset by "
+                            "subtraction (--allow-reset-change): the agreement includes the reset change")
+    return XyloLoweredFinetuned(tuned, low, student, record, checked)
+
+
+@dataclass
+class XyloFinetunedArtefact:
+    """``finetune``'s artefact: the Xylo artefact of the fine-tuned spec (written and summarised as ``lower``'s,
+    its manifest holding a ``finetune`` entry)."""
+
+    artefact: Any                # artefact.XyloArtefact
+    result: XyloLoweredFinetuned
+
+    def write(self, path) -> None:
+        self.artefact.write(path)
+
+    def summary(self) -> dict:
+        return {**self.artefact.summary(), "finetune": self.finetune_record()}
+
+    def render_text(self, console) -> None:
+        self.artefact.render_text(console)
+        for line in self.result.record.lines():
+            console.print(line, markup=False)
+
+    def adapted_graph(self) -> Graph:
+        raise SnnccError(FINETUNE_OUT_REFUSAL, field="--finetune-out")
+
+    def finetune_record(self) -> dict:
+        return {**self.result.metadata(), "record": self.result.record.as_dict()}
+
+
+def with_finetune_record(artefact, result: XyloLoweredFinetuned):
+    """``artefact`` (``package.package`` of the fine-tuned lowering) with manifest.json's ``finetune`` entry and the
+    forward-pass check under ``validation``."""
+    from snncc.targets.xylo.artefact import MANIFEST
+
+    manifest = dict(artefact.manifest)
+    manifest["validation"] = {**manifest["validation"], "finetune": "checked: " + result.forward_check}
+    manifest["finetune"] = {**result.metadata(), "record": result.record.as_dict()}
+    files = dict(artefact.files)
+    files[MANIFEST] = (json.dumps(manifest, indent=2, default=float) + "\n").encode()
+    notes = list(artefact.notes) + ["fine-tuned: the spec's weights, thresholds and biases trained through Xylo's "
+                                    "integer arithmetic towards the float graph as trained (docs/finetune.md)"]
+    return dataclasses.replace(artefact, files=files, manifest=manifest, notes=notes)
+
+
+def finetune_artefact(graph: Graph, inputs, options, finetuning, *, labels=None, data: str | None = None,
+                      progress=None) -> XyloFinetunedArtefact:
+    """``target.finetune`` (``options``: ``capabilities.XyloOptions``; ``finetuning``: ``FinetuneOptions``): lower as
+    ``compile`` does, fine-tune on the user's data or seeded random spikes, package and check as any artefact."""
+    from snncc.finetune.engine import FinetuneConfig
+    from snncc.finetune.inputs import model_split
+    from snncc.targets.xylo import rules as design_rules
+    from snncc.targets.xylo.chip import get_chip
+    from snncc.targets.xylo.lowering import lower, lowering_settings
+    from snncc.targets.xylo.package import package
+    from snncc.training.device import resolve_device
+
+    if finetuning.finetune_out is not None:
+        raise SnnccError(FINETUNE_OUT_REFUSAL, field="--finetune-out")
+    device = finetuning.device or "cpu"
+    resolve_device(device)                      # an unavailable device is refused before any work
+    split = model_split(graph, inputs, labels, time_steps=options.time_steps, density=finetuning.density,
+                        samples=finetuning.finetune_samples, seed=finetuning.finetune_seed, data=data)
+    report = progress or (lambda done, total, phase: None)
+    report(0, 1, "lowering and measuring the rules")
+    settings = lowering_settings(options)
+    settings.setdefault("time_steps", int(split.x.shape[1]))
+    try:
+        low = lower(graph, settings)
+    except SnnccError as err:
+        raise (err.with_file(options.source) if options.source else err) from None
+    config = FinetuneConfig(epochs=finetuning.finetune_epochs, seed=finetuning.finetune_seed, device=device,
+                            lr=dict(XYLO_LR))
+    result = finetune_lowered(low, split, config=config, progress=progress)
+    design_rules.check_spec(result.lowered.spec, get_chip(low.chip))
+    report(0, 1, "writing and re-reading spec.npz")
+    artefact = with_finetune_record(package(result.lowered, options.source), result)
+    return XyloFinetunedArtefact(artefact, result)
