@@ -36,9 +36,8 @@ from snncc.targets.xylo.spec import XyloSpec
 # step. Loihi's defaults (0.03 / 0.05 / 0.1) are far too small for Xylo's units (thresholds of 10^3 .. 10^4).
 XYLO_LR = {"weights": 0.3, "thresholds": 10.0, "decays": 0.0, "biases": 3.0}
 FORWARD_CHECK_SAMPLES = 8
-FINETUNE_OUT_REFUSAL = ("a fine-tuned Xylo spec has no faithful float NIR reading (its bit-shift decays, 16-bit "
-                        "saturation, multi-spike events and the chip's feed timing have no NIR form); the fine-tuned "
-                        "network is the artefact's spec.npz")
+FINETUNE_OUT_REFUSAL = ("a fine-tuned Xylo spec has no faithful float NIR reading (shift decays, int16 saturation, "
+                        "multi-spike events, feed timing): its network is spec.npz")
 
 
 @dataclass
