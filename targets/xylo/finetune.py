@@ -98,8 +98,6 @@ class XyloLoweredFinetuned:
 
 def lowered_student(low, steps: int, *, learn=("weights", "thresholds", "biases"), slope: float = 5.0, device=None):
     """The differentiable arithmetic of a ``lowering.XyloLowered`` in the model's time (``lowered_student.py``)."""
-    import numpy as np
-
     from snncc.targets.xylo.lowered_student import ChipTimeStudent
 
     hidden = {r.name: np.arange(r.neurons[0], r.neurons[1]) for r in low.populations if r.role == "hidden"}
@@ -129,14 +127,16 @@ def forward_equals_emulator(student, x: np.ndarray) -> str:
 
     from snncc.targets.xylo.emulator import emulate
 
-    chip_x = student.chip_input(torch.as_tensor(np.asarray(x), dtype=torch.float64))
+    device = student.core.dash_mem.device
+    chip_x = student.chip_input(torch.as_tensor(np.asarray(x), dtype=torch.float64, device=device))
     with torch.no_grad():
         run = student.core(chip_x, record=True)
-    em = emulate(student.export(), chip_x.numpy().astype(np.int64), record=True)
+    em = emulate(student.export(), chip_x.cpu().numpy().astype(np.int64), record=True)
     mine = {"output_spikes": run.states["output_spikes"], "spikes": run.states["spikes"],
             "vmem": run.states["vmem"], "vmem_out": run.states["vmem_out"]}
     for name, value in mine.items():
-        if not np.array_equal(np.rint(value.numpy()).astype(np.int64), np.asarray(getattr(em, name)).astype(np.int64)):
+        got = np.rint(value.cpu().numpy()).astype(np.int64)
+        if not np.array_equal(got, np.asarray(getattr(em, name)).astype(np.int64)):
             raise InternalError(f"the fine-tuned spec's {name} in the emulator differs from the differentiable "
                                 "forward pass it was trained with")
     return (f"the emulator equals the differentiable forward pass on the exported integers (output and hidden "
@@ -157,7 +157,6 @@ def finetune_lowered(low, split, *, config=None, task_sets=(), progress=None,
     student = lowered_student(low, steps, learn=learn, slope=slope, device=device)
     student, record = finetune(student, low.trained, split, config=config, deployed_counts=lowered_counts(low),
                                task_sets=list(task_sets), progress=progress)
-    student = student.cpu()
     checked = forward_equals_emulator(student, split.x[split.held_out[:FORWARD_CHECK_SAMPLES]])
     spec = student.export()
     kwargs = spec.kwargs()

@@ -72,8 +72,8 @@ class ChipTimeStudent(torch.nn.Module):
         x = torch.as_tensor(x, dtype=torch.float64, device=self.core.dash_mem.device)
         chip_force = None
         if force:
-            chip_force = {p: self._in_chip_time(torch.as_tensor(f, dtype=torch.float64, device=x.device), self.shifts[p])
-                          for p, f in force.items() if p in self.shifts}
+            chip_force = {p: self._in_chip_time(torch.as_tensor(f, dtype=torch.float64, device=x.device),
+                                                self.shifts[p]) for p, f in force.items() if p in self.shifts}
         run = self.core(self.chip_input(x), chip_force)
         out_name = self.populations[-1]
         t = x.shape[1]

@@ -170,6 +170,13 @@ def test_the_student_in_model_time_equals_the_emulator_on_the_chip_window(lowere
     counts = lowered_counts(lowered)(student, x)
     assert counts.sum() > 0 and np.array_equal(np.rint(run.counts.numpy()).astype(np.int64), counts)
     assert "equals" in forward_equals_emulator(student, x)
+    # teacher forcing in the model's time: forcing the hidden population with its own free-running spikes changes
+    # nothing; forcing it silent takes most of the output's drive away
+    with torch.no_grad():
+        own = student(torch.as_tensor(x), force={"hidden": run.spikes["hidden"]})
+        silent = student(torch.as_tensor(x), force={"hidden": torch.zeros_like(run.spikes["hidden"])})
+    assert torch.equal(own.counts, run.counts) and torch.equal(own.spikes["hidden"], run.spikes["hidden"])
+    assert silent.counts.sum() < run.counts.sum()
 
 
 def test_training_keeps_the_synapse_layout_and_the_neurons_that_carry_no_population(lowered):
