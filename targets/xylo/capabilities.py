@@ -221,7 +221,7 @@ class XyloTarget:
     def finetune(self, model: Model, inputs: np.ndarray | None, options: Given = None,
                  finetuning: FinetuneOptions | None = None, *, labels: np.ndarray | None = None,
                  data: str | None = None, progress: PhaseProgress | None = None) -> FinetunedArtefact:
-        """Lower as ``lower`` does, then train the spec's weights, thresholds and biases through Xylo Audio 2's
+        """Lower as ``lower`` does, then train the XyloSpec's weights, thresholds and biases through Xylo Audio 2's
         integer arithmetic towards the float graph as trained (no labels); ``--finetune-out`` is refused."""
         from snncc.ir.graph import Graph
         from snncc.targets.xylo.finetune import finetune_artefact

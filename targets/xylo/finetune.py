@@ -203,7 +203,7 @@ def with_finetune_record(artefact, result: XyloLoweredFinetuned):
     manifest["finetune"] = {**result.metadata(), "record": result.record.as_dict()}
     files = dict(artefact.files)
     files[MANIFEST] = (json.dumps(manifest, indent=2, default=float) + "\n").encode()
-    notes = list(artefact.notes) + ["fine-tuned: the spec's weights, thresholds and biases trained through Xylo's "
+    notes = list(artefact.notes) + ["fine-tuned: spec.npz's weights, thresholds and biases trained through Xylo's "
                                     "integer arithmetic towards the float graph as trained (docs/finetune.md)"]
     return dataclasses.replace(artefact, files=files, manifest=manifest, notes=notes)
 
