@@ -8,6 +8,7 @@ from __future__ import annotations
 import io
 import json
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -121,5 +122,8 @@ def load_graph(path: str | Path) -> Graph:
         return graph_from_record(record, arrays)
     except SnnccError as err:
         raise err.with_file(str(path)) from None
-    except (zipfile.BadZipFile, KeyError, ValueError, json.JSONDecodeError, OSError) as ex:
+    # damaged deflate data (zlib.error), a truncated member (EOFError), an unknown compression
+    # (NotImplementedError) or an encrypted member (RuntimeError): one line like every other damage
+    except (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError, RuntimeError, KeyError, ValueError,
+            json.JSONDecodeError, OSError) as ex:
         raise SnnccError(f"not a readable snncc IR file ({type(ex).__name__})", file=str(path), field="graph.json") from None

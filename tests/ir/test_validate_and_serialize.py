@@ -109,3 +109,22 @@ def test_damaged_ir_file_is_one_clear_error(tmp_path):
     p.write_bytes(b"PK\x03\x04 not really a zip")
     with pytest.raises(SnnccError, match="not a readable snncc IR file"):
         load_graph(p)
+
+
+def test_damaged_deflate_data_in_an_ir_file_is_one_clear_error(tmp_path):
+    """A member whose compressed bytes are damaged (zlib: invalid block type) is refused like any damage,
+    not a zlib.error traceback (found by the loaders' fuzz test)."""
+    import zipfile
+
+    good = tmp_path / "good.snnir"
+    save_graph(small_rsnn(), good)
+    data = bytearray(good.read_bytes())
+    with zipfile.ZipFile(good) as zf:
+        info = zf.getinfo("graph.json")
+    start = info.header_offset + 30 + len(info.filename.encode()) + len(info.extra)
+    data[start:start + 4] = b"\xff\xff\xff\xff"         # BFINAL 1, BTYPE 11: a reserved block type
+    bad = tmp_path / "bad.snnir"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(SnnccError, match=r"not a readable snncc IR file \(error\)") as caught:
+        load_graph(bad)
+    assert caught.value.line().count("\n") == 0
