@@ -2,13 +2,22 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 import torch
+from hypothesis import settings
 
 from snncc.frontends.checkpoint import save_checkpoint
 from snncc.models import SNNConfig, SpikingClassifier
 
 from snncc_test_helpers import TH1_PARAMS
+
+# CI (CI=true) draws hypothesis examples from a fixed seed, so a red run is reproducible and a landing is
+# never decided by a new random draw; local runs keep exploring (what they find is pinned as @example)
+settings.register_profile("ci", derandomize=True, database=None)
+if os.environ.get("CI") == "true":
+    settings.load_profile("ci")
 
 
 @pytest.fixture(autouse=True)
