@@ -132,7 +132,7 @@ def offered_options(capabilities: Sequence[str]) -> list[Offer]:
         kind = kinds.pop() if len(kinds) == 1 else str
         helps = {s.help for s in specs}
         default = specs[0].default if len({s.default for s in specs}) == 1 else None
-        shown = f" [default: {default}]" if default not in (None, False) else ""
+        shown = f" (default {default})" if default not in (None, False) else ""
         if len(helps) == 1:
             text = f"{specs[0].help}{shown} (--target {', '.join(targets)})"
         else:

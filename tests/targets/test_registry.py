@@ -146,7 +146,7 @@ def test_capability_options_are_declared_once_and_refused_where_they_do_not_appl
     assert err.value.line() == "--noise: applies only to check without labels (agreement), not to check with labelled data"
     offers = {o.name: o for o in offered_options(["check", "agree"])}
     assert offers["density"].targets == tuple(offering("agree")) == ("jetson", "loihi", "xylo")   # all measure agreement
-    assert offers["density"].default == 0.08 and "[default: 0.08]" in offers["density"].help
+    assert offers["density"].default == 0.08 and "(default 0.08)" in offers["density"].help
 
 
 def test_shared_flags_are_offered_once_and_a_switch_value_clash_is_refused(monkeypatch):
