@@ -243,6 +243,22 @@ def _replace_directory(new: Path, dest: Path, swap: Callable[[Path, Path], bool]
     shutil.rmtree(old, ignore_errors=True)
 
 
+def foreign_entries(directory: Path, ours: Iterable[str]) -> str | None:
+    """Why ``directory`` (an earlier artefact) may not be replaced, or None: an entry whose name is not
+    among ``ours`` is a user's file; one of our names that is not a regular file (a directory, symlink
+    or device) is a user's too, since snncc writes only regular files there."""
+    ours = set(ours)
+    entries = list(directory.iterdir())
+    foreign = sorted(p.name for p in entries if p.name not in ours)
+    if foreign:
+        return f"it holds files snncc did not write ({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''})"
+    odd = sorted(p.name for p in entries if p.is_symlink() or not p.is_file())
+    if odd:
+        return (f"{', '.join(odd[:3])}{', ...' if len(odd) > 3 else ''} is not a regular file "
+                "(snncc writes only regular files there)")
+    return None
+
+
 @contextlib.contextmanager
 def atomic_dir(dest: str | os.PathLike, replaceable: Callable[[Path], str | None] | None = None,
                swap: Callable[[Path, Path], bool] = exchange) -> Iterator[Path]:

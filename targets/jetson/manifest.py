@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import snncc
+from snncc.atomic import atomic_dir, foreign_entries
 from snncc.input_layout import frame_shape
 from snncc.ir.nodes import LIF
 from snncc.targets.jetson.plan import GraphPlan
@@ -121,8 +122,6 @@ def write_artefact(path, files: dict[str, bytes]) -> None:
     import os
     from pathlib import Path
 
-    from snncc.atomic import atomic_dir
-
     with atomic_dir(Path(path), replaceable=replace_refusal) as tmp:
         for name, data in files.items():
             (tmp / name).write_bytes(data)
@@ -157,17 +156,7 @@ def replace_refusal(directory) -> str | None:
         return f"it has no readable {MANIFEST} of an snncc Jetson artefact"
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
         return f"its {MANIFEST} is not an snncc Jetson manifest"
-    ours = own_names(manifest)
-    entries = list(directory.iterdir())
-    foreign = sorted(p.name for p in entries if p.name not in ours)
-    if foreign:
-        return f"it holds files snncc did not write ({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''})"
-    # snncc writes only regular files: a directory, symlink or device of a listed name is a user's
-    odd = sorted(p.name for p in entries if p.is_symlink() or not p.is_file())
-    if odd:
-        return (f"{', '.join(odd[:3])}{', ...' if len(odd) > 3 else ''} is not a regular file "
-                "(snncc writes only regular files there)")
-    return None
+    return foreign_entries(directory, own_names(manifest))
 
 
 @dataclass

@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from snncc.atomic import atomic_dir, foreign_entries
+
 FORMAT = "snncc-xylo-artefact"
 FORMAT_VERSION = 1
 SPEC = "spec.npz"
@@ -63,14 +65,7 @@ def replace_refusal(directory: str | os.PathLike) -> str | None:
         return f"it has no readable {MANIFEST} of an snncc Xylo artefact"
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
         return f"its {MANIFEST} is not an snncc Xylo manifest"
-    entries = list(directory.iterdir())
-    foreign = sorted(p.name for p in entries if p.name not in FILES)
-    if foreign:
-        return f"it holds files snncc did not write ({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''})"
-    odd = sorted(p.name for p in entries if p.is_symlink() or not p.is_file())
-    if odd:
-        return f"{', '.join(odd)} is not a regular file (snncc writes only regular files there)"
-    return None
+    return foreign_entries(directory, FILES)
 
 
 @dataclass
@@ -82,8 +77,6 @@ class XyloArtefact:
     notes: list[str] = field(default_factory=list)
 
     def write(self, path: str | os.PathLike) -> None:
-        from snncc.atomic import atomic_dir
-
         with atomic_dir(Path(path), replaceable=replace_refusal) as tmp:
             for name, data in self.files.items():
                 (tmp / name).write_bytes(data)

@@ -125,18 +125,12 @@ def _check_spike_rules(graph: Graph, pops: list[Population]) -> None:
 
 
 def _reset(graph: Graph, pops: list[Population], allow: bool) -> tuple[Graph, list[str]]:
-    g, changes = graph, []
-    for p in pops:
-        if graph.node(p.lif).reset == "zero":
-            if not allow:
-                raise SnnccError("Xylo resets by subtracting the threshold and cannot reset to zero; pass "
-                                 "--allow-reset-change to deploy reset by subtraction (snncc check measures the cost)",
-                                 field=f"node '{p.lif}'.reset")
-            if g is graph:
-                g = graph.copy()
-            g.node(p.lif).reset = "subtract"
-            changes.append(f"{p.lif}: reset zero -> subtract (Xylo subtracts the threshold)")
-    return g, changes
+    from snncc.passes.reset_change import change_reset
+
+    return change_reset(graph, [p.lif for p in pops], from_="zero", to="subtract", allow=allow,
+                        refusal="Xylo resets by subtracting the threshold and cannot reset to zero; pass "
+                                "--allow-reset-change to deploy reset by subtraction (snncc check measures the cost)",
+                        why="Xylo subtracts the threshold")
 
 
 def _sources(g: Graph, pops: list[Population], timing: XyloTiming) -> list[_Source]:

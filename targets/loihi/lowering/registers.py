@@ -102,20 +102,12 @@ def chain(graph: Graph) -> list[ChainLayer]:
 
 def lif_params_check(graph: Graph, layers: list[ChainLayer], allow_reset_change: bool) -> tuple[Graph, list[str]]:
     """Refuse subtract reset unless allowed (then lower it as reset to zero and say so)."""
-    g = graph
-    changes: list[str] = []
-    for c in layers:
-        op = graph.node(c.lif)
-        if op.reset == "subtract":
-            if not allow_reset_change:
-                raise SnnccError("Loihi 1 resets the voltage to zero and cannot reset by subtraction; pass "
-                                 "--allow-reset-change to deploy it with reset to zero (snncc check measures the cost)",
-                                 field=f"node '{c.lif}'.reset")
-            if g is graph:
-                g = graph.copy()
-            g.node(c.lif).reset = "zero"
-            changes.append(f"{c.lif}: reset subtract -> zero (Loihi 1 cannot subtract)")
-    return g, changes
+    from snncc.passes.reset_change import change_reset
+
+    return change_reset(graph, [c.lif for c in layers], from_="subtract", to="zero", allow=allow_reset_change,
+                        refusal="Loihi 1 resets the voltage to zero and cannot reset by subtraction; pass "
+                                "--allow-reset-change to deploy it with reset to zero (snncc check measures the cost)",
+                        why="Loihi 1 cannot subtract")
 
 
 def build_network(graph: Graph, layers: list[ChainLayer], quant: QuantizationRecord, timing: TimingRecord,
