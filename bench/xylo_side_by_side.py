@@ -10,7 +10,7 @@ it reports, against the float graph (snncc's IR reference simulation; with a res
 deployed), argmax agreement over the samples whose float output has one clear winner (a unique non-zero
 maximum; the others are counted beside it) with its 95 % Wilson interval, and the output-count
 correlation, for:
-    snncc <rule>     lower(graph, rule) for direct / single / single-identified, the network spec run in XyloSim
+    snncc <rule>     lower(graph, rule) for direct / single / single-identified / relayed, the network spec run in XyloSim
     snncc auto       what ``rule=auto`` picks (measured in snncc's bit-exact emulator on its own calibration
                      inputs, seed 1, never these)
     rockpool         Rockpool 3.1's flow (bench/xylo_rockpool_flow.py, run in --rockpool-python)
@@ -55,7 +55,7 @@ GRAPHS = {  # file -> (load options, allow_reset_change)
     "braille_subgraph_2023.nir": (dict(dt=1e-4, reset="zero"), True),
 }
 LETTERS = ("Space", "A", "E", "I", "O", "U", "Y")
-RULES = ("direct", "single", "single-identified")
+RULES = ("direct", "single", "single-identified", "relayed")
 
 
 def braille_inputs(reps: int, seed: int, steps: int) -> tuple[np.ndarray, np.ndarray]:

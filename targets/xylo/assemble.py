@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.targets.xylo import identify, kernels
+from snncc.targets.xylo import identify, kernels, relays as relay_rules
 from snncc.targets.xylo.quantize import (BIAS_SOURCE, SINGLE_THRESHOLD, STATE_MARGIN, STATE_MAX, WEIGHT_MAX,
                                          WEIGHT_MIN, HiddenFloat, OutputFloat, choose_gains, saturating_int16, to_int)
 
@@ -30,9 +30,10 @@ class PopulationRecord:
     rounding: str
     gain: dict[str, float]      # chip units per threshold: min / median / max
     notes: list[str] = field(default_factory=list)
+    units: tuple[float, ...] = ()   # per neuron, chip units per IR threshold (not in the record: the gain spread is)
 
     def as_dict(self) -> dict[str, Any]:
-        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items() if k != "units"}
 
 
 def _currents(pop: HiddenFloat, trains: dict[str, np.ndarray]) -> np.ndarray:
@@ -73,14 +74,25 @@ def output_state_limit(out: OutputFloat, pre: np.ndarray, v_pre: np.ndarray) -> 
     return STATE_MAX / (STATE_MARGIN * np.maximum(np.maximum(np.abs(cur).max(axis=(0, 1)), v_abs), 1e-12))
 
 
-def assemble(hidden: list[HiddenFloat], output: OutputFloat, n_inputs: int, input_source: str,
-             limits: dict[str, np.ndarray], out_limit: np.ndarray, rounding: str) -> tuple[dict, list[PopulationRecord]]:
-    """The spec dict and a record per population. ``limits``: per hidden population its state-limited gains."""
+def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: int, input_source: str,
+             limits: dict[str, np.ndarray], out_limit: np.ndarray | None, rounding: str,
+             relays: list[relay_rules.Relay] = (), shifts: tuple[int, int] | None = None) -> tuple[dict, list[PopulationRecord]]:
+    """The spec dict and a record per population. ``limits``: per hidden population its state-limited gains;
+    ``relays`` (``relays.py``): placed after the populations, their registers under the matrices' shifts;
+    ``shifts``: the input and recurrent matrices' left shifts (None: chosen here, ``choose_gains``).
+    ``output`` None: the readout population is the last of ``hidden`` and the output neurons copy its spikes
+    one step later, exactly (``_copy_readout``)."""
     starts, at = {}, 0
     for p in hidden:
         starts[p.name] = at
         at += p.n
-    source = any(BIAS_SOURCE in p.weights for p in hidden) or output.bias_source
+    for r in relays:
+        starts[relay_rules.relay_name(r.source)] = at
+        at += r.n
+    if output is None:
+        starts[READOUT_COPY] = at
+        at += hidden[-1].n
+    source = any(BIAS_SOURCE in p.weights for p in hidden) or (output is not None and output.bias_source)
     if source:                       # the always-on neuron that carries biases: the last hidden neuron
         starts[BIAS_SOURCE] = at
         at += 1
@@ -103,7 +115,7 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat, n_inputs: int, inpu
     if source:
         theta[starts[BIAS_SOURCE]] = 1.0
         state[starts[BIAS_SOURCE]] = SINGLE_THRESHOLD - 1
-    gains, (s_in, s_rec) = choose_gains(state, [w_in_max, w_rec_max])
+    gains, (s_in, s_rec) = choose_gains(state, [w_in_max, w_rec_max], shifts)
     gains = np.floor(gains)
     spec: dict[str, Any] = {
         "weights_in": np.zeros((n_inputs, n, 2), np.int8), "weights_rec": np.zeros((n, n, 2), np.int8),
@@ -161,12 +173,34 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat, n_inputs: int, inpu
             p.name, "hidden", p.method, (s0, s0 + p.n),
             {"dash_syn": sorted({int(v) for v in p.dash_syn[:, 0]}), "dash_syn_2": sorted({int(v) for v in p.dash_syn[:, 1]}),
              "dash_mem": sorted({int(v) for v in p.dash_mem})},
-            p.fit, rounding if p.hessians is not None else "nearest", _spread(gains[sl])))
+            p.fit, rounding if p.hessians is not None else "nearest", _spread(gains[sl]),
+            units=tuple(float(v) for v in gains[sl])))
+    for r in relays:
+        _place_relay(spec, r, starts, input_source, s_in, s_rec)
+        records.append(PopulationRecord(
+            relay_rules.relay_name(r.source), "relay", "sigma-delta",
+            (starts[relay_rules.relay_name(r.source)], starts[relay_rules.relay_name(r.source)] + r.n),
+            {"dash_syn": [r.dash], "dash_mem": [relay_rules.RELAY_DASH_MEM]}, "fixed", "-",
+            {"min": r.gain, "median": r.gain, "max": r.gain},
+            [f"events per unit of the filtered train: {r.gain:.3g} (registers: weight, threshold "
+             f"{r.registers(s_in if r.source == input_source else s_rec)})"]))
     if source:                       # no input, memoryless, V = bias = threshold: exactly one spike every step
         k = starts[BIAS_SOURCE]
         spec["threshold"][k] = SINGLE_THRESHOLD
         spec["bias"][k] = SINGLE_THRESHOLD
-        records[-1].notes.append(f"hidden neuron {k} is the always-on bias source")
+        records[len(hidden) - 1].notes.append(f"hidden neuron {k} is the always-on bias source")
+    if output is None:
+        records[len(hidden) - 1].role = "readout"
+        spec.update(_copy_readout(spec, hidden[-1], starts, s_rec, n))
+        records.append(PopulationRecord(hidden[-1].name, "output", "copy", (0, hidden[-1].n),
+                                        {"dash_syn_out": [1], "dash_mem_out": [0]}, "exact", "-",
+                                        {"min": 1.0, "median": 1.0, "max": 1.0},
+                                        [f"the output neurons copy hidden neurons {starts[hidden[-1].name]}.."
+                                         f"{starts[hidden[-1].name] + hidden[-1].n - 1} one step later (exact)"],
+                                        units=(float(COPY_WEIGHT // 2),) * hidden[-1].n))
+        if np.any(spec["threshold"] < 1):
+            raise SnnccError("a threshold rounds below 1 chip unit", field="threshold")
+        return spec, records
     # output neurons
     m = output.n
     o_max = np.abs(output.weight).max(axis=1) / output.theta
@@ -195,8 +229,59 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat, n_inputs: int, inpu
     records.append(PopulationRecord(output.name, "output", "native", (0, m),
                                     {"dash_syn_out": sorted({int(v) for v in output.dash_syn}),
                                      "dash_mem_out": sorted({int(v) for v in output.dash_mem})},
-                                    output.fit, rounding if output.hessians is not None else "nearest", _spread(o_gain)))
+                                    output.fit, rounding if output.hessians is not None else "nearest", _spread(o_gain),
+                                    units=tuple(float(v) for v in o_gain)))
     return spec, records
+
+
+READOUT_COPY = "readout copy"    # hidden neurons that repeat the readout's spikes one step later (``_copy_readout``)
+COPY_WEIGHT = 64                 # int8: the readout -> copy and readout -> output weight; half of it cancels
+
+
+def _copy_readout(spec: dict, readout: HiddenFloat, starts: dict[str, int], s_rec: int, n: int) -> dict[str, Any]:
+    """Output neurons that fire exactly when the readout's hidden neuron fired the step before.
+
+    A synapse with dash 1 keeps half its current: a spike's weight w leaves w/2, w/4, ... behind. A copy
+    neuron C (memoryless, dash_syn 1) takes the readout R's spike with weight w and its own with -w/2: by
+    induction its current after the decay is (w/2) R[t-1] exactly (w a power of two), so C fires at threshold
+    w/2 iff R fired the step before: C[t] = R[t-1]. The output neuron O (dash_syn_out 1, dash_mem_out 0: V is
+    its current) takes R with w and C with -w/2: its current is (w/2) R[t-1], so O[t] = R[t-1] exactly, one
+    spike at most."""
+    r0, c0, m = starts[readout.name], starts[READOUT_COPY], readout.n
+    for j in range(m):
+        spec["weights_rec"][r0 + j, c0 + j, 0] = COPY_WEIGHT
+        spec["weights_rec"][c0 + j, c0 + j, 0] = -COPY_WEIGHT // 2
+    sl = slice(c0, c0 + m)
+    spec["dash_syn"][sl] = spec["dash_syn_2"][sl] = 1
+    spec["dash_mem"][sl] = 0
+    spec["threshold"][sl] = (COPY_WEIGHT // 2) << s_rec
+    spec["bias"][sl] = 0
+    w_out = np.zeros((n, m), np.int8)
+    for j in range(m):
+        w_out[r0 + j, j] = COPY_WEIGHT
+        w_out[c0 + j, j] = -COPY_WEIGHT // 2
+    return {"weights_out": w_out, "weight_shift_out": 0, "dash_syn_out": np.ones(m, np.uint8),
+            "dash_mem_out": np.zeros(m, np.uint8), "threshold_out": np.full(m, COPY_WEIGHT // 2, np.int16),
+            "bias_out": np.zeros(m, np.int16), "aliases": [[] for _ in range(n)]}
+
+
+def _place_relay(spec: dict, r: relay_rules.Relay, starts: dict[str, int], input_source: str, s_in: int,
+                 s_rec: int) -> None:
+    """A source's relays: relay j takes channel j of ``r.source`` on its first synapse (the input matrix or the
+    recurrent one, under that matrix's shift), integrates (dash_mem 15) and fires at its threshold."""
+    r0 = starts[relay_rules.relay_name(r.source)]
+    from_input = r.source == input_source
+    w8, theta = r.registers(s_in if from_input else s_rec)
+    for j in range(r.n):
+        if from_input:
+            spec["weights_in"][j, r0 + j, 0] = w8
+        else:
+            spec["weights_rec"][starts[r.source] + j, r0 + j, 0] = w8
+    sl = slice(r0, r0 + r.n)
+    spec["dash_syn"][sl] = spec["dash_syn_2"][sl] = r.dash
+    spec["dash_mem"][sl] = relay_rules.RELAY_DASH_MEM
+    spec["threshold"][sl] = theta
+    spec["bias"][sl] = 0
 
 
 def _spread(v: np.ndarray) -> dict[str, float]:

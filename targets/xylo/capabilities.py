@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from snncc.targets.base import Model
 
 CHIP_KEYS = ("syns61201", "syns63300", "syns65302")            # = chip.CHIPS (tested)
-RULES = ("auto", "direct", "single", "single-identified")      # = lowering.RULES (tested)
+RULES = ("auto", "direct", "single", "single-identified", "relayed")   # = lowering.RULES (tested)
 MODEL_VERBS = ("lower", "check", "agree", "map")
 RANDOM_STEPS = 256                                             # steps of report's and agree's random samples
 DEFAULT_AGREEMENT_SAMPLES = 1000                               # a 95 % interval of about +-0.03
@@ -53,7 +53,8 @@ class XyloOptions(TargetOptions):
     rule: str | None = option(
         "Xylo placement rule: 'direct' (one chip neuron per neuron, nearest decays), 'single' (two synaptic "
         "currents fitted to the neuron's kernel, one spike per step), 'single-identified' (the same, weights fitted "
-        "to the float graph's voltages), or 'auto' (default: each measured in snncc's emulator, the best kept).",
+        "to the float graph's voltages), 'relayed' (the same with sigma-delta relay neurons adding a third kernel "
+        "term), or 'auto' (default: each measured in snncc's emulator, the best kept).",
         choices=RULES, rule=f"rule must be one of {', '.join(RULES)}", capabilities=MODEL_VERBS)
     allow_reset_change: bool = option(
         "Accept a model that resets to zero, deployed with reset by subtraction (Xylo's; snncc check measures the "

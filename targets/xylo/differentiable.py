@@ -41,28 +41,32 @@ BITS = CORE.state_bits - 1
 
 
 class _Events(torch.autograd.Function):
-    """n = clamp(floor(v / theta), 0, cap) for theta >= 1 (the chip's loop); surrogate h((v - theta) / theta) / theta."""
+    """n = clamp(floor(v / theta), 0, cap) for theta >= 1 (the chip's loop); surrogate h((v - theta) / u) / u, u the
+    neuron's unit: the chip units of one IR threshold (theta itself for a direct neuron; for a single-rule neuron,
+    whose threshold carries an offset of about 2**14, its gain)."""
 
     @staticmethod
-    def forward(ctx, v, theta, cap: float, slope: float):
-        ctx.save_for_backward(v, theta)
+    def forward(ctx, v, theta, unit, cap: float, slope: float):
+        ctx.save_for_backward(v, theta, unit)
         ctx.slope = slope
         n = torch.div(v, theta, rounding_mode="floor").clamp(0.0, cap)
         return n
 
     @staticmethod
     def backward(ctx, g):
-        v, theta = ctx.saved_tensors
-        h = 1.0 / (1.0 + ctx.slope * ((v - theta) / theta).abs()) ** 2 / theta
+        v, theta, unit = ctx.saved_tensors
+        h = 1.0 / (1.0 + ctx.slope * ((v - theta) / unit).abs()) ** 2 / unit
         gv = g * h
         gt = None
         if ctx.needs_input_grad[1]:
             gt = (-gv).sum_to_size(theta.shape)
-        return gv, gt, None, None
+        return gv, gt, None, None, None
 
 
-def events(v: torch.Tensor, theta: torch.Tensor, cap: int, slope: float = 5.0) -> torch.Tensor:
-    return _Events.apply(v, theta, float(cap), float(slope))
+def events(v: torch.Tensor, theta: torch.Tensor, cap: int, slope: float = 5.0,
+           unit: torch.Tensor | None = None) -> torch.Tensor:
+    """Events per step with the surrogate on (v - theta) / unit (``unit`` defaults to theta)."""
+    return _Events.apply(v, theta, theta.detach() if unit is None else unit, float(cap), float(slope))
 
 
 def shift_decay(x: torch.Tensor, dash: torch.Tensor) -> torch.Tensor:
@@ -98,7 +102,8 @@ class DifferentiableXylo(torch.nn.Module):
     population Xylo's output neurons carry (the last of ``populations``); ``steps``: time steps per sample."""
 
     def __init__(self, spec: XyloSpec, steps: int, hidden: dict[str, Any] | None = None, output: str = "output", *,
-                 learn=("weights", "thresholds", "biases"), slope: float = 5.0, device=None):
+                 learn=("weights", "thresholds", "biases"), slope: float = 5.0, unit=None, unit_out=None,
+                 device=None):
         super().__init__()
         if any(spec.aliases[k] for k in range(spec.n_hidden)):
             raise SnnccError("fine-tuning a Xylo network with aliases is not supported", field="aliases")
@@ -128,6 +133,9 @@ class DifferentiableXylo(torch.nn.Module):
         self.register_buffer("dash_mem", fixed(spec.dash_mem))
         self.register_buffer("dash_syn_out", fixed(spec.dash_syn_out)[:, None])
         self.register_buffer("dash_mem_out", fixed(spec.dash_mem_out))
+        # the surrogate's scale per neuron (``_Events``): chip units of one IR threshold; None: the threshold
+        self.register_buffer("unit", None if unit is None else fixed(unit))
+        self.register_buffer("unit_out", None if unit_out is None else fixed(unit_out))
         self._kinds = {"weights": [self.w_in, self.w_rec, self.w_out], "thresholds": [self.theta, self.theta_out],
                        "biases": [self.bias, self.bias_out]}
 
@@ -185,8 +193,9 @@ class DifferentiableXylo(torch.nn.Module):
             isyn = isyn - shift_decay(isyn, self.dash_syn)
             dv = sat16(wrap_ste(-shift_decay(v, self.dash_mem), BITS) + isyn.sum(-1))
             v = sat16(v + sat16(dv + bias))
-            volt.append(v / theta)
-            ev = events(v, theta, cap_h, self.slope)
+            u = theta.detach() if self.unit is None else self.unit
+            volt.append((v - theta + u) / u)                 # V in IR thresholds (an offset threshold removed)
+            ev = events(v, theta, cap_h, self.slope, u)
             v = v - ev * theta
             hid.append(ev)
             if forced:
@@ -196,7 +205,7 @@ class DifferentiableXylo(torch.nn.Module):
             isyn_o = isyn_o - shift_decay(isyn_o, self.dash_syn_out)
             dv_o = sat16(wrap_ste(-shift_decay(v_o, self.dash_mem_out), BITS) + isyn_o.sum(-1))
             v_o = sat16(v_o + sat16(dv_o + bias_out))
-            o = events(v_o, theta_out, cap_o, self.slope)
+            o = events(v_o, theta_out, cap_o, self.slope, self.unit_out)
             v_o = v_o - o * theta_out
             outs.append(o)
             if record:

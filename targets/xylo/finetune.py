@@ -101,10 +101,25 @@ def lowered_student(low, steps: int, *, learn=("weights", "thresholds", "biases"
     from snncc.targets.xylo.lowered_student import ChipTimeStudent
 
     hidden = {r.name: np.arange(r.neurons[0], r.neurons[1]) for r in low.populations if r.role == "hidden"}
-    output = next(r.name for r in low.populations if r.role == "output")
-    return ChipTimeStudent(low.xylo_spec, steps, hidden, output, input_pad=low.timing.input_pad,
+    out = next(r for r in low.populations if r.role == "output")
+    readout = [np.arange(r.neurons[0], r.neurons[1]) for r in low.populations if r.role == "readout"]
+    return ChipTimeStudent(low.xylo_spec, steps, hidden, out.name, input_pad=low.timing.input_pad,
                            output_lag=low.timing.output_lag, shifts=low.timing.shifts, learn=learn, slope=slope,
+                           unit=surrogate_units(low), unit_out=np.asarray(out.units, np.float64),
+                           also_learned=np.concatenate(readout) if readout else (), fixed_output=out.method == "copy",
                            device=device)
+
+
+def surrogate_units(low) -> np.ndarray:
+    """Per hidden neuron, the chip units of one IR threshold (the lowering's gains; the chip threshold where no
+    population is carried): the scale of the spike surrogate, so that a single-rule neuron, whose chip threshold is an offset
+    near 2**14, gets a gradient as local as a direct one's."""
+    spec = low.xylo_spec
+    unit = np.asarray(spec.threshold, np.float64).copy()
+    for r in low.populations:
+        if r.role in ("hidden", "readout"):
+            unit[r.neurons[0]:r.neurons[1]] = np.asarray(r.units, np.float64)
+    return unit
 
 
 def lowered_counts(low):

@@ -13,8 +13,9 @@ its output step ``t + output_lag`` is the model's step t. ``ChipTimeStudent`` wr
 
 What training may change is limited to what the lowering's design rules already accepted: a weight that
 the lowering left at zero stays zero (the synapse layout, fan-out and expansion limits are kept), and the
-neurons that carry no population (the always-on bias source) keep their threshold and bias, so they still
-fire once on every step. ``project`` enforces both after every optimiser step.
+neurons that carry no population (the always-on bias source, relays, the readout's copies) keep their
+threshold, bias and incoming weights, so they still do what the lowering built them for; output neurons that
+copy a hidden readout keep every register. ``project`` enforces both after every optimiser step.
 """
 
 from __future__ import annotations
@@ -39,18 +40,28 @@ class ChipTimeStudent(torch.nn.Module):
 
     def __init__(self, spec: XyloSpec, steps: int, hidden: dict[str, Any], output: str, *, input_pad: int,
                  output_lag: int, shifts: dict[str, int], learn=("weights", "thresholds", "biases"),
-                 slope: float = 5.0, device=None):
+                 slope: float = 5.0, unit=None, unit_out=None, also_learned=(), fixed_output: bool = False,
+                 device=None):
         super().__init__()
         self.steps = int(steps)
         self.input_pad, self.output_lag = int(input_pad), int(output_lag)
         self.shifts = {p: int(shifts[p]) for p in hidden}
         self.core = DifferentiableXylo(spec, chip_steps(steps, input_pad, output_lag), hidden, output, learn=learn,
-                                       slope=slope, device=device)
+                                       slope=slope, unit=unit, unit_out=unit_out, device=device)
         self.populations = self.core.populations
         carried = np.zeros(spec.n_hidden, bool)
         for idx in hidden.values():
             carried[np.asarray(idx, np.int64)] = True
+        carried[np.asarray(also_learned, np.int64)] = True
         as_t = dict(dtype=torch.float64, device=device)
+        # neurons that carry no population keep what reaches them too (a relay's gain, a copy's cancellation)
+        self.register_buffer("_fixed_w_in", torch.as_tensor(np.asarray(spec.weights_in, np.float64)[:, ~carried], **as_t))
+        self.register_buffer("_fixed_w_rec", torch.as_tensor(np.asarray(spec.weights_rec, np.float64)[:, ~carried], **as_t))
+        self.fixed_output = bool(fixed_output)
+        if self.fixed_output:         # output neurons that copy a hidden readout: every register of theirs is kept
+            self.register_buffer("_fixed_w_out", torch.as_tensor(np.asarray(spec.weights_out, np.float64), **as_t))
+            self.register_buffer("_fixed_theta_out", torch.as_tensor(np.asarray(spec.threshold_out, np.float64), **as_t))
+            self.register_buffer("_fixed_bias_out", torch.as_tensor(np.asarray(spec.bias_out, np.float64), **as_t))
         self.register_buffer("_keep_w_in", torch.as_tensor(np.asarray(spec.weights_in) != 0, **as_t))
         self.register_buffer("_keep_w_rec", torch.as_tensor(np.asarray(spec.weights_rec) != 0, **as_t))
         self.register_buffer("_keep_w_out", torch.as_tensor(np.asarray(spec.weights_out) != 0, **as_t))
@@ -99,6 +110,12 @@ class ChipTimeStudent(torch.nn.Module):
         if self._fixed.numel():
             c.theta[self._fixed] = self._fixed_theta
             c.bias[self._fixed] = self._fixed_bias
+            c.w_in[:, self._fixed] = self._fixed_w_in
+            c.w_rec[:, self._fixed] = self._fixed_w_rec
+        if self.fixed_output:
+            c.w_out.copy_(self._fixed_w_out)
+            c.theta_out.copy_(self._fixed_theta_out)
+            c.bias_out.copy_(self._fixed_bias_out)
 
     @torch.no_grad()
     def export(self) -> XyloSpec:

@@ -36,7 +36,7 @@ from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF
 from snncc.passes.current_bias import current_biases
 from snncc.passes.fold_linear import fold_linear
-from snncc.targets.xylo import kernels, measure, quantize
+from snncc.targets.xylo import kernels, measure, quantize, relays
 from snncc.targets.xylo.assemble import PopulationRecord, assemble, hidden_state_limit, output_state_limit
 from snncc.targets.xylo.chip import CHIPS, XyloChip, get_chip
 from snncc.targets.xylo.identify import delayed
@@ -44,12 +44,13 @@ from snncc.targets.xylo.structure import Population, populations
 from snncc.targets.xylo.timing import XyloTiming, projection_delay, solve_timing
 from snncc.targets.xylo.twin import spec_graph
 
-RULES = ("auto", "direct", "single", "single-identified")
+RULES = ("auto", "direct", "single", "single-identified", "relayed")
 DEFAULT_CALIBRATION_SAMPLES = 256
 DEFAULT_STEPS = 256
 DEFAULT_DENSITY = 0.08
 IDENTIFY_SCALE = 2.0      # regression weight exp(-|V - theta| / (2 theta)) (0.5-4 measured; 2 among the best)
 IDENTIFY_RIDGE = 1e-3     # pull towards the kernel fit, relative to the mean curvature
+RELAYED_RIDGE = 1e-4      # relayed fits: pull towards zero (1e-3 to 3e-5 measured; 1e-4 among the best)
 PAIRS_TRIED = 2
 
 
@@ -109,6 +110,7 @@ class _Source:
     d_ff: int
     bias_lag: int | None = None        # IR step from which the always-on source's spikes arrive (None: not usable)
     trains: dict[str, np.ndarray] = field(default_factory=dict)
+    raw: dict[str, np.ndarray] = field(default_factory=dict)      # pre's and own spikes, undelayed (IR time)
     v_pre: np.ndarray | None = None
 
 
@@ -163,6 +165,7 @@ def _calibrate(ref: Graph, sources: list[_Source], x: np.ndarray) -> None:
     ones = np.ones(np.shape(x)[:2] + (1,))
     for s in sources:
         s.trains = {s.pop.pre: delayed(trains[s.pop.pre], s.d_ff), s.pop.lif: delayed(trains[s.pop.lif], 1)}
+        s.raw = {s.pop.pre: trains[s.pop.pre], s.pop.lif: trains[s.pop.lif]}
         if s.bias_lag is not None:
             s.trains[quantize.BIAS_SOURCE] = delayed(ones, s.bias_lag)
         s.v_pre = res.voltage[s.pop.lif].numpy() + s.theta * trains[s.pop.lif]
@@ -197,33 +200,107 @@ def _hidden(s: _Source, method: str, dashes: tuple[int, int] | None) -> quantize
 
 
 def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: list[tuple[int, int]] | None,
-                    identified: bool, chip: XyloChip) -> tuple[dict, list[PopulationRecord]]:
+                    identified: bool, chip: XyloChip, timing: XyloTiming | None = None,
+                    relayed: bool = False, readout: str = "output") -> tuple[dict, list[PopulationRecord]]:
     """A spec for one rule: hidden populations ``method`` (single: dash pair per population, kernel or
-    identified weights, rounding with error feedback), the readout population on the output neurons."""
-    hidden = []
-    for i, s in enumerate(sources[:-1]):
-        pop = _hidden(s, method, None if pairs is None else pairs[i])
-        if method == "single":
+    identified weights, rounding with error feedback), the readout population on the output neurons
+    (``readout`` "output"), or on hidden neurons like the others, copied exactly to the output neurons one
+    step later ("hidden": ``assemble._copy_readout``; ``pairs`` then has one more entry).
+    ``relayed`` (identified single populations only): sigma-delta relays (``relays.py``) give every hidden
+    population a third basis function; their events depend on the matrices' shifts, so the fit runs twice:
+    with a provisional shift, then with the shifts the first assembly chose (kept). Relayed fits are pulled
+    towards zero, not towards the two-exponential kernel: its cancelling coefficients (about 7 thresholds
+    per unit weight on the Braille RSNN) cost more in int8 rounding than they gain (docs/xylo_lowering.md)."""
+    on_hidden = sources if readout == "hidden" else sources[:-1]
+    plan = relay_plan(on_hidden, pairs) if relayed else []
+    shifts: tuple[int, int] | None = None
+    ridge = RELAYED_RIDGE if relayed else IDENTIFY_RIDGE
+    for _ in range(2 if plan else 1):
+        if plan:
+            assert timing is not None
+            relay_trains(on_hidden, plan, timing, shifts)
+        hidden = []
+        for i, s in enumerate(on_hidden):
+            pop = _hidden(s, method, None if pairs is None else pairs[i])
+            if plan:
+                pop = _with_relays(pop, s, plan)
+            if method == "single":
+                if identified:
+                    pop = quantize.identify_hidden(pop, s.trains, s.v_pre, IDENTIFY_SCALE, ridge)
+                else:
+                    pop = quantize.hidden_hessians(pop, s.trains, s.v_pre, IDENTIFY_SCALE, ridge)
+            hidden.append(pop)
+        limits = {p.name: hidden_state_limit(p, s.trains, s.v_pre) for p, s in zip(hidden, on_hidden)}
+        if readout == "hidden":
+            out, out_limit = None, None
+        else:
+            last = sources[-1]
+            out = quantize.output_native(last.pop.lif, last.pop.pre, last.alpha, last.beta, last.theta, last.w_ff,
+                                         last.bias_v, last.bias_i, bias_source=last.bias_lag == 0)
+            pre = last.trains[last.pop.pre]
+            if out.bias_source:
+                pre = np.concatenate([pre, last.trains[quantize.BIAS_SOURCE]], axis=2)
             if identified:
-                pop = quantize.identify_hidden(pop, s.trains, s.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
-            else:
-                pop = quantize.hidden_hessians(pop, s.trains, s.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
-        hidden.append(pop)
-    last = sources[-1]
-    out = quantize.output_native(last.pop.lif, last.pop.pre, last.alpha, last.beta, last.theta, last.w_ff,
-                                 last.bias_v, last.bias_i, bias_source=last.bias_lag == 0)
-    pre = last.trains[last.pop.pre]
-    if out.bias_source:
-        pre = np.concatenate([pre, last.trains[quantize.BIAS_SOURCE]], axis=2)
-    if identified:
-        out = quantize.identify_output(out, pre, _own(last), last.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
-    limits = {p.name: hidden_state_limit(p, s.trains, s.v_pre) for p, s in zip(hidden, sources)}
-    out_limit = output_state_limit(out, pre, last.v_pre)
-    spec, records = assemble(hidden, out, n_inputs, sources[0].pop.pre, limits, out_limit,
-                             "feedback" if method == "single" else "nearest")
+                out = quantize.identify_output(out, pre, _own(last), last.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
+            out_limit = output_state_limit(out, pre, last.v_pre)
+        spec, records = assemble(hidden, out, n_inputs, sources[0].pop.pre, limits, out_limit,
+                                 "feedback" if method == "single" else "nearest", relays=plan, shifts=shifts)
+        shifts = (int(spec["weight_shift_in"]), int(spec["weight_shift_rec"]))
     if chip.synapses_per_hidden < 2:          # one synaptic current: the weights' last axis has one entry
         spec["weights_in"], spec["weights_rec"] = spec["weights_in"][:, :, :1], spec["weights_rec"][:, :, :1]
     return spec, records
+
+
+def _with_relays(pop: quantize.HiddenFloat, s: _Source, plan: list[relays.Relay]) -> quantize.HiddenFloat:
+    """``pop`` with its prior weights at zero and a zero prior for each relay source that reaches it (the
+    identification fits them all)."""
+    pop.weights = {k: np.zeros_like(v) for k, v in pop.weights.items()}
+    for r in plan:
+        name = relays.relay_name(r.source)
+        if name in s.trains:
+            pop.weights[name] = np.zeros((2, pop.n, r.n))
+    pop.columns = [(src, k) for k in range(2) for src in pop.weights]
+    return pop
+
+
+# -- relays ------------------------------------------------------------------------------------------------
+def relay_plan(hidden: list[_Source], pairs: list[tuple[int, int]] | None) -> list[relays.Relay]:
+    """The relays a relayed candidate adds to the populations on ``hidden`` neurons: one per channel of the
+    input and of every hidden population that feeds a hidden population (its own recurrence or the next one);
+    each takes the slower synapse dash of the first population it feeds, and the gain its calibration trains
+    allow (``relays.choose_gain``)."""
+    plan = []
+    for k, s in enumerate(hidden):
+        dash = int(pairs[k][1]) if pairs is not None else 3
+        if k == 0:
+            plan.append(relays.Relay(s.pop.pre, s.raw[s.pop.pre].shape[2], dash,
+                                     relays.choose_gain(s.raw[s.pop.pre], dash)))
+        feeds_next = k + 1 < len(hidden)
+        if s.pop.rec is not None or feeds_next:
+            d = dash if s.pop.rec is not None else int(pairs[k + 1][1]) if pairs is not None else 3
+            plan.append(relays.Relay(s.pop.lif, s.raw[s.pop.lif].shape[2], d, relays.choose_gain(s.raw[s.pop.lif], d)))
+    return plan
+
+
+def relay_trains(hidden: list[_Source], plan: list[relays.Relay], timing: XyloTiming,
+                 shifts: tuple[int, int] | None) -> None:
+    """Each hidden population's relay trains in its IR time: relay events of source Q (chip rules, the registers
+    under ``shifts``, else a provisional shift 0) reach population P ``d + 1 + s_Q - s_P`` steps after Q's IR
+    step (d: Q -> relay, 0 from the input, 1 from hidden neurons; relay -> P: 1)."""
+    from snncc.targets.xylo.timing import CHIP_DELAY_HIDDEN, CHIP_DELAY_INPUT
+
+    first_pre = hidden[0].pop.pre
+    for s in hidden:
+        for r in plan:
+            if r.source not in (s.pop.pre, s.pop.lif if s.pop.rec is not None else None):
+                continue
+            is_input = r.source == first_pre
+            shift = 0 if shifts is None else shifts[0 if is_input else 1]
+            w8, theta = r.registers(shift)
+            events = relays.relay_events(s.raw[r.source], r.dash, w8, shift, theta)
+            lag = (CHIP_DELAY_INPUT if is_input else CHIP_DELAY_HIDDEN) + CHIP_DELAY_HIDDEN \
+                + timing.shifts[r.source] - timing.shifts[s.pop.lif]
+            s.trains[relays.relay_name(r.source)] = delayed(events.astype(np.float64), lag)
 
 
 def _emulate(spec: dict, chip_x: np.ndarray) -> np.ndarray:
@@ -232,6 +309,18 @@ def _emulate(spec: dict, chip_x: np.ndarray) -> np.ndarray:
     from snncc.targets.xylo.spec import XyloSpec
 
     return emulate(XyloSpec(**spec), chip_x).output_spikes
+
+
+def _event_rates(spec: dict, chip_x: np.ndarray) -> dict[str, float]:
+    """The share of channel- and neuron-steps with an event, ``spec`` run on the chip inputs (every hidden neuron:
+    relays and copies too), for the real-time estimate; several events of one neuron in one step count once,
+    as the cycle model states its rates (``rules.cycles_per_step``)."""
+    from snncc.targets.xylo.emulator import emulate
+    from snncc.targets.xylo.spec import XyloSpec
+
+    run = emulate(XyloSpec(**spec), chip_x, record=True)
+    return {"input": float(np.mean(chip_x > 0)), "hidden": float(np.mean(run.spikes > 0)),
+            "output": float(np.mean(run.output_spikes > 0))}
 
 
 def _bias_notes(sources: list[_Source], records: list[PopulationRecord], timing: XyloTiming) -> list[str]:
@@ -266,27 +355,67 @@ def _own(s: _Source) -> np.ndarray:
     return out
 
 
-def candidate_rules(sources: list[_Source], rule: str, chip: XyloChip) -> list[tuple[str, str, list | None, bool]]:
-    """(name, method, dash pairs per hidden population, identified) for ``rule`` (``single`` needs two
-    synaptic currents per hidden neuron: not on Xylo IMU)."""
+@dataclass(frozen=True)
+class Candidate:
+    """One way to lower: ``method`` for the hidden populations (dash ``pairs`` per population placed on hidden
+    neurons), ``identified`` weights, ``relayed`` (sigma-delta relays), the readout on the output neurons
+    ("output") or on hidden neurons copied to them ("hidden")."""
+
+    name: str
+    method: str
+    pairs: list | None = None
+    identified: bool = False
+    relayed: bool = False
+    readout: str = "output"
+
+
+def candidate_rules(sources: list[_Source], rule: str, chip: XyloChip) -> list[Candidate]:
+    """The candidates of ``rule`` (``single`` needs two synaptic currents per hidden neuron: not on Xylo IMU;
+    ``relayed`` also needs room for its relays, and tries the readout on hidden neurons where they fit)."""
     if chip.synapses_per_hidden < 2:
         if rule not in ("auto", "direct"):
             raise SnnccError(f"the {rule} rule needs two synaptic currents per hidden neuron; {chip.name} has "
                              f"{chip.synapses_per_hidden} (use --rule direct)", field="--rule")
-        return [("direct", "direct", None, False)]
-    hidden = sources[:-1]
-    fits = [kernels.best_pairs(float(np.median(s.alpha)), float(np.median(s.beta)), PAIRS_TRIED) for s in hidden]
-    out: list[tuple[str, str, list | None, bool]] = []
+        return [Candidate("direct", "direct")]
+    fits = [kernels.best_pairs(float(np.median(s.alpha)), float(np.median(s.beta)), PAIRS_TRIED) for s in sources]
+    out: list[Candidate] = []
     if rule in ("auto", "direct"):
-        out.append(("direct", "direct", None, False))
+        out.append(Candidate("direct", "direct"))
     for k in range(PAIRS_TRIED if rule == "auto" else 1):
-        pairs = [f[min(k, len(f) - 1)].dashes for f in fits]
+        every = [f[min(k, len(f) - 1)].dashes for f in fits]
+        pairs = every[:-1]
         label = "/".join(f"{a},{b}" for a, b in pairs)
         if rule in ("auto", "single"):
-            out.append((f"single dashes {label}", "single", pairs, False))
+            out.append(Candidate(f"single dashes {label}", "single", pairs))
         if rule in ("auto", "single-identified"):
-            out.append((f"single-identified dashes {label}", "single", pairs, True))
+            out.append(Candidate(f"single-identified dashes {label}", "single", pairs, identified=True))
+        if rule in ("auto", "relayed") and k == 0:      # the best pair only (a relayed fit costs ~10 s)
+            room = relay_room(sources[:-1], pairs, chip)
+            if room is None:
+                out.append(Candidate(f"relayed dashes {label}", "single", pairs, True, True))
+            elif rule == "relayed":
+                raise SnnccError(room, field="--rule")
+            if relay_room(sources, every, chip, copies=len(sources[-1].theta)) is None:
+                out.append(Candidate(f"relayed dashes {label}, readout on hidden neurons "
+                                     f"(dashes {every[-1][0]},{every[-1][1]}) copied to the output neurons",
+                                     "single", every, True, True, "hidden"))
     return out
+
+
+def relay_room(hidden: list[_Source], pairs: list[tuple[int, int]], chip: XyloChip, copies: int = 0) -> str | None:
+    """None when the populations on ``hidden`` neurons, their relays, the readout's ``copies`` and the bias
+    source fit ``chip``'s hidden neurons and its input and output expansion (conservatively: every hidden
+    neuron within both), else why not, in one line."""
+    plan = relay_plan(hidden, pairs)
+    used = sum(len(s.theta) for s in hidden) + copies + 1
+    total = used + sum(r.n for r in plan)
+    if total > chip.max_hidden:
+        return (f"the relayed rule needs {total} hidden neurons (populations, {sum(r.n for r in plan)} relays, the "
+                f"bias source); {chip.name} has {chip.max_hidden}")
+    if total > chip.max_input_expansion or total > chip.max_output_expansion:
+        return (f"the relayed rule places {total} hidden neurons; {chip.name} lets input weights reach the first "
+                f"{chip.max_input_expansion} and output weights leave the last {chip.max_output_expansion}")
+    return None
 
 
 def lowering_settings(options: Any) -> dict[str, Any]:
@@ -327,30 +456,32 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     candidates: dict[str, dict[str, Any]] = {}
     emulator = opts.get("emulator")      # (spec, chip inputs (B, T', C)) -> output spikes (B, T', Nout); None: the twin
     best = None
-    for name, method, pairs, identified in candidate_rules(sources, rule, chip):
-        spec, records = build_candidate(sources, n_in, method, pairs, identified, chip)
+    readout_timing = {"output": timing, "hidden": solve_timing(ref, pops, readout_extra=1)}
+    for cand in candidate_rules(sources, rule, chip):
+        ctiming = readout_timing[cand.readout]
+        spec, records = build_candidate(sources, n_in, cand.method, cand.pairs, cand.identified, chip, ctiming,
+                                        cand.relayed, cand.readout)
         spec["dt"] = float(ref.dt)
         twin = spec_graph(spec, ref.dt)
-        chip_x = measure.chip_window(sel_x, timing.input_pad, timing.output_lag)
+        chip_x = measure.chip_window(sel_x, ctiming.input_pad, ctiming.output_lag)
         out = emulator(spec, chip_x) if emulator is not None else _emulate(spec, chip_x)
-        counts = measure.read_window(np.asarray(out), timing.output_lag, sel_x.shape[1]).sum(axis=1)
+        counts = measure.read_window(np.asarray(out), ctiming.output_lag, sel_x.shape[1]).sum(axis=1)
         agr = measure.agreement(counts, float_sel)
-        candidates[name] = agr.as_dict()
+        candidates[cand.name] = agr.as_dict()
         if best is None or agr.agreement > best[0].agreement:
-            best = (agr, name, spec, records, twin)
-    agr, name, spec, records, twin = best
+            best = (agr, cand, spec, records, twin)
+    agr, chosen, spec, records, twin = best
+    name, timing = chosen.name, readout_timing[chosen.readout]
     if x.shape[0] > 1 and bool(opts.get("refit", True)):
         # the chosen rule, fitted again on every calibration sample (the selection half too)
-        chosen = next(c for c in candidate_rules(sources, rule, chip) if c[0] == name)
         _calibrate(ref, sources, x)
-        spec, records = build_candidate(sources, n_in, chosen[1], chosen[2], chosen[3], chip)
+        spec, records = build_candidate(sources, n_in, chosen.method, chosen.pairs, chosen.identified, chip, timing,
+                                        chosen.relayed, chosen.readout)
         spec["dt"] = float(ref.dt)
         twin = spec_graph(spec, ref.dt)
     design_rules.check_spec(spec, chip)
     notes = list(timing.notes) + fold.notes()
-    rates = {"input": float(np.mean(x > 0)),
-             "hidden": float(np.mean([np.mean(s.trains[s.pop.lif] > 0) for s in sources[:-1]])),
-             "output": float(np.mean(sources[-1].trains[sources[-1].pop.lif] > 0))}
+    rates = _event_rates(spec, measure.chip_window(x, timing.input_pad, timing.output_lag))
     rt = design_rules.real_time(spec, float(ref.dt), rates)
     notes.append(rt.line())
     notes += _bias_notes(sources, records, timing)

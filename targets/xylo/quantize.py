@@ -256,19 +256,20 @@ def _shift_for(max_abs_chip: float) -> int:
     return int(min(SAFE_WEIGHT_SHIFT, np.ceil(np.log2(max_abs_chip / WEIGHT_MAX))))
 
 
-def choose_gains(state_limit: np.ndarray, weight_max: list[np.ndarray]) -> tuple[np.ndarray, list[int]]:
+def choose_gains(state_limit: np.ndarray, weight_max: list[np.ndarray],
+                 shifts: tuple[int, ...] | None = None) -> tuple[np.ndarray, list[int]]:
     """Per-neuron gains (chip units per threshold) and one shift per weight matrix.
 
     ``state_limit``: the largest gain each neuron's states allow; ``weight_max``: per matrix, each neuron's
     largest |weight| in threshold units. The shift of a matrix is the smallest under which every neuron keeps
     min(state_limit, MIN_GAIN); a neuron's gain is then the largest both its states and every matrix's
-    int8 range allow, so weights use their 8 bits wherever the states leave room.
+    int8 range allow, so weights use their 8 bits wherever the states leave room. ``shifts`` given: those
+    shifts (the gains then as their int8 ranges allow).
     """
     floor = np.minimum(state_limit, MIN_GAIN)
-    shifts = []
-    for wm in weight_max:
-        need = float(np.max(floor * wm)) if wm.size else 0.0
-        shifts.append(_shift_for(need))
+    if shifts is None:
+        shifts = [_shift_for(float(np.max(floor * wm)) if wm.size else 0.0) for wm in weight_max]
+    shifts = [int(s) for s in shifts]
     gains = state_limit.astype(np.float64).copy()
     for s, wm in zip(shifts, weight_max):
         with np.errstate(divide="ignore"):

@@ -1,0 +1,109 @@
+"""Sigma-delta relay neurons: a third basis function for Xylo's memoryless-readout neurons.
+
+A memoryless-readout neuron (``quantize.hidden_single``) answers an input spike with two exponentials
+``u_1 a_1^(n+1) + u_2 a_2^(n+1)`` on Xylo's grid ``a = 1 - 2^-d``. A float kernel with a pole off the grid
+is fitted poorly by two of them: the NIR paper's Braille RSNN (alpha 0.75, beta 0.85) loses about 20 points
+of argmax agreement to its membrane pole alone (0.85 between the grid's 0.75 and 0.875). Any linear path
+on the chip has only grid poles, but a *repeated* pole, ``n a^n``, fits an off-grid pole well
+(0.85^n = 0.875^n (0.85 / 0.875)^n, to first order in n). A relay supplies it:
+
+    one hidden neuron per presynaptic channel z (the input's channels, a hidden population's neurons)
+    i  <- a_R (i + w z)                               its synapse (dash_syn d_R; w = int8 << the matrix's shift)
+    V  <- V - max(V >> 15, sign V) + i                its membrane integrates (dash_mem 15: a leak of one unit)
+    n  = min(V // theta_R, 31);  V -= n theta_R       events, the remainder carried (a sigma-delta quantizer)
+
+so ``n[t] ~ (w / theta_R) F(z)[t]`` with ``F(z)[t] = a_R (F[t-1] + z[t])``, its quantization error carried to
+the next step (shaped to high frequencies, which the target's synapse filters out). The events reach a
+target neuron one step later (hidden -> hidden) through its own two synapses: the basis functions
+``(F_{a_k} * F_{a_R})(z)`` delayed by one step, ``n a^n`` where ``a_k = a_R``. The identification
+(``identify.py``) fits their weights with the rest; the relays' own registers are fixed here.
+
+Relays are shared: one per channel of each source population, used by every population that source feeds
+(and by the source's own recurrence). ``relay_events`` computes their events on given trains with the chip's
+integer rules (``emulator.py``'s decay, saturation and firing), so the identification sees what the chip does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from snncc.targets.xylo import kernels
+from snncc.targets.xylo.chip import CORE
+from snncc.targets.xylo.weights import wrap16
+
+RELAY_DASH_MEM = 15          # V loses max(V >> 15, sign V): one unit per step, an integrator
+CURRENT_BUDGET = 3360        # largest chip weight: a channel firing on every step keeps i <= 7.8 w < 32767 (dash 3)
+EVENT_MARGIN = 1.25          # headroom over the largest filtered train of the calibration inputs
+PREFIX = "relay of "
+
+
+def relay_name(source: str) -> str:
+    """The source name of a population's relays (a key of a ``HiddenFloat``'s weights and of the trains)."""
+    return PREFIX + source
+
+
+def relayed_source(name: str) -> str | None:
+    """The population a relay source name relays (None for other names)."""
+    return name[len(PREFIX):] if name.startswith(PREFIX) else None
+
+
+@dataclass(frozen=True)
+class Relay:
+    """The relays of one source: ``n`` neurons, their synapse dash and the gain their events aim for."""
+
+    source: str
+    n: int
+    dash: int
+    gain: float             # events per unit of the filtered train F(z) (before integer rounding)
+
+    def registers(self, shift: int) -> tuple[int, int]:
+        """(int8 input weight, threshold) under the input matrix's left ``shift``: the largest weight whose
+        current stays in range, and theta_R = w << shift / gain."""
+        a = float(kernels.grid(self.dash))
+        budget = min(CURRENT_BUDGET, int(CORE.state_max / (EVENT_MARGIN * a / max(1 - a, 1e-9) + 1)))
+        w8 = int(max(1, min(CORE.weight_max, budget >> int(shift))))
+        chip_w = w8 << int(shift)
+        theta = int(np.clip(round(chip_w / self.gain), 1, CORE.state_max))
+        return w8, theta
+
+
+def choose_gain(trains: np.ndarray, dash: int) -> float:
+    """Events per unit of F(z) so the calibration's largest F(z) (with margin) gives 31 events; at most the
+    gain of a channel that fires on every step (F -> a / (1 - a))."""
+    a = float(kernels.grid(dash))
+    acc = np.zeros((trains.shape[0], trains.shape[2]))
+    peak = 0.0
+    for t in range(trains.shape[1]):
+        acc = a * (acc + trains[:, t])
+        peak = max(peak, float(acc.max(initial=0.0)))
+    peak = max(peak * EVENT_MARGIN, a)             # at least one spike's worth
+    return float(CORE.max_hidden_spikes / min(peak, a / max(1 - a, 1e-9) * EVENT_MARGIN))
+
+
+def relay_events(z: np.ndarray, dash: int, w8: int, shift: int, theta: int) -> np.ndarray:
+    """Events (B, T, n) of relays fed ``z`` (B, T, n) event counts, one channel each, delivered in the step
+    they are given (chip integer rules: saturating delivery, shift decay, 16-bit membrane, multi-event
+    firing up to 31 with subtraction)."""
+    from snncc.targets.xylo.emulator import decay, sat16
+
+    w = int(wrap16(np.int64(w8) << int(shift)))
+    z = np.asarray(z, np.int64)
+    b, t_steps, n = z.shape
+    i = np.zeros((b, n), np.int64)
+    v = np.zeros((b, n), np.int64)
+    d_syn = np.full(n, int(dash), np.int64)
+    d_mem = np.full(n, RELAY_DASH_MEM, np.int64)
+    out = np.zeros((b, t_steps, n), np.int64)
+    cap = CORE.max_hidden_spikes
+    for t in range(t_steps):
+        i = sat16(i + z[:, t] * w)
+        i = i - decay(i, d_syn)
+        dv = wrap16(-decay(v, d_mem))
+        dv = sat16(dv + i)
+        v = sat16(v + dv)
+        ev = np.where(v >= theta, np.minimum(v // theta, cap), 0)
+        v = v - ev * theta
+        out[:, t] = ev
+    return out

@@ -1,0 +1,153 @@
+"""Sigma-delta relays and the readout copied to the output neurons (the ``relayed`` rule), against XyloSim."""
+
+import numpy as np
+import pytest
+
+from snncc.errors import SnnccError
+from snncc.ir.simulate import simulate
+from snncc.targets.xylo import measure, relays
+from snncc.targets.xylo.assemble import COPY_WEIGHT
+from snncc.targets.xylo.lowering import lower
+
+from xylo_models import chain, run_xylosim, spikes
+
+QUICK = {"calibration_samples": 32, "time_steps": 80, "density": 0.15}
+
+
+def _relay_spec(n, w8, shift, theta, dash):
+    """n relays, relay j fed by input channel j, nothing else (output neurons idle)."""
+    spec = {"weights_in": np.zeros((n, n, 2), np.int8), "weights_rec": np.zeros((n, n, 2), np.int8),
+            "weights_out": np.zeros((n, 1), np.int8), "dash_mem": np.full(n, relays.RELAY_DASH_MEM, np.uint8),
+            "dash_syn": np.full(n, dash, np.uint8), "dash_syn_2": np.full(n, dash, np.uint8),
+            "dash_mem_out": np.zeros(1, np.uint8), "dash_syn_out": np.ones(1, np.uint8),
+            "threshold": np.full(n, theta, np.int16), "threshold_out": np.full(1, 100, np.int16),
+            "bias": np.zeros(n, np.int16), "bias_out": np.zeros(1, np.int16), "weight_shift_in": shift,
+            "weight_shift_rec": 0, "weight_shift_out": 0}
+    for j in range(n):
+        spec["weights_in"][j, j, 0] = w8
+    return spec
+
+
+@pytest.mark.parametrize("shift,gain,dash", [(0, 6.0, 3), (3, 3.6, 3), (8, 4.0, 2)])
+def test_relay_events_are_the_chips(shift, gain, dash):
+    """``relay_events`` (what the identification sees) equals XyloSim's hidden events for the same registers,
+    including several events per step and the remainder carried from step to step."""
+    r = relays.Relay("x", 5, dash, gain)
+    w8, theta = r.registers(shift)
+    assert 1 <= w8 <= 127 and theta >= 1
+    z = spikes(np.random.default_rng(shift), 4, 150, 5, 0.3)
+    mine = relays.relay_events(z, dash, w8, shift, theta)
+    chip = run_xylosim(_relay_spec(5, w8, shift, theta, dash), z, record=True).spikes
+    assert np.array_equal(mine, chip.astype(np.int64))
+    assert mine.max() >= 2 and mine.sum() > 200           # multi-event steps, active
+    # sigma-delta: the events track the filtered train (the gain), error bounded by one event
+    a = 1 - 2.0 ** -dash
+    f = np.zeros(z.shape[:1] + z.shape[2:])
+    total = np.zeros_like(f)
+    for t in range(z.shape[1]):
+        f = a * (f + z[:, t])
+        total += f
+    want = total * (w8 << shift) / theta
+    assert np.all(np.abs(mine.sum(axis=1) - want) <= 0.02 * want + 2)
+
+
+def test_relay_registers_keep_the_current_in_range():
+    for shift in range(0, 9):
+        w8, theta = relays.Relay("x", 1, 3, 4.0).registers(shift)
+        assert (w8 << shift) * 8 < 32767          # a channel firing on every step: i -> 7 w (dash 3)
+
+
+def test_readout_copy_is_exact():
+    """A hidden readout copied to the output neurons one step later, exactly, whatever its spike train:
+    bursts of every length, isolated spikes, silence (XyloSim)."""
+    rng = np.random.default_rng(3)
+    n_in, m = 4, 4
+    # readout neurons 0..m-1 fire exactly when their input channel has a spike (memoryless, one spike per step)
+    n = 2 * m
+    spec = {"weights_in": np.zeros((n_in, n, 2), np.int8), "weights_rec": np.zeros((n, n, 2), np.int8),
+            "dash_mem": np.zeros(n, np.uint8), "dash_syn": np.ones(n, np.uint8), "dash_syn_2": np.ones(n, np.uint8),
+            "threshold": np.full(n, 32, np.int16), "bias": np.zeros(n, np.int16), "weight_shift_in": 0,
+            "weight_shift_rec": 0}
+    for j in range(m):
+        spec["weights_in"][j, j, 0] = 64                 # i = 32 after the decay: V = 32, one event
+        spec["weights_rec"][j, j, 0] = -32               # the own spike cancels the current's tail (32 - 32)
+    from snncc.targets.xylo.assemble import _copy_readout
+    from snncc.targets.xylo.quantize import HiddenFloat
+
+    readout = HiddenFloat("r", "single", np.ones(m), np.ones((m, 2), np.int64), np.zeros(m, np.int64), {}, np.zeros(m))
+    spec.update(_copy_readout(spec, readout, {"r": 0, "readout copy": m}, spec["weight_shift_rec"], n))
+    x = np.zeros((3, 120, n_in), np.uint8)
+    x[0] = rng.random((120, n_in)) < 0.5
+    x[1, 10:60] = 1                                      # a 50-step burst
+    x[1, 70:120:2] = 1
+    res = run_xylosim(spec, x, record=True)
+    hidden = res.spikes[:, :, :m]
+    assert hidden.sum() > 100 and hidden.max() == 1
+    assert np.array_equal(res.output_spikes[:, 1:], hidden[:, :-1])
+    assert not res.output_spikes[:, 0].any()
+    assert res.spikes[:, :, m:].max() == 1 and np.array_equal(res.spikes[:, 1:, m:], hidden[:, :-1])
+    assert COPY_WEIGHT & (COPY_WEIGHT - 1) == 0          # a power of two: its halves are exact
+
+
+@pytest.fixture(scope="module")
+def model():
+    return chain(np.random.default_rng(5), n_in=6, n_hidden=12, n_out=3, beta=0.85, alpha_o=0.45, beta_o=0.7)
+
+
+def test_relayed_rule_runs_unchanged_in_xylosim_and_follows_the_float_graph(model):
+    low = lower(model, dict(QUICK, rule="relayed"))
+    rec = low.record()
+    kinds = [p["role"] for p in rec["populations"]]
+    assert kinds.count("relay") == 2 and low.rule.startswith("relayed")
+    relay = [p for p in rec["populations"] if p["role"] == "relay"]
+    assert [p["neurons"][1] - p["neurons"][0] for p in relay] == [6, 12]      # one per input channel, per neuron
+    x = spikes(np.random.default_rng(11), 60, 80, 6, 0.15)
+    from snncc.targets.xylo.emulator import emulate
+    from snncc.targets.xylo.spec import XyloSpec
+
+    chip_x = low.chip_input(x)
+    vendor = run_xylosim(low.spec, chip_x, record=True)
+    mine = emulate(XyloSpec(**low.spec), chip_x, record=True)
+    assert np.array_equal(vendor.output_spikes, mine.output_spikes)
+    assert np.array_equal(vendor.spikes, mine.spikes) and np.array_equal(vendor.vmem, mine.vmem)
+    r0, r1 = relay[1]["neurons"]
+    assert vendor.spikes[:, :, r0:r1].max() >= 2          # relays emit several events a step
+    counts = low.read_output(vendor.output_spikes, x.shape[1]).sum(axis=1)
+    agr = measure.agreement(counts, simulate(model, x, record="spikes").spikes["out"].numpy().sum(axis=1))
+    assert agr.counted > 30 and agr.agreement >= 0.75, agr.line()
+
+
+def test_auto_measures_relayed_candidates_with_the_readout_on_both_sides(model):
+    low = lower(model, QUICK)
+    names = list(low.candidates)
+    assert any(n.startswith("relayed") and "readout on hidden" not in n for n in names)
+    assert any("readout on hidden neurons" in n for n in names)
+
+
+def test_readout_on_hidden_neurons_reads_one_step_later_and_is_exact_in_xylosim(model):
+    """The candidate with the readout on hidden neurons: output neurons copy it, the output is read one chip step
+    later, and the counts equal the readout population's on the chip."""
+    from snncc.targets.xylo import lowering as lw
+
+    pops = lw.populations(model)
+    timing = lw.solve_timing(model, pops, readout_extra=1)
+    sources = lw._sources(model, pops, timing)
+    x = spikes(np.random.default_rng(2), 32, 80, 6, 0.15)
+    lw._calibrate(model, sources, x)
+    cand = next(c for c in lw.candidate_rules(sources, "relayed", lw.get_chip(None)) if c.readout == "hidden")
+    spec, records = lw.build_candidate(sources, 6, cand.method, cand.pairs, True, lw.get_chip(None), timing, True,
+                                       "hidden")
+    assert [r.role for r in records][-1] == "output" and records[-1].method == "copy"
+    readout = next(r for r in records if r.role == "readout")
+    res = run_xylosim({**spec, "dt": 1e-3}, measure.chip_window(x, timing.input_pad, timing.output_lag), record=True)
+    hid = res.spikes[:, :, readout.neurons[0]:readout.neurons[1]]
+    assert hid.sum() > 50 and np.array_equal(res.output_spikes[:, 1:], hid[:, :-1])
+
+
+def test_relayed_rule_is_refused_in_one_line_where_it_cannot_fit(model):
+    with pytest.raises(SnnccError, match="two synaptic currents"):
+        lower(model, dict(QUICK, rule="relayed", chip="syns63300"))
+    big = chain(np.random.default_rng(1), n_in=16, n_hidden=60, n_out=3)
+    with pytest.raises(SnnccError, match="relayed rule places .* hidden neurons; Xylo Audio 3") as err:
+        lower(big, dict(QUICK, rule="relayed", chip="syns65302", density=0.1))
+    assert "\n" not in str(err.value)
