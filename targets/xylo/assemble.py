@@ -177,13 +177,14 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
             units=tuple(float(v) for v in gains[sl])))
     for r in relays:
         _place_relay(spec, r, starts, input_source, s_in, s_rec)
+        shift = s_in if r.source == input_source else s_rec
+        r0 = starts[relay_rules.relay_name(r.source)]
         records.append(PopulationRecord(
-            relay_rules.relay_name(r.source), "relay", "sigma-delta",
-            (starts[relay_rules.relay_name(r.source)], starts[relay_rules.relay_name(r.source)] + r.n),
+            relay_rules.relay_name(r.source), "relay", "sigma-delta", (r0, r0 + r.n),
             {"dash_syn": [r.dash], "dash_mem": [relay_rules.RELAY_DASH_MEM]}, "fixed", "-",
-            {"min": r.gain, "median": r.gain, "max": r.gain},
-            [f"events per unit of the filtered train: {r.gain:.3g} (registers: weight, threshold "
-             f"{r.registers(s_in if r.source == input_source else s_rec)})"]))
+            {k: r.gain(shift) for k in ("min", "median", "max")},
+            [f"events per unit of the filtered train: {r.gain(shift):.3g} (registers: weight, threshold "
+             f"{r.registers(shift)})"]))
     if source:                       # no input, memoryless, V = bias = threshold: exactly one spike every step
         k = starts[BIAS_SOURCE]
         spec["threshold"][k] = SINGLE_THRESHOLD

@@ -12,7 +12,8 @@ on the chip has only grid poles, but a *repeated* pole, ``n a^n``, fits an off-g
     V  <- V - max(V >> 15, sign V) + i                its membrane integrates (dash_mem 15: a leak of one unit)
     n  = min(V // theta_R, 31);  V -= n theta_R       events, the remainder carried (a sigma-delta quantizer)
 
-so ``n[t] ~ (w / theta_R) F(z)[t]`` with ``F(z)[t] = a_R (F[t-1] + z[t])``, its quantization error carried to
+so ``n[t] ~ (w / theta_R) F(z)[t]``, theta_R the smallest threshold under which a 0/1 train never reaches the cap
+(a capped relay would keep the excess in its membrane and fire on long after its input stopped), with ``F(z)[t] = a_R (F[t-1] + z[t])``, its quantization error carried to
 the next step (shaped to high frequencies, which the target's synapse filters out). The events reach a
 target neuron one step later (hidden -> hidden) through its own two synapses: the basis functions
 ``(F_{a_k} * F_{a_R})(z)`` delayed by one step, ``n a^n`` where ``a_k = a_R``. The identification
@@ -34,8 +35,9 @@ from snncc.targets.xylo.chip import CORE
 from snncc.targets.xylo.weights import wrap16
 
 RELAY_DASH_MEM = 15          # V loses max(V >> 15, sign V): one unit per step, an integrator
-CURRENT_BUDGET = 3360        # largest chip weight: a channel firing on every step keeps i <= 7.8 w < 32767 (dash 3)
-EVENT_MARGIN = 1.25          # headroom over the largest filtered train of the calibration inputs
+CURRENT_BUDGET = 3360        # largest chip weight: a channel firing on every step keeps i < 8 w < 32767 (dash <= 3)
+EVENTS_MAX = 30              # at most 30 events from the current (+1 from the remainder): never the cap of 31, so the
+                             # membrane never winds up (a capped relay keeps the excess and fires on long after)
 PREFIX = "relay of "
 
 
@@ -51,35 +53,31 @@ def relayed_source(name: str) -> str | None:
 
 @dataclass(frozen=True)
 class Relay:
-    """The relays of one source: ``n`` neurons, their synapse dash and the gain their events aim for."""
+    """The relays of one source: ``n`` neurons fed 0/1 events (the input's spikes, single-rule neurons' spikes),
+    their synapse dash."""
 
     source: str
     n: int
     dash: int
-    gain: float             # events per unit of the filtered train F(z) (before integer rounding)
 
     def registers(self, shift: int) -> tuple[int, int]:
-        """(int8 input weight, threshold) under the input matrix's left ``shift``: the largest weight whose
-        current stays in range, and theta_R = w << shift / gain."""
-        a = float(kernels.grid(self.dash))
-        budget = min(CURRENT_BUDGET, int(CORE.state_max / (EVENT_MARGIN * a / max(1 - a, 1e-9) + 1)))
-        w8 = int(max(1, min(CORE.weight_max, budget >> int(shift))))
+        """(int8 input weight, threshold) under the input matrix's left ``shift``: the largest weight whose current
+        stays in range, and the smallest threshold that can never reach the cap (``current_bound``)."""
+        w8 = int(max(1, min(CORE.weight_max, CURRENT_BUDGET >> int(shift))))
         chip_w = w8 << int(shift)
-        theta = int(np.clip(round(chip_w / self.gain), 1, CORE.state_max))
-        return w8, theta
+        theta = -(-current_bound(chip_w, self.dash) // EVENTS_MAX)
+        return w8, int(min(max(theta, 1), CORE.state_max))
+
+    def gain(self, shift: int) -> float:
+        """Events per unit of the filtered train F(z) under ``shift``: (w << shift) / theta_R."""
+        w8, theta = self.registers(shift)
+        return (w8 << int(shift)) / theta
 
 
-def choose_gain(trains: np.ndarray, dash: int) -> float:
-    """Events per unit of F(z) so the calibration's largest F(z) (with margin) gives 31 events; at most the
-    gain of a channel that fires on every step (F -> a / (1 - a))."""
-    a = float(kernels.grid(dash))
-    acc = np.zeros((trains.shape[0], trains.shape[2]))
-    peak = 0.0
-    for t in range(trains.shape[1]):
-        acc = a * (acc + trains[:, t])
-        peak = max(peak, float(acc.max(initial=0.0)))
-    peak = max(peak * EVENT_MARGIN, a)             # at least one spike's worth
-    return float(CORE.max_hidden_spikes / min(peak, a / max(1 - a, 1e-9) * EVENT_MARGIN))
+def current_bound(chip_w: int, dash: int) -> int:
+    """The largest current a relay reaches on a 0/1 train (an event every step), under the chip's decay
+    i <- i + w, i <- i - max(i >> d, 1): below (w + 1)(2^d - 1)."""
+    return (int(chip_w) + 1) * ((1 << int(dash)) - 1)
 
 
 def relay_events(z: np.ndarray, dash: int, w8: int, shift: int, theta: int) -> np.ndarray:
