@@ -87,7 +87,7 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
         starts[p.name] = at
         at += p.n
     for r in relays:
-        starts[relay_rules.relay_name(r.source)] = at
+        starts[r.name] = at
         at += r.n
     if output is None:
         starts[READOUT_COPY] = at
@@ -178,9 +178,9 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
     for r in relays:
         _place_relay(spec, r, starts, input_source, s_in, s_rec)
         shift = s_in if r.source == input_source else s_rec
-        r0 = starts[relay_rules.relay_name(r.source)]
+        r0 = starts[r.name]
         records.append(PopulationRecord(
-            relay_rules.relay_name(r.source), "relay", "sigma-delta", (r0, r0 + r.n),
+            r.name, "relay", "sigma-delta", (r0, r0 + r.n),
             {"dash_syn": [r.dash], "dash_mem": [relay_rules.RELAY_DASH_MEM]}, "fixed", "-",
             {k: r.gain(shift) for k in ("min", "median", "max")},
             [f"events per unit of the filtered train: {r.gain(shift):.3g} (registers: weight, threshold "
@@ -270,7 +270,7 @@ def _place_relay(spec: dict, r: relay_rules.Relay, starts: dict[str, int], input
                  s_rec: int) -> None:
     """A source's relays: relay j takes channel j of ``r.source`` on its first synapse (the input matrix or the
     recurrent one, under that matrix's shift), integrates (dash_mem 15) and fires at its threshold."""
-    r0 = starts[relay_rules.relay_name(r.source)]
+    r0 = starts[r.name]
     from_input = r.source == input_source
     w8, theta = r.registers(s_in if from_input else s_rec)
     for j in range(r.n):

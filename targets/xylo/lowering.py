@@ -262,7 +262,7 @@ def _with_relays(pop: quantize.HiddenFloat, s: _Source, plan: list[relays.Relay]
     identification fits them all)."""
     pop.weights = {k: np.zeros_like(v) for k, v in pop.weights.items()}
     for r in plan:
-        name = relays.relay_name(r.source)
+        name = r.name
         if name in s.trains:
             pop.weights[name] = np.zeros((2, pop.n, r.n))
     pop.columns = [(src, k) for k in range(2) for src in pop.weights]
@@ -307,7 +307,7 @@ def relay_trains(hidden: list[_Source], plan: list[relays.Relay], timing: XyloTi
             events = relays.relay_events(s.raw[r.source], r.dash, w8, shift, theta)
             lag = (CHIP_DELAY_INPUT if is_input else CHIP_DELAY_HIDDEN) + CHIP_DELAY_HIDDEN \
                 + timing.shifts[r.source] - timing.shifts[s.pop.lif]
-            s.trains[relays.relay_name(r.source)] = delayed(events.astype(np.float64), lag)
+            s.trains[r.name] = delayed(events.astype(np.float64), lag)
 
 
 def _emulate(spec: dict, chip_x: np.ndarray) -> np.ndarray:

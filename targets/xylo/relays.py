@@ -60,6 +60,11 @@ class Relay:
     n: int
     dash: int
 
+    @property
+    def name(self) -> str:
+        """The relays' source name (a key of a ``HiddenFloat``'s weights, of the trains and the layout)."""
+        return relay_name(self.source)
+
     def registers(self, shift: int) -> tuple[int, int]:
         """(int8 input weight, threshold) under the input matrix's left ``shift``: the largest weight whose current
         stays in range, and the smallest threshold that can never reach the cap (``current_bound``)."""
