@@ -30,18 +30,9 @@ sys.path.insert(0, str(ROOT))
 
 from snncc.finetune.agreement import argmax_agreement  # noqa: E402
 from snncc.frontends import LoadOptions, load_model  # noqa: E402
+from snncc.models.surrogate import spike  # noqa: E402   (the fast-sigmoid surrogate of snncc's training)
 
-
-class _Spike(torch.autograd.Function):
-    @staticmethod
-    def forward(ctx, v):
-        ctx.save_for_backward(v)
-        return (v > 0).to(v.dtype)
-
-    @staticmethod
-    def backward(ctx, g):
-        (v,) = ctx.saved_tensors
-        return g / (1 + 5 * v.abs()) ** 2
+SURROGATE_SCALE = 5.0
 
 
 def layer(drive, a, b, theta, rec=None, reset="subtract"):
@@ -54,7 +45,7 @@ def layer(drive, a, b, theta, rec=None, reset="subtract"):
     for t in range(steps):
         i = a * i + drive[:, t] + (s @ rec.T if rec is not None else 0)
         v = b * v + i
-        s = _Spike.apply(v - theta)
+        s = spike(v - theta, SURROGATE_SCALE)
         out.append(s)
         v = v - theta * s if reset == "subtract" else v * (1 - s)
     return torch.stack(out, 1)

@@ -176,8 +176,8 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
             p.fit, rounding if p.hessians is not None else "nearest", _spread(gains[sl]),
             units=tuple(float(v) for v in gains[sl])))
     for r in relays:
-        _place_relay(spec, r, starts, input_source, s_in, s_rec)
         shift = s_in if r.source == input_source else s_rec
+        _place_relay(spec, r, starts, r.source == input_source, shift)
         r0 = starts[r.name]
         records.append(PopulationRecord(
             r.name, "relay", "sigma-delta", (r0, r0 + r.n),
@@ -266,13 +266,11 @@ def _copy_readout(spec: dict, readout: HiddenFloat, starts: dict[str, int], s_re
             "bias_out": np.zeros(m, np.int16), "aliases": [[] for _ in range(n)]}
 
 
-def _place_relay(spec: dict, r: relay_rules.Relay, starts: dict[str, int], input_source: str, s_in: int,
-                 s_rec: int) -> None:
+def _place_relay(spec: dict, r: relay_rules.Relay, starts: dict[str, int], from_input: bool, shift: int) -> None:
     """A source's relays: relay j takes channel j of ``r.source`` on its first synapse (the input matrix or the
-    recurrent one, under that matrix's shift), integrates (dash_mem 15) and fires at its threshold."""
+    recurrent one, whose left ``shift`` it is), integrates (dash_mem 15) and fires at its threshold."""
     r0 = starts[r.name]
-    from_input = r.source == input_source
-    w8, theta = r.registers(s_in if from_input else s_rec)
+    w8, theta = r.registers(shift)
     for j in range(r.n):
         if from_input:
             spec["weights_in"][j, r0 + j, 0] = w8

@@ -112,8 +112,8 @@ def lowered_student(low, steps: int, *, learn=("weights", "thresholds", "biases"
 
 def surrogate_units(low) -> np.ndarray:
     """Per hidden neuron, the chip units of one IR threshold (the lowering's gains; the chip threshold where no
-    population is carried): the scale of the spike surrogate, so that a single-rule neuron, whose chip threshold is an offset
-    near 2**14, gets a gradient as local as a direct one's."""
+    population is carried): the scale of the spike surrogate, so that a single-rule neuron, whose chip
+    threshold is an offset near 2**14, gets a gradient as local as a direct one's."""
     spec = low.xylo_spec
     unit = np.asarray(spec.threshold, np.float64).copy()
     for r in low.populations:

@@ -262,9 +262,8 @@ def _with_relays(pop: quantize.HiddenFloat, s: _Source, plan: list[relays.Relay]
     identification fits them all)."""
     pop.weights = {k: np.zeros_like(v) for k, v in pop.weights.items()}
     for r in plan:
-        name = r.name
-        if name in s.trains:
-            pop.weights[name] = np.zeros((2, pop.n, r.n))
+        if r.name in s.trains:
+            pop.weights[r.name] = np.zeros((2, pop.n, r.n))
     pop.columns = [(src, k) for k in range(2) for src in pop.weights]
     return pop
 
@@ -297,17 +296,19 @@ def relay_trains(hidden: list[_Source], plan: list[relays.Relay], timing: XyloTi
     from snncc.targets.xylo.timing import CHIP_DELAY_HIDDEN, CHIP_DELAY_INPUT
 
     first_pre = hidden[0].pop.pre
+    events: dict[str, np.ndarray] = {}          # each relay set run once, whichever populations it reaches
     for s in hidden:
         for r in plan:
             if r.source not in (s.pop.pre, s.pop.lif if s.pop.rec is not None else None):
                 continue
             is_input = r.source == first_pre
-            shift = (shifts or PROVISIONAL_SHIFTS)[0 if is_input else 1]
-            w8, theta = r.registers(shift)
-            events = relays.relay_events(s.raw[r.source], r.dash, w8, shift, theta)
+            if r.name not in events:
+                shift = (shifts or PROVISIONAL_SHIFTS)[0 if is_input else 1]
+                w8, theta = r.registers(shift)
+                events[r.name] = relays.relay_events(s.raw[r.source], r.dash, w8, shift, theta).astype(np.float64)
             lag = (CHIP_DELAY_INPUT if is_input else CHIP_DELAY_HIDDEN) + CHIP_DELAY_HIDDEN \
                 + timing.shifts[r.source] - timing.shifts[s.pop.lif]
-            s.trains[r.name] = delayed(events.astype(np.float64), lag)
+            s.trains[r.name] = delayed(events[r.name], lag)
 
 
 def _emulate(spec: dict, chip_x: np.ndarray) -> np.ndarray:

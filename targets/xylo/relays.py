@@ -4,24 +4,24 @@ A memoryless-readout neuron (``quantize.hidden_single``) answers an input spike 
 ``u_1 a_1^(n+1) + u_2 a_2^(n+1)`` on Xylo's grid ``a = 1 - 2^-d``. A float kernel with a pole off the grid
 is fitted poorly by two of them: the NIR paper's Braille RSNN (alpha 0.75, beta 0.85) loses about 20 points
 of argmax agreement to its membrane pole alone (0.85 between the grid's 0.75 and 0.875). Any linear path
-on the chip has only grid poles, but a *repeated* pole, ``n a^n``, fits an off-grid pole well
-(0.85^n = 0.875^n (0.85 / 0.875)^n, to first order in n). A relay supplies it:
+on the chip has only grid poles, but a *cascade* of two grid filters -- the shape of a CUBA kernel, the
+current's decay then the membrane's -- fits it with small weights. A relay supplies the cascade:
 
     one hidden neuron per presynaptic channel z (the input's channels, a hidden population's neurons)
     i  <- a_R (i + w z)                               its synapse (dash_syn d_R; w = int8 << the matrix's shift)
     V  <- V - max(V >> 15, sign V) + i                its membrane integrates (dash_mem 15: a leak of one unit)
     n  = min(V // theta_R, 31);  V -= n theta_R       events, the remainder carried (a sigma-delta quantizer)
 
-so ``n[t] ~ (w / theta_R) F(z)[t]``, theta_R the smallest threshold under which a 0/1 train never reaches the cap
-(a capped relay would keep the excess in its membrane and fire on long after its input stopped), with ``F(z)[t] = a_R (F[t-1] + z[t])``, its quantization error carried to
-the next step (shaped to high frequencies, which the target's synapse filters out). The events reach a
+so ``n[t] ~ (w / theta_R) F(z)[t]`` with ``F(z)[t] = a_R (F[t-1] + z[t])``, its quantization error carried to
+the next step. theta_R is the smallest threshold under which a 0/1 train never reaches the cap of 31 (a capped
+relay would keep the excess in its membrane and fire on long after its input stopped). The events reach a
 target neuron one step later (hidden -> hidden) through its own two synapses: the basis functions
-``(F_{a_k} * F_{a_R})(z)`` delayed by one step, ``n a^n`` where ``a_k = a_R``. The identification
-(``identify.py``) fits their weights with the rest; the relays' own registers are fixed here.
+``(F_{a_k} * F_{a_R})(z)`` delayed by one step. The identification (``identify.py``) fits their weights with
+the rest; the relays' own registers are fixed here.
 
 Relays are shared: one per channel of each source population, used by every population that source feeds
-(and by the source's own recurrence). ``relay_events`` computes their events on given trains with the chip's
-integer rules (``emulator.py``'s decay, saturation and firing), so the identification sees what the chip does.
+(and by the source's own recurrence). ``relay_events`` runs them in snncc's bit-exact emulator, so the
+identification sees what the chip does.
 """
 
 from __future__ import annotations
@@ -30,9 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from snncc.targets.xylo import kernels
 from snncc.targets.xylo.chip import CORE
-from snncc.targets.xylo.weights import wrap16
 
 RELAY_DASH_MEM = 15          # V loses max(V >> 15, sign V): one unit per step, an integrator
 CURRENT_BUDGET = 3360        # largest chip weight: a channel firing on every step keeps i < 8 w < 32767 (dash <= 3)
@@ -44,11 +42,6 @@ PREFIX = "relay of "
 def relay_name(source: str) -> str:
     """The source name of a population's relays (a key of a ``HiddenFloat``'s weights and of the trains)."""
     return PREFIX + source
-
-
-def relayed_source(name: str) -> str | None:
-    """The population a relay source name relays (None for other names)."""
-    return name[len(PREFIX):] if name.startswith(PREFIX) else None
 
 
 @dataclass(frozen=True)
@@ -86,27 +79,20 @@ def current_bound(chip_w: int, dash: int) -> int:
 
 
 def relay_events(z: np.ndarray, dash: int, w8: int, shift: int, theta: int) -> np.ndarray:
-    """Events (B, T, n) of relays fed ``z`` (B, T, n) event counts, one channel each, delivered in the step
-    they are given (chip integer rules: saturating delivery, shift decay, 16-bit membrane, multi-event
-    firing up to 31 with subtraction)."""
-    from snncc.targets.xylo.emulator import decay, sat16
+    """Events (B, T, n) of relays fed ``z`` (B, T, n) 0/1 events, one channel each, delivered in the step they
+    are given: the relays alone, as input-expansion neurons, run by ``emulator.emulate``."""
+    from snncc.targets.xylo.emulator import emulate
+    from snncc.targets.xylo.spec import XyloSpec
 
-    w = int(wrap16(np.int64(w8) << int(shift)))
-    z = np.asarray(z, np.int64)
-    b, t_steps, n = z.shape
-    i = np.zeros((b, n), np.int64)
-    v = np.zeros((b, n), np.int64)
-    d_syn = np.full(n, int(dash), np.int64)
-    d_mem = np.full(n, RELAY_DASH_MEM, np.int64)
-    out = np.zeros((b, t_steps, n), np.int64)
-    cap = CORE.max_hidden_spikes
-    for t in range(t_steps):
-        i = sat16(i + z[:, t] * w)
-        i = i - decay(i, d_syn)
-        dv = wrap16(-decay(v, d_mem))
-        dv = sat16(dv + i)
-        v = sat16(v + dv)
-        ev = np.where(v >= theta, np.minimum(v // theta, cap), 0)
-        v = v - ev * theta
-        out[:, t] = ev
-    return out
+    z = np.asarray(z)
+    n = z.shape[2]
+    w_in = np.zeros((n, n, CORE.hidden_synapse_states), np.int8)
+    w_in[np.arange(n), np.arange(n), 0] = w8
+    spec = XyloSpec(weights_in=w_in, weights_rec=np.zeros((n, n, CORE.hidden_synapse_states), np.int8),
+                    weights_out=np.zeros((n, 1), np.int8), dash_mem=np.full(n, RELAY_DASH_MEM, np.uint8),
+                    dash_syn=np.full(n, dash, np.uint8), dash_syn_2=np.full(n, dash, np.uint8),
+                    dash_mem_out=np.zeros(1, np.uint8), dash_syn_out=np.ones(1, np.uint8),
+                    threshold=np.full(n, theta, np.int16), threshold_out=np.ones(1, np.int16),
+                    bias=np.zeros(n, np.int16), bias_out=np.zeros(1, np.int16), weight_shift_in=int(shift),
+                    weight_shift_rec=0, weight_shift_out=0, aliases=[[] for _ in range(n)], dt=1.0)
+    return emulate(spec, z.astype(np.uint8), record=True).spikes.astype(np.int64)
