@@ -169,6 +169,20 @@ def test_design_rule_refusals_are_one_line_exit_2_nothing_written(tmp_path, caps
     assert "--rule" in line and "two synaptic currents" in line
 
 
+def test_the_relayed_rule_is_refused_in_one_line_where_it_cannot_fit(tmp_path, capsys):
+    model = tmp_path / "m.snnir"
+    save_graph(chain(np.random.default_rng(2), n_in=16, n_hidden=60), model)
+    out = tmp_path / "o.xylo"
+    line = _refused(capsys, ["compile", model, "--target", "xylo", "-o", out, "--rule", "relayed", "--chip",
+                             "syns65302", *QUICK], out)
+    assert f"{model}: --rule: the relayed rule places" in line and "128" in line
+    line = _refused(capsys, ["compile", model, "--target", "xylo", "-o", out, "--rule", "relayed", "--chip",
+                             "syns63300", *QUICK], out)
+    assert "--rule" in line and "two synaptic currents" in line
+    line = _refused(capsys, ["compile", model, "--target", "xylo", "-o", out, "--rule", "relays", *QUICK], out)
+    assert "rule must be one of" in line and "relayed" in line
+
+
 def test_a_changed_spec_is_refused_by_emulate(compiled, tmp_path, capsys):
     import shutil
 
