@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.rounding import round_with_feedback
 from snncc.targets.xylo import identify, kernels, relays as relay_rules
 from snncc.targets.xylo.quantize import (BIAS_SOURCE, SINGLE_THRESHOLD, STATE_MARGIN, STATE_MAX, WEIGHT_MAX,
                                          WEIGHT_MIN, HiddenFloat, OutputFloat, choose_gains, saturating_int16, to_int)
@@ -147,7 +148,7 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
                 st_full = np.concatenate([st, [1.0 / g[j]]])
                 low = np.concatenate([np.full(c.size, WEIGHT_MIN), [-STATE_MAX]])
                 high = np.concatenate([np.full(c.size, WEIGHT_MAX), [STATE_MAX]])
-                ints_full = identify.round_with_feedback(h, c_full, st_full, low, high, last=c.size)
+                ints_full = round_with_feedback(h, c_full, st_full, low, high, last=c.size)
                 ints, bias_units = ints_full[:-1], float(ints_full[-1])
             else:
                 ints = to_int(c, st, h if (h is not None and h.shape[0] == c.size) else None)

@@ -11,9 +11,9 @@ presynaptic spike trains as Xylo's synapses filter them (chip order, decay a_k o
 teacher-forced (the float graph's spikes drive every feature) and weighted by
 exp(-|V - theta| / (scale theta)): the voltages that decide a spike count most. The solution is a
 ridge regression towards the kernel fit (``kernels.two_exponential``), so features the inputs never
-exercise keep the kernel's value. ``round_with_feedback`` then rounds one weight at a time and
-moves the weights not yet rounded to absorb the error under the same quadratic form (the
-optimal-brain-surgeon update), so rounding costs as little voltage error as the data allow.
+exercise keep the kernel's value. ``round_with_feedback`` (``snncc/rounding.py``) then rounds one weight
+at a time and moves the weights not yet rounded to absorb the error under the same quadratic form,
+so rounding costs as little voltage error as the data allow.
 """
 
 from __future__ import annotations
@@ -79,28 +79,3 @@ def ridge_towards(h: np.ndarray, b: np.ndarray, prior: np.ndarray, ridge: float)
     lam = ridge * max(float(np.trace(h)) / max(len(b), 1), 1e-12)
     hr = h + lam * np.eye(len(b))
     return prior + np.linalg.solve(hr, b - h @ prior), hr
-
-
-def round_with_feedback(h: np.ndarray, c: np.ndarray, step: np.ndarray, low=-128, high=127,
-                        last: int | None = None) -> np.ndarray:
-    """Integers k (in [low, high], scalars or per coefficient) with k * step ~ c, rounded one at a time
-    (largest curvature first, ``last`` at the end); after each, the coefficients still free move by
-    -H_ff^-1 H_fi * error (the quadratic form's optimum)."""
-    c = np.asarray(c, np.float64).copy()
-    n = len(c)
-    low, high = np.broadcast_to(low, (n,)), np.broadcast_to(high, (n,))
-    hinv = np.linalg.inv(h)
-    free = np.ones(n, bool)
-    out = np.zeros(n, np.int64)
-    order = [i for i in np.argsort(-np.diag(h), kind="stable") if i != last] + ([last] if last is not None else [])
-    for i in order:
-        k = int(np.clip(np.round(c[i] / step[i]), low[i], high[i]))
-        out[i] = k
-        err = c[i] - k * step[i]
-        free[i] = False
-        idx = np.flatnonzero(free)
-        if idx.size:
-            col = hinv[idx, i] / hinv[i, i]
-            c[idx] -= col * err
-            hinv[np.ix_(idx, idx)] -= np.outer(hinv[idx, i], hinv[i, idx]) / hinv[i, i]
-    return out

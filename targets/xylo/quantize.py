@@ -16,7 +16,7 @@ Two ways to place a hidden population (per rule; ``lowering.py`` measures which 
 The readout population runs on the output neurons (one synapse, their own membrane, one spike per
 step: the IR's rule): nearest dashes with a gain that matches the kernels, or identified weights.
 Gains are per neuron (the threshold is per neuron); a weight matrix shares one left shift; rounding
-is to nearest or with error feedback (``identify.round_with_feedback``).
+is to nearest or with error feedback (``snncc/rounding.py``).
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.rounding import round_with_feedback
 from snncc.targets.xylo import identify, kernels
 from snncc.targets.xylo.chip import CORE
 
@@ -281,7 +282,7 @@ def to_int(c: np.ndarray, step: np.ndarray, hessian: np.ndarray | None) -> np.nd
     """Integers for coefficients ``c`` on grids ``step``: nearest, or with error feedback under ``hessian``."""
     if hessian is None:
         return np.clip(np.round(c / step), WEIGHT_MIN, WEIGHT_MAX).astype(np.int64)
-    return identify.round_with_feedback(hessian, c, step, WEIGHT_MIN, WEIGHT_MAX)
+    return round_with_feedback(hessian, c, step, WEIGHT_MIN, WEIGHT_MAX)
 
 
 def saturating_int16(x) -> np.ndarray:

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from snncc.ir.simulate import simulate
+from snncc.rounding import round_with_feedback
 from snncc.targets.xylo import identify, kernels
 from snncc.targets.xylo.quantize import choose_gains
 
@@ -70,10 +71,10 @@ def test_rounding_with_feedback_beats_nearest_on_the_quadratic_form():
     step = np.full(12, 0.7)
     err = lambda k: float((k * step - c) @ h @ (k * step - c))  # noqa: E731
     near = np.clip(np.round(c / step), -128, 127)
-    fb = identify.round_with_feedback(h, c, step)
+    fb = round_with_feedback(h, c, step)
     assert err(fb) < err(near)
     # with a diagonal form there is nothing to feed back: both round to nearest
-    assert identify.round_with_feedback(np.diag(np.diag(h)), c, step).tolist() == near.astype(int).tolist()
+    assert round_with_feedback(np.diag(np.diag(h)), c, step).tolist() == near.astype(int).tolist()
 
 
 def test_identification_recovers_weights_that_explain_the_voltages():
