@@ -13,6 +13,9 @@ bundle (one weight exponent per projection) to agree with the float graph as wel
                feedback (input weights, recurrent weights, biases, all), and with Gaussian weight noise of
                0.3 % and 1 % (three seeds)
   settings     the error-feedback rounding's damping and the number of calibration inputs
+  int8         the same question for Xylo's weight format: braille_noDelay_noBias_subtract.nir in float with
+               only its weights rounded to 127 / 254 / 1,024 levels of each neuron's largest incoming weight
+               (nearest; int8 on Xylo has 127 per sign), nothing else changed
 
     python bench/loihi_precision.py [--out bench/results/loihi_precision.json]
 
@@ -44,6 +47,7 @@ from snncc.targets.loihi.finetune import deployed_counts  # noqa: E402
 from snncc.targets.loihi.lowering.lower import lower_model  # noqa: E402
 
 GRAPH = ROOT / "tests" / "data" / "nir" / "braille_zero_2023.nir"
+SUBTRACT = ROOT / "tests" / "data" / "nir" / "braille_noDelay_noBias_subtract.nir"
 
 
 class Fixed:
@@ -156,9 +160,27 @@ def main() -> None:
     for k, v in settings.items():
         print(f"  {k}: {v:.3f}", flush=True)
 
+    sub = load_model(SUBTRACT, LoadOptions(dt=1e-4, reset="subtract"))
+    pops = tuple(name for name, op in sub.items() if type(op).__name__ == "LIF")
+    sub_teacher = run_teacher(sub, held, pops, voltage=False).counts
+
+    def levels_of(levels: int) -> float:
+        g = sub.copy()
+        for lif in pops:
+            denses = [p for p in g.predecessors(lif) if type(g.node(p)).__name__ == "Dense"]
+            top = np.max(np.stack([np.abs(g.node(p).weight).max(axis=1) for p in denses]), axis=0)
+            scale = levels / np.where(top > 0, top, 1.0)
+            for p in denses:
+                g.node(p).weight = np.round(g.node(p).weight * scale[:, None]) / scale[:, None]
+        return argmax_agreement(sub_teacher, run_teacher(g, held, pops, voltage=False).counts).value
+
+    int8 = {f"{SUBTRACT.name}, float, weights at {n} levels per neuron": levels_of(n) for n in (127, 254, 1024)}
+    for k, v in int8.items():
+        print(f"  {k}: {v:.3f}", flush=True)
+
     out = {"machine": {"platform": platform.platform(), "python": platform.python_version()},
            "graph": GRAPH.name, "inputs": "SYNTHETIC: 1,000 held-out seeded random spike trains, density 0.08, 256 steps",
-           "ladder": ladder, "sensitivity": sensitivity, "settings": settings,
+           "ladder": ladder, "sensitivity": sensitivity, "settings": settings, "int8": int8,
            "cpu_s": time.process_time() - c0, "wall_s": time.time() - t0}
     Path(args.out).write_text(json.dumps(out, indent=1))
     print(f"wrote {args.out}")
