@@ -30,3 +30,21 @@ def test_compile_report_counts_the_cores_of_the_recorded_map():
     buf = io.StringIO()
     art.render_text(Console(file=buf, width=200, highlight=False, color_system=None))
     assert "core map: 1 cores\n" in buf.getvalue()
+
+
+def test_per_neuron_registers_alone_do_not_say_lava_runs_the_bundle_differently():
+    """Lava's CPU model runs per-neuron vThMant / iDecay / vDecay arrays as written (bench/lava_netx_agreement.py's
+    probes): the report lists them, but says netx would run the bundle differently only for a field it ignores."""
+    art = target.lower(small_graph(seed=1), {"scale": "global"})
+    s = art.summary()
+
+    def text(notes):
+        buf = io.StringIO()
+        render_compile_report({**s, "netx_compat": notes}, Console(file=buf, width=400, highlight=False,
+                                                                   color_system=None))
+        return buf.getvalue()
+
+    per_neuron = "/layer/1/neuron/{vThMant}: one value per neuron (compartment profiles; ...)"
+    assert "one value per neuron" in text([per_neuron]) and "Lava would run this bundle differently" not in text(
+        [per_neuron])
+    assert "Lava would run this bundle differently" in text([per_neuron, "/layer/1/neuron/refDelay = 2 (...)"])

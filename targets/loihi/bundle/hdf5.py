@@ -37,6 +37,7 @@ from snncc.errors import SnnccError
 from snncc.hdf5_links import check_self_contained
 from snncc.limits import check_memory, check_time_steps
 from snncc.targets.loihi import chip
+from snncc.targets.loihi.bundle.portability import PER_NEURON_NOTE
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 
 SNNCC_GROUP = "snncc"
@@ -64,8 +65,9 @@ def netx_compat(network: LoihiNetwork) -> list[str]:
         per_neuron = [key for key, value in (("vThMant", lay.v_th_mant), ("iDecay", lay.i_decay),
                                              ("vDecay", lay.v_decay)) if np.ndim(value)]
         if per_neuron:
-            notes.append(f"/layer/{i}/neuron/{{{', '.join(per_neuron)}}}: one value per neuron (compartment profiles; "
-                         "snncc extension, netx reads one value per layer)")
+            notes.append(f"/layer/{i}/neuron/{{{', '.join(per_neuron)}}}: {PER_NEURON_NOTE} (compartment profiles; "
+                         "Lava's LIF declares one value per layer, its CPU simulation runs the arrays as written: "
+                         "measured by bench/lava_netx_agreement.py, not Lava's stated interface)")
         if lay.always_on:
             notes.append(f"/layer/{i}/alwaysOn = {lay.always_on}: the last {lay.always_on} compartment(s) are bias "
                          "sources for the next layer, timed by refDelay")

@@ -37,6 +37,7 @@ from snncc.targets.loihi import chip
 from snncc.targets.loihi.network import LoihiNetwork
 
 NOT_RUNNABLE = "not runnable by netx as written"
+PER_NEURON_NOTE = "one value per neuron"   # a bundle note on per-neuron registers, which Lava's CPU model runs as written
 NETX_MIN_WEIGHT = -256     # an all-negative matrix holding it is given Lava's inhibitory format (at most -255)
 
 

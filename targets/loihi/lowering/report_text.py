@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from snncc.targets.loihi.bundle.portability import PER_NEURON_NOTE
 from snncc.targets.loihi.mapping.coremap import CoreMap
 
 
@@ -73,7 +74,7 @@ def render_compile_report(s: dict[str, Any], console) -> None:
                               + (f"; this bundle {ArgmaxAgreement(**ours).text()}" if ours else ""), markup=False)
     for note in s["netx_compat"]:
         console.print(f"  [yellow]netx compatibility: {note}[/yellow]")
-    if s["netx_compat"]:
+    if any(PER_NEURON_NOTE not in note for note in s["netx_compat"]):
         console.print("  [yellow]lava-dl netx ignores the fields above, so Lava would run this bundle differently "
                       "than the chip semantics snncc emulates.[/yellow]")
     if s["core_map"] is not None:
