@@ -158,7 +158,8 @@ def rescaled(lowered, network, x: np.ndarray, spikes: dict[str, np.ndarray], *, 
             sel = (i_dec == a) & (v_dec == b)
             h = damped(kernel_moments(lowered, k, x, spikes, 1.0 - a / chip.DECAY_ONE, 1.0 - b / chip.DECAY_ONE),
                        DAMPING)
-            rows[sel] = 2 * round_with_feedback(h, target[sel] * s[sel, None], 2.0, chip.WEIGHT_MIN // 2,
+            # symmetric, -254..254: never the -256 that Lava's inhibitory format cannot hold (portability.py)
+            rows[sel] = 2 * round_with_feedback(h, target[sel] * s[sel, None], 2.0, -(chip.WEIGHT_MAX // 2),
                                                 chip.WEIGHT_MAX // 2)
         full = np.asarray(lay.weight).copy()
         full[:m, :n_in] = rows[:, :n_in]
