@@ -179,7 +179,8 @@ def main() -> None:
         print(f"  {k}: {v:.3f}", flush=True)
 
     out = {"machine": {"platform": platform.platform(), "python": platform.python_version()},
-           "graph": GRAPH.name, "inputs": "SYNTHETIC: 1,000 held-out seeded random spike trains, density 0.08, 256 steps",
+           "graph": GRAPH.name,
+           "inputs": "SYNTHETIC: 1,000 held-out seeded random spike trains, density 0.08, 256 steps",
            "ladder": ladder, "sensitivity": sensitivity, "settings": settings, "int8": int8,
            "cpu_s": time.process_time() - c0, "wall_s": time.time() - t0}
     Path(args.out).write_text(json.dumps(out, indent=1))

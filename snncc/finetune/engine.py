@@ -177,7 +177,8 @@ def _student_counts(student, x: np.ndarray, batch: int) -> np.ndarray:
     return np.rint(np.concatenate(out)).astype(np.int64)
 
 
-StartingPoints = Callable[[Any, Callable[[Any], float]], tuple[Any, list[dict]]]
+StartingPoints = Callable[[Any, Callable[[Any], float], tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]],
+                          tuple[Any, list[dict]]]
 
 
 def finetune(student, teacher_graph, split: Split, *, config: FinetuneConfig | None = None,
@@ -188,8 +189,9 @@ def finetune(student, teacher_graph, split: Split, *, config: FinetuneConfig | N
 
     ``deployed_counts(student, x)``: output counts of the student's exported integers on the target's
     own emulator (default: the student's forward pass, which equals it). ``starting_points(student,
-    score)``: a target's search among equivalent or nearby starting points, ``score(candidate)`` being
-    the candidate's validation agreement; returns (the chosen student, [{"name", "validation"}, ...]).
+    score, train)``: a target's search among equivalent or nearby starting points, ``score(candidate)``
+    being the candidate's validation agreement, ``train`` = (all inputs, the teacher's spikes per population
+    on them, the training part's indices); returns (the chosen student, [{"name", "validation"}, ...]).
     Returns (student with the kept parameters loaded, ``FinetuneRecord``)."""
     import torch
 
@@ -224,7 +226,8 @@ def finetune(student, teacher_graph, split: Split, *, config: FinetuneConfig | N
         trace: list[dict] = []
         if starting_points is not None:
             report(0, 1, "starting points")
-            student, trace = starting_points(student, lambda cand: _score(agreement_on(split.validation, cand)))
+            train = (split.x, teacher.spikes, split.train)
+            student, trace = starting_points(student, lambda cand: _score(agreement_on(split.validation, cand)), train)
             report(1, 1, "starting points")
         groups = student.param_groups()
         unknown = set(groups) - set(config.lr)

@@ -114,7 +114,7 @@ def requantized(lowered, network, layer: int, which: str, exponent: int):
     return net
 
 
-def starting_points(lowered, make_student, calibration: Callable[[], tuple] | None = None):
+def starting_points(lowered, make_student):
     """The search ``engine.finetune`` runs before training (``make_student(network)`` builds a student),
     greedy and measured on the validation part, keeping a change only when it is strictly better:
 
@@ -122,15 +122,15 @@ def starting_points(lowered, make_student, calibration: Callable[[], tuple] | No
        what a reset to zero discards);
     2. per projection with outliers (max|W| > 20x the median |W|) under the per-layer or split rule, a
        weight exponent 1 or 2 finer than the rule's (the outliers clip, the bulk gains 1-2 bits);
-    3. with ``calibration()`` -> (inputs, the teacher's spikes per population on them): every layer's
-       weights rounded with error feedback, at the rule's scales, then at per-neuron scales (at most 8 per
-       layer: ``rescale.py``; the exponents are kept).
+    3. every layer's weights rounded with error feedback under the teacher's spikes on the first
+       ``CALIBRATION_SAMPLES`` training inputs, at the rule's scales, then at per-neuron scales (at most 8
+       per layer: ``rescale.py``; the exponents are kept).
     """
     import copy
 
     from snncc.targets.loihi.lowering.quantize import OUTLIER_RATIO
 
-    def search(student, score):
+    def search(student, score, train):
         best, best_s = student, score(student)
         trace = [{"name": "as lowered", "validation": best_s}]
         for k, name in enumerate(best.populations):
@@ -159,20 +159,22 @@ def starting_points(lowered, make_student, calibration: Callable[[], tuple] | No
                         trace.append({"name": f"{dense}: wgtExp {exps[dense] - shift} (outliers clip)", "validation": s})
                         if s > best_s:
                             best, best_s = cand, s
-        if calibration is not None:
-            from snncc.targets.loihi.rescale import rescaled
+        from snncc.targets.loihi.rescale import rescaled
 
-            inputs, spikes = calibration()
-            for per_neuron, label in ((False, "compensated rounding at the rule's scales"),
-                                      (True, "per-neuron scales (at most 8 per layer), compensated rounding")):
-                net = rescaled(lowered, best.export(), inputs, spikes, per_neuron=per_neuron)
-                if net is None:
-                    continue
-                cand = make_student(net)
-                s = score(cand)
-                trace.append({"name": label, "validation": s})
-                if s > best_s:
-                    best, best_s = cand, s
+        x, teacher_spikes, train_idx = train
+        idx = train_idx[:CALIBRATION_SAMPLES]
+        inputs, spikes = x[idx], {p: v[idx] for p, v in teacher_spikes.items()}
+        moments: dict = {}      # the second moments, shared by both candidates
+        for per_neuron, label in ((False, "compensated rounding at the rule's scales"),
+                                  (True, "per-neuron scales (at most 8 per layer), compensated rounding")):
+            net = rescaled(lowered, best.export(), inputs, spikes, per_neuron=per_neuron, moments=moments)
+            if net is None:
+                continue
+            cand = make_student(net)
+            s = score(cand)
+            trace.append({"name": label, "validation": s})
+            if s > best_s:
+                best, best_s = cand, s
         return best, trace
 
     return search
@@ -251,16 +253,9 @@ def finetune_loihi(graph: Graph, options: dict[str, Any], split, *, config=None,
         return DifferentiableLoihi(network, [c.lif for c in lowered.layers], lowered.timing_record.shifts, steps,
                                    learn=learn, slope=slope, device=device)
 
-    def calibration():
-        """The teacher's spikes on the first training inputs (the rescaled starting points' statistics)."""
-        from snncc.finetune.teacher import run_teacher
-
-        x = split.x[split.train[:CALIBRATION_SAMPLES]]
-        return x, run_teacher(lowered.trained, x, tuple(c.lif for c in lowered.layers), voltage=False).spikes
-
     student, record = finetune(make_student(lowered.network), lowered.trained, split, config=config,
                                deployed_counts=deployed_counts(lowered, steps),
-                               starting_points=starting_points(lowered, make_student, calibration) if search else None,
+                               starting_points=starting_points(lowered, make_student) if search else None,
                                task_sets=list(task_sets), progress=progress)
     network = student.export()
     result = LoihiFinetuned(network=network, lowered=lowered, record=record, adapted=adapted_graph(lowered, network))

@@ -13,8 +13,9 @@ A threshold lives in a profile, 8 per core, so the neurons of a layer share at m
 layer also holds always-on bias sources, whose threshold stays theirs): ``scale_groups`` groups them by
 max|W_i| losing the fewest bits, and the cores a network needs do not grow. Weights are then rounded
 with error feedback (``snncc/rounding.py``) on the grid of even mantissas, H being the second moments
-of the neuron's presynaptic signals as its membrane sees them: the float teacher's spikes (inputs, the previous population, its own population one step late, the
-always-on sources of its current biases) filtered by the neuron's chip decays,
+of the neuron's presynaptic signals as its membrane sees them: the float teacher's spikes (inputs, the
+previous population, its own population one step late, the always-on sources of its current biases)
+filtered by the neuron's chip decays,
 z = (1 - beta q^-1)^-1 (1 - alpha q^-1)^-1 pre. Label-free: only the teacher's spikes on the inputs
 given. Measured on braille_zero_2023 (per-layer, 1,000 held-out random inputs, bench/loihi_precision.py):
 0.846 as lowered, 0.889 with a scale per neuron, 0.903 with error-feedback rounding too, 0.896 with at most
@@ -115,13 +116,16 @@ def _float_rows(lowered, layer: int) -> tuple[np.ndarray, int, int]:
     return np.concatenate(parts, axis=1), w.shape[1], len(terms)
 
 
-def rescaled(lowered, network, x: np.ndarray, spikes: dict[str, np.ndarray], *, per_neuron: bool = True):
+def rescaled(lowered, network, x: np.ndarray, spikes: dict[str, np.ndarray], *, per_neuron: bool = True,
+             moments: dict | None = None):
     """``network`` with every layer's model-neuron weights requantized from the float graph by compensated
     rounding, at per-neuron scales (``per_neuron``) or at the rule's layer scales; thresholds follow the
-    scales, and so does a voltage bias. ``spikes``: the teacher's spikes per population on inputs ``x``.
+    scales, and so does a voltage bias. ``spikes``: the teacher's spikes per population on inputs ``x``;
+    ``moments``: a dict that keeps the second moments between calls on the same inputs.
     A new network; None when a layer's format does not allow it (per-synapse exponents, a register out
     of range)."""
     net = copy.deepcopy(network)
+    cache = {} if moments is None else moments
     layer_scale = {lq.lif: float(lq.scale) for lq in lowered.quant_record.layers}
     for k, (c, lay) in enumerate(zip(lowered.layers, net.layers[1:])):
         op = lowered.order.node(c.lif)
@@ -156,8 +160,10 @@ def rescaled(lowered, network, x: np.ndarray, spikes: dict[str, np.ndarray], *, 
         v_dec = np.broadcast_to(np.asarray(lay.v_decay, np.int64), (lay.n,))[:m]
         for a, b in sorted(set(zip(i_dec.tolist(), v_dec.tolist()))):
             sel = (i_dec == a) & (v_dec == b)
-            h = damped(kernel_moments(lowered, k, x, spikes, 1.0 - a / chip.DECAY_ONE, 1.0 - b / chip.DECAY_ONE),
-                       DAMPING)
+            if (k, a, b) not in cache:
+                cache[(k, a, b)] = damped(kernel_moments(lowered, k, x, spikes, 1.0 - a / chip.DECAY_ONE,
+                                                         1.0 - b / chip.DECAY_ONE), DAMPING)
+            h = cache[(k, a, b)]
             # symmetric, -254..254: never the -256 that Lava's inhibitory format cannot hold (portability.py)
             rows[sel] = 2 * round_with_feedback(h, target[sel] * s[sel, None], 2.0, -(chip.WEIGHT_MAX // 2),
                                                 chip.WEIGHT_MAX // 2)

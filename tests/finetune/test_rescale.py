@@ -1,4 +1,4 @@
-"""Loihi fine-tuning's rescaled starting points (targets/loihi/rescale.py) and the shared rounding (snncc/rounding.py)."""
+"""Loihi fine-tuning's rescaled starting points (targets/loihi/rescale.py), the shared rounding (snncc/rounding.py)."""
 
 from __future__ import annotations
 
@@ -87,7 +87,8 @@ def test_starting_point_search_measures_the_rescaled_networks():
     split = split_inputs(width=6, steps=STEPS, train=48, validation=40, held_out=40, density=0.25, seed=0)
     out = finetune_loihi(g, {"scale": "per-layer"}, split, config=FinetuneConfig(epochs=1, batch=16))
     names = [s["name"] for s in out.record.starting_points]
-    assert "compensated rounding at the rule's scales" in names and "per-neuron scales (at most 8 per layer), compensated rounding" in names
+    assert "compensated rounding at the rule's scales" in names
+    assert "per-neuron scales (at most 8 per layer), compensated rounding" in names
     assert out.validation["timing_exact"] and out.validation["quantized_params_exact"]
     assert out.validation["kernel_exact"]
 
