@@ -86,6 +86,9 @@ def nir_goal(name, args):
     else:
         path, reset, options = NIR / "braille_zero_2023.nir", None, {"scale": "per-layer"}
         command = "snncc compile braille_zero_2023.nir --dt 1e-4 --scale per-layer --target loihi --finetune"
+    if args.replicas > 1:
+        options["replicas"] = args.replicas
+        command += f" --replicas {args.replicas}"
     graph = load_model(path, LoadOptions(dt=1e-4, reset=reset))
     split = split_inputs(width=12, steps=args.steps, density=args.density, train=args.train,
                          validation=args.validation, held_out=args.held_out, seed=args.seed)
@@ -104,8 +107,8 @@ def nir_goal(name, args):
     teacher = run_teacher(result.lowered.trained, held, tuple(c.lif for c in result.lowered.layers),
                           voltage=False).counts
     rules = {}
-    for rule in ("per-layer", "fine", "auto"):
-        low = lower_model(graph, dict(options, scale=rule, t_sample=args.steps))
+    for rule in ("per-layer", "fine", "auto"):   # untuned, as the goals state them: without replicas
+        low = lower_model(graph, dict(options, scale=rule, t_sample=args.steps, replicas=None))
 
         class Fixed:   # the untuned network in the student's place (deployed_counts only calls export)
             def export(self, net=low.network):
@@ -239,6 +242,7 @@ def main(argv=None):
     ap.add_argument("--w-windows", type=float, default=1.0)
     ap.add_argument("--w-voltage", type=float, default=0.0)
     ap.add_argument("--no-search", action="store_true", help="skip the starting-point search")
+    ap.add_argument("--replicas", type=int, default=1, help="Loihi goals: --replicas K (precision by replication)")
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--max-cpu-s", type=float, default=None)
     ap.add_argument("--rsnn", type=Path)

@@ -13,6 +13,9 @@ bundle (one weight exponent per projection) to agree with the float graph as wel
                feedback (input weights, recurrent weights, biases, all), and with Gaussian weight noise of
                0.3 % and 1 % (three seeds)
   settings     the error-feedback rounding's damping and the number of calibration inputs
+  replication  what --replicas K buys (targets/loihi/lowering/replicate.py): in float, every weight rounded at
+               per-neuron scales with K times the levels for the input weights (relays), the hidden neurons'
+               outgoing weights (copies) or both; on the chip, the per-neuron start on the replicated network
   int8         the same question for Xylo's weight format: braille_noDelay_noBias_subtract.nir in float with
                only its weights rounded to 127 / 254 / 1,024 levels of each neuron's largest incoming weight
                (nearest; int8 on Xylo has 127 per sign), nothing else changed
@@ -112,6 +115,15 @@ def main() -> None:
     for k, v in ladder.items():
         print(f"  {k}: {v:.3f}", flush=True)
 
+    def set_rows(g, c, m, n_in: int, n_terms: int) -> None:
+        """Layer ``c``'s float rows ``m`` (``rescale._float_rows``' column order) written back into ``g``."""
+        g.node(c.ff).weight = m[:, :n_in]
+        terms = current_biases(g, c.lif)
+        if terms:
+            restore_biases(g, c.lif, [BiasTerm(t.start, m[:, n_in + j], t.origins) for j, t in enumerate(terms)])
+        if c.rec:
+            g.node(c.rec).weight = m[:, n_in + n_terms:]
+
     def float_variant(parts=(), noise=None, seed=0) -> float:
         g = low.trained.copy()
         rng = np.random.default_rng(seed)
@@ -130,13 +142,7 @@ def main() -> None:
                 chosen[:n_in] = "input" in parts
                 chosen[n_in:n_in + n_terms] = "biases" in parts
                 chosen[n_in + n_terms:] = "recurrent" in parts
-            m = np.where(chosen[None, :], q, w)
-            g.node(c.ff).weight = m[:, :n_in]
-            terms = current_biases(g, c.lif)
-            if terms:
-                restore_biases(g, c.lif, [BiasTerm(t.start, m[:, n_in + j], t.origins) for j, t in enumerate(terms)])
-            if c.rec:
-                g.node(c.rec).weight = m[:, n_in + n_terms:]
+            set_rows(g, c, np.where(chosen[None, :], q, w), n_in, n_terms)
         return argmax_agreement(teacher, run_teacher(g, held, names, voltage=False).counts).value
 
     sensitivity = {f"float, {' + '.join(p)} rounded (per-neuron 8-bit, error feedback)": float_variant(p)
@@ -160,6 +166,43 @@ def main() -> None:
     for k, v in settings.items():
         print(f"  {k}: {v:.3f}", flush=True)
 
+    def float_levels(inputs: int, copies: int) -> float:
+        """The float graph with every weight rounded (error feedback) at per-neuron scales that ``inputs`` /
+        ``copies`` times more levels allow for the input / the hidden neurons' outgoing weights (bias columns
+        keep 8 bits): what --replicas lets a chip hold, before any chip arithmetic."""
+        g = low.trained.copy()
+        for k, c in enumerate(low.layers):
+            w, n_in, n_terms = rescale._float_rows(low, k)
+            k_in = inputs if k == 0 else copies
+            parts = [np.abs(w[:, :n_in]).max(axis=1) / k_in, np.abs(w[:, n_in:n_in + n_terms]).max(axis=1, initial=0)]
+            if w.shape[1] > n_in + n_terms:
+                parts.append(np.abs(w[:, n_in + n_terms:]).max(axis=1) / copies)
+            s = 254.0 / np.maximum.reduce(parts)
+            op = low.order.node(c.lif)
+            a, b = (float(np.ravel(d)[0]) for d in op.decays(low.order.dt))
+            h = damped(rescale.kernel_moments(low, k, x512, s512, a, b), rescale.DAMPING)
+            top = np.full(w.shape[1], 127.0 * copies)
+            top[:n_in], top[n_in:n_in + n_terms] = 127.0 * k_in, 127.0
+            set_rows(g, c, 2.0 * round_with_feedback(h, w * s[:, None], 2.0, -top, top) / s[:, None], n_in, n_terms)
+        return argmax_agreement(teacher, run_teacher(g, held, names, voltage=False).counts).value
+
+    def replicated_start(copies: int) -> float:
+        """The chip: --replicas ``copies``, per-layer, fine-tuning's per-neuron start (no training)."""
+        rl = lower_model(graph, {"scale": "per-layer", "t_sample": 256, "replicas": copies})
+        rn = tuple(c.lif for c in rl.layers)
+        net = rescale.rescaled(rl, rl.network, x512, run_teacher(rl.trained, x512, rn, voltage=False).spikes)
+        return argmax_agreement(teacher, deployed_counts(rl, 256)(Fixed(net), held)).value
+
+    replication = {}
+    for k in (2, 4, 8):
+        replication[f"float, {k}x levels: input relays and hidden copies"] = float_levels(k, k)
+        replication[f"float, {k}x levels: input relays only"] = float_levels(k, 1)
+        replication[f"float, {k}x levels: hidden copies only"] = float_levels(1, k)
+    for k in (1, 2, 4, 8):
+        replication[f"chip, --replicas {k}, per-neuron start (untrained)"] = replicated_start(k)
+    for k, v in replication.items():
+        print(f"  {k}: {v:.3f}", flush=True)
+
     sub = load_model(SUBTRACT, LoadOptions(dt=1e-4, reset="subtract"))
     pops = tuple(name for name, op in sub.items() if type(op).__name__ == "LIF")
     sub_teacher = run_teacher(sub, held, pops, voltage=False).counts
@@ -181,7 +224,8 @@ def main() -> None:
     out = {"machine": {"platform": platform.platform(), "python": platform.python_version()},
            "graph": GRAPH.name,
            "inputs": "SYNTHETIC: 1,000 held-out seeded random spike trains, density 0.08, 256 steps",
-           "ladder": ladder, "sensitivity": sensitivity, "settings": settings, "int8": int8,
+           "ladder": ladder, "sensitivity": sensitivity, "settings": settings, "replication": replication,
+           "int8": int8,
            "cpu_s": time.process_time() - c0, "wall_s": time.time() - t0}
     Path(args.out).write_text(json.dumps(out, indent=1))
     print(f"wrote {args.out}")

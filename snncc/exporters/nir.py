@@ -82,6 +82,7 @@ def graph_to_nir(graph: Graph, step: float | None = None) -> tuple[Any, ExportRe
 
     validate(graph)
     refuse_spike_rules(graph, "NIR")
+    graph = _current_bias_on_dense(graph)
     dt = float(graph.dt)
     h = float(dt if step is None else step)
     if not (math.isfinite(h) and h > 0):
@@ -181,6 +182,24 @@ def graph_to_nir(graph: Graph, step: float | None = None) -> tuple[Any, ExportRe
     return nir_graph, report
 
 
+def _current_bias_on_dense(graph: Graph) -> Graph:
+    """``graph`` with every LIF current bias moved into the bias of a Dense that feeds the LIF with delay 0
+    (the same term: a Dense bias enters the current at every step from t = 0); NIR has no LIF current bias.
+    A LIF without such a Dense keeps its bias (``_cuba`` refuses it)."""
+    moved = None
+    for name, op in graph.items():
+        if not (isinstance(op, LIF) and op.bias is not None and op.bias_placement == "current"):
+            continue
+        feeds = [p for p in graph.predecessors(name) if isinstance(graph.node(p), Dense) and graph.delay(p, name) == 0]
+        if not feeds:
+            continue
+        moved = moved or graph.copy()
+        dense, lif = moved.node(feeds[0]), moved.node(name)
+        dense.bias = lif.bias.copy() if dense.bias is None else dense.bias + lif.bias
+        lif.bias = None
+    return moved or graph
+
+
 def _cuba(name: str, op: LIF, dt: float, h: float) -> Any:
     import nir
 
@@ -203,17 +222,22 @@ def _cuba(name: str, op: LIF, dt: float, h: float) -> Any:
     return nir.CubaLIF(v_threshold=op.threshold.copy(), v_reset=np.zeros(op.n), **common)
 
 
-def export_nir(graph: Graph, path: str | Path, step: float | None = None) -> ExportReport:
-    """Write ``graph`` as a NIR file atomically; return the report for the user."""
+def nir_bytes(graph: Graph, step: float | None = None) -> tuple[bytes, ExportReport]:
+    """``graph`` as the bytes of a NIR file, and the report (refusals raised before anything is written)."""
     import nir
 
     nir_graph, report = graph_to_nir(graph, step=step)
-    path = Path(path)
     # Serialised in memory first: HDF5 writing straight to a file crashes the process (SIGSEGV)
     # when the disk fills; a plain write of the finished bytes fails cleanly with ENOSPC instead.
     buf = io.BytesIO()
     nir.write(buf, nir_graph)
-    write_bytes_atomic(path, buf.getvalue())
+    return buf.getvalue(), report
+
+
+def export_nir(graph: Graph, path: str | Path, step: float | None = None) -> ExportReport:
+    """Write ``graph`` as a NIR file atomically; return the report for the user."""
+    data, report = nir_bytes(graph, step=step)
+    write_bytes_atomic(Path(path), data)
     report.output = str(path)
     return report
 

@@ -136,13 +136,18 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
         steps = getattr(settings, "time_steps", None)      # the target's steps option, where it declares one
         silent = calibration_warning(loaded, sample_steps(loaded, steps if isinstance(steps, int) else None)[0])
         warnings += [silent] if silent else []
-    artefact.write(output)
-    if tuning and tuned_out is not None:
-        from snncc.exporters.nir import export_nir
+    adapted = None
+    if tuning and tuned_out is not None:     # built first: a graph NIR cannot hold is refused before any write
+        from snncc.exporters.nir import nir_bytes
         from snncc.targets.base import FinetunedArtefact
 
         assert isinstance(artefact, FinetunedArtefact)
-        export_nir(artefact.adapted_graph(), str(tuned_out))
+        adapted = nir_bytes(artefact.adapted_graph())[0]
+    artefact.write(output)
+    if adapted is not None:
+        from snncc.atomic import write_bytes_atomic
+
+        write_bytes_atomic(Path(str(tuned_out)), adapted)
     return CompileRecord(name, str(output), artefact, None if isinstance(loaded, BufferedModel) else loaded,
                          target_rule, warnings, *_written_hash(tgt, output),
                          finetune_out=None if tuned_out is None else str(tuned_out))

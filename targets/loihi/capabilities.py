@@ -54,6 +54,11 @@ class LoihiOptions(TargetOptions):
         "second synapse format with a coarser exponent), 'fine' (each synapse its finest exponent), or 'auto' "
         "(default: the paper's unless outliers make it lossy; then the candidate with the smallest measured error).",
         choices=SCALE_RULES, rule="scale must be one of global, per-layer, split, fine, auto", capabilities=MODEL_VERBS)
+    replicas: int | None = option(
+        "Precision by replication: K relays per input channel and K copies of every hidden neuron, each weight "
+        "split over K synapses (exact in float; K times finer weight steps at per-neuron scales, e.g. with "
+        "--finetune; costs neurons, synapses and one step of latency). Default 1.",
+        minimum=1, maximum=16, rule="replicas must be a whole number from 1 to 16", capabilities=MODEL_VERBS)
     allow_reset_change: bool = option(
         "Accept a subtract-reset model deployed with reset to zero (snncc check reports the cost).",
         default=False, capabilities=("lower", "check", "agree"))
@@ -142,7 +147,7 @@ class LoihiTarget:
         from snncc.targets.loihi.mapping.partition import map_network
 
         opts = self._options(options, "map")
-        network = load_network(source, opts.timing, opts.scale)
+        network = load_network(source, opts.timing, opts.scale, opts.replicas)
         try:
             found: CoreMap = map_network(network)
         except SnnccError as err:

@@ -156,7 +156,8 @@ def test_portability_is_recorded_in_the_report_and_the_bundle(tmp_path, capsys):
         stored = json.loads(f["snncc/portability"][()][0].decode())
         meta = json.loads(f["snncc/metadata"][()][0].decode())
     assert stored["netx_runnable"] and stored["line"].startswith("portable")
-    assert meta["compile_options"] == {"timing": None, "scale": None, "allow_reset_change": False, "time_steps": None}
+    assert meta["compile_options"] == {"timing": None, "scale": None, "allow_reset_change": False, "time_steps": None,
+                                       "replicas": None}
     fine = _compile(capsys, model, tmp_path / "f.net", "--scale", "fine")
     assert not fine["portability"]["netx_runnable"] and fine["portability"]["reasons"][0]["by_rule"]
     assert fine["portability"]["line"].startswith("not runnable by netx as written: per-synapse weight exponents")

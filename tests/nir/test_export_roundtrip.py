@@ -91,6 +91,23 @@ def test_plain_nir_import_of_an_export_simulates_identically():
     np.testing.assert_array_equal(a.output.numpy(), b.output.numpy())
 
 
+def test_lif_current_bias_is_exported_on_its_dense(tmp_path):
+    """NIR has no LIF current bias: the exporter moves it into the Dense that feeds the LIF with delay 0 (the
+    same term), and the file simulates as the graph did."""
+    g = _rsnn("loihi", seed=4)
+    hidden = g.node("hidden")
+    hidden.bias = np.linspace(-0.2, 0.3, hidden.n)
+    hidden.bias_placement = "current"
+    export_nir(g, tmp_path / "m.nir")
+    back = load_model(tmp_path / "m.nir")
+    assert back.node("hidden").bias is None and g.node("hidden").bias is not None     # the input graph is kept
+    x = (np.random.default_rng(5).random((4, 120, 48)) < 0.1).astype(float)
+    a, b = simulate(g, x, record="spikes"), simulate(back, x, record="spikes")
+    assert a.spikes["hidden"].sum() > 50
+    np.testing.assert_allclose(a.spikes["hidden"].numpy(), b.spikes["hidden"].numpy())
+    np.testing.assert_array_equal(a.output.numpy(), b.output.numpy())
+
+
 def test_edited_export_is_refused():
     g = _rsnn("spytorch")
     nir_graph, _ = graph_to_nir(g)

@@ -171,7 +171,7 @@ def test_the_toy_option_is_validated_by_the_toy_and_reaches_lower_and_check(toy,
     code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "loihi", "-o", tmp_path / "m.net",
                             "--toy-precision", "8"], capsys)
     assert code == 2 and err == ("snncc: error: snncc compile: --toy-precision: does not apply to --target loihi (it "
-                                 "takes --timing, --scale, --allow-reset-change, --time-steps)\n")
+                                 "takes --timing, --scale, --replicas, --allow-reset-change, --time-steps)\n")
     code, stdout, err = run_cli(["check", small_rsnn_checkpoint, "-t", "toy", "--data", toy_data, "--toy-precision",
                                  "4", "--json"], capsys)
     assert code == 0, err
@@ -198,7 +198,7 @@ def test_the_toy_option_from_the_api(toy, toy_data, small_rsnn_checkpoint, tmp_p
     ("ir", {"time_steps": 5}, "--time-steps: does not apply to --target ir (it takes no target options)"),
     ("ir", {"scale": "global"}, "--scale: does not apply to --target ir (it takes no target options)"),
     ("loihi", {"jetpack": "5.1"}, "--jetpack: does not apply to --target loihi (it takes --timing, --scale, "
-                                  "--allow-reset-change, --stream, --time-steps)"),
+                                  "--replicas, --allow-reset-change, --stream, --time-steps)"),
     ("jetson", {"timing": "paper"}, "--timing: does not apply to --target jetson (it takes --jetpack, --time-steps)"),
     ("jetson", {"stream": True}, "--stream: does not apply to --target jetson (it takes --jetpack, --time-steps)"),
 ])

@@ -87,13 +87,16 @@ class CheckRecord:
             say(f"  note: {note}")
 
 
-def _ir_run(graph: Graph, x: np.ndarray, names: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """(output spike counts (B, classes), population spikes) of the float IR."""
+def _ir_run(graph: Graph, x: np.ndarray, names: list[str], cut=None) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """(output spike counts (B, classes), population spikes) of the float IR; ``cut`` maps the population
+    spikes of a lowering stage to the model's neurons (``WrittenBundle.cut``: replicated populations)."""
     from snncc.threads import one_thread
 
     with one_thread():
         res = simulate(graph, x, record="spikes")
     spikes = {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
+    if cut is not None:
+        spikes = cut(spikes)
     return spikes[names[-1]].sum(axis=1, dtype=np.int64), spikes
 
 
@@ -140,20 +143,21 @@ def check_bundle(graph: Graph, bundle, inputs: np.ndarray, labels: np.ndarray, o
         runs: dict[str, tuple[np.ndarray, dict[str, np.ndarray]]] = {"float_trained": _ir_run(graph, x, names)}
         if lowered is not None:
             order = lowered.order
-            runs["ir_loihi_order"] = _ir_run(order, x, names) if order is not lowered.trained else runs["float_trained"]
+            runs["ir_loihi_order"] = (_ir_run(order, x, names, bundle.cut) if order is not lowered.trained
+                                      else runs["float_trained"])
             if lowered.deployed is not None:
                 runs["ir_reset_changed"] = (runs["ir_loihi_order"] if order is lowered.deployed
-                                            else _ir_run(lowered.deployed, x, names))
+                                            else _ir_run(lowered.deployed, x, names, bundle.cut))
             else:
                 runs["ir_reset_changed"] = runs["float_trained"]
-            runs["ir_quantized"] = _ir_run(lowered.quantized, x, names)
+            runs["ir_quantized"] = _ir_run(lowered.quantized, x, names, bundle.cut)
         s_d, res = bundle.run(x, mode=mode, gap=gap)
         runs["emulator"] = (s_d[names[-1]].sum(axis=1, dtype=np.int64), s_d)
         if relayed:
             trec = lowered.timing_record
             kw = {"mode": "stream", "gap": gap} if mode == "stream" else {}
             plain = emulate(lowered.network, pad(x, lead_steps(trec.shifts, trec.output_shift)), record="all", **kw)
-            s_0 = loihi_spikes(plain, lowered.network, lowered.layers, trec.shifts, steps)
+            s_0 = bundle.cut(loihi_spikes(plain, lowered.network, lowered.layers, trec.shifts, steps))
             runs["emulator_without_relays"] = (s_0[names[-1]].sum(axis=1, dtype=np.int64), s_0)
             res_over = plain.overflow
         else:

@@ -10,7 +10,9 @@ Otherwise (a bundle from another snncc version, a netx or SLAYER file, an edited
 breakdown is left out and ``stages_note`` says why; the bundle is still measured against the model.
 
 Population spikes are read from the run at their layer (relay layers included) and time shift
-(``population_shifts``), so a relayed bundle reads like the network it relays.
+(``population_shifts``), so a relayed bundle reads like the network it relays. A replicated bundle
+(``--replicas``, ``lowering/replicate.py``) reads like the model: its input relays are not a model
+population, and a copied population is read as its first copy (the model's own neuron count).
 """
 
 from __future__ import annotations
@@ -39,6 +41,11 @@ class WrittenBundle:
     output_shift: int
     lowered: Any = None                  # LoweredModel re-derived from the model (None: see stages_note)
     stages_note: str | None = None
+    sizes: dict[str, int] | None = None  # population -> the model's neuron count (replicated bundles)
+
+    def cut(self, spikes: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """Population spikes cut to the model's neurons (a replicated population: its first copy)."""
+        return {k: v[..., :self.sizes[k]] if self.sizes and k in self.sizes else v for k, v in spikes.items()}
 
     @property
     def metadata(self) -> dict[str, Any]:
@@ -63,7 +70,7 @@ class WrittenBundle:
         for name in self.populations:
             j, s = self.layer_of[name], self.shifts.get(name, 0)
             out[name] = res.spikes[j][:, s:s + steps, :self.network.layers[j].model_n]
-        return out, res
+        return self.cut(out), res
 
     def run_wide(self, x: np.ndarray, *, mode: str = "batch", gap: int = 100) -> np.ndarray:
         """The output population's spikes (B, T, n) with wide registers (no wrap, no clip): what overflow costs."""
@@ -104,10 +111,11 @@ def _names(network: LoihiNetwork, graph: Graph) -> tuple[list[str], dict[str, in
     names = meta.get("layer_names")
     index = meta.get("relayed_layer_index") or list(range(len(network.layers)))
     lifs = set(graph.of_kind(LIF))
+    relay = (meta.get("replication") or {}).get("relay")
     if isinstance(names, list) and len(names) == len(network.layers) and len(index) > 1:
-        pops = [str(names[j]) for j in index[1:]]
-        if set(pops) <= lifs:
-            return pops, {p: int(j) for p, j in zip(pops, index[1:])}
+        pairs = [(str(names[j]), int(j)) for j in index[1:] if str(names[j]) != relay]
+        if {p for p, _ in pairs} <= lifs:
+            return [p for p, _ in pairs], dict(pairs)
     from snncc.passes.fold_linear import fold_linear
     from snncc.targets.loihi.lowering.registers import chain
 
@@ -133,7 +141,10 @@ def open_bundle(path: str | Path, graph: Graph) -> WrittenBundle:
         raise err.with_file(str(path)) from None
     meta = network.metadata
     shifts = {p: int(v) for p, v in (meta.get("population_shifts") or {}).items() if p in layer_of}
-    bundle = WrittenBundle(str(path), network, pops, layer_of, shifts, int(meta.get("output_shift", 0) or 0))
+    from snncc.targets.loihi.lowering.replicate import model_sizes
+
+    bundle = WrittenBundle(str(path), network, pops, layer_of, shifts, int(meta.get("output_shift", 0) or 0),
+                           sizes=model_sizes(meta.get("replication")) or None)
     recorded = meta.get("compile_options")
     if not isinstance(recorded, dict):
         bundle.stages_note = ("the bundle records no compile options (not written by this snncc): the loss is not "

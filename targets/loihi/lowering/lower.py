@@ -4,7 +4,7 @@
 ``LoihiArtefact`` that has already been checked against the IR reference (``checks/exactness.py``).
 Settings (``LoihiOptions.as_dict()``, plus ``t_sample`` for checks): timing ("exact" | "paper"), scale ("auto" | "global" |
 "per-layer" | "split" | "fine"), allow_reset_change (bool), source (model path), time_steps (tSample
-when the model states no recording length; --time-steps).
+when the model states no recording length; --time-steps), replicas (K copies: ``replicate.py``; 1 or None: none).
 """
 
 from __future__ import annotations
@@ -25,11 +25,12 @@ from snncc.targets.loihi.lowering.timing import lower_timing
 from snncc.targets.loihi.lowering.artefact import LoihiArtefact
 from snncc.targets.loihi.lowering.chip_units import in_chip_units
 from snncc.targets.loihi.lowering.registers import build_network, chain, lif_params_check
+from snncc.targets.loihi.lowering.replicate import replicate, replication_note
 from snncc.targets.loihi.network import LoihiNetwork
 from snncc.targets.loihi.mapping.partition import map_network
 from snncc.targets.loihi.mapping.resources import LOIHI1
 
-COMPILE_OPTIONS = ("timing", "scale", "allow_reset_change", "time_steps")   # recorded in the bundle: check re-lowers with them
+COMPILE_OPTIONS = ("timing", "scale", "allow_reset_change", "time_steps", "replicas")   # recorded in the bundle: check re-lowers with them
 VALIDATION_BATCH = 4
 VALIDATING = "validating the bundle against the IR reference"
 
@@ -38,7 +39,7 @@ VALIDATING = "validating the bundle against the IR reference"
 class LoweredModel:
     """Everything lowering produced, for checks: the graphs at each stage and the network."""
 
-    trained: Graph           # the model as given (its own update order)
+    trained: Graph           # the model as given (its own update order; with --replicas its exact replica)
     order: Graph             # the IR in the order Loihi runs (timing change, reset change)
     quantized: Graph         # ``order`` with quantized parameters read back in float
     layers: list
@@ -102,6 +103,7 @@ def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | Non
     rule = options.get("scale") or "auto"
     frame = frame_shape(graph)           # the input frame (C, H, W) before convolutions are folded
     graph, fold = fold_linear(graph)     # Conv -> connection matrix; linear chains -> one projection
+    graph, replication = replicate(graph, int(options.get("replicas") or 1))   # --replicas (replicate.py)
     layers = chain(graph)
     deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
     order, trec = lower_timing(deployed, timing_mode)   # exact timing returns ``deployed`` itself where it can
@@ -155,6 +157,8 @@ def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | Non
         "input_shape": frame,
         "compile_options": {key: options.get(key) for key in COMPILE_OPTIONS},
     }
+    if replication is not None:
+        meta["replication"] = replication
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
     return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
                         deployed=None if deployed is graph else deployed, notes=fold.notes())
@@ -191,6 +195,8 @@ def lower_artefact(graph: Graph, options: dict[str, Any], progress: Progress | N
 
     lowered = lower_model(graph, options, progress)
     notes: list[str] = list(lowered.notes)
+    if "replication" in lowered.network.metadata:
+        notes.append(replication_note(lowered.network.metadata["replication"]))
     network, plan = lowered.network, None
     if needs_relays(lowered.network):
         network, plan = relay_network(lowered.network)   # the mapper's relays: the bundle holds them
@@ -214,7 +220,8 @@ def lower_artefact(graph: Graph, options: dict[str, Any], progress: Progress | N
                                               validation["relays"]["spike_agreement"].items())
                      + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
                      + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
-    liveness = calibration_liveness(graph, lowered)
+    replicated = "replication" in lowered.network.metadata     # its relays and copies are populations of their own
+    liveness = calibration_liveness(lowered.trained if replicated else graph, lowered)
     portability = portability_record(network, lowered.quant_record)
     if progress is not None:
         progress(1, 1, VALIDATING)
