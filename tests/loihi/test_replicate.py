@@ -181,3 +181,12 @@ def test_finetune_with_replicas_writes_the_bundle_and_the_adapted_graph(tmp_path
                                  "--json"], capsys)
     assert code == 0, err
     assert set(json.loads(stdout)["layer_spike_agreement"]) == {"lif1.lif", "lif2"}
+
+
+def test_replicas_refused_for_a_single_population(tmp_path, capsys):
+    out = tmp_path / "one.net"
+    code, _, err = run_cli(["compile", str(NIR / "lif_norse.nir"), "--dt", "1e-4", "--replicas", "2", "-o", str(out)],
+                           capsys)
+    lines = [ln for ln in err.strip().splitlines() if ln.startswith("snncc: error")]
+    assert code == 2 and len(lines) == 1 and "--replicas" in lines[0] and "feeds another" in lines[0], err
+    assert not out.exists()
