@@ -3,6 +3,8 @@
     python bench/lava_netx_agreement.py                  # everything: ~15-25 min on 2 cores, first run + venv build
     python bench/lava_netx_agreement.py --quick          # 2 samples, the small graphs only
     python bench/lava_netx_agreement.py --graphs braille_zero_2023 --rules global auto --timings exact
+    python bench/lava_netx_agreement.py --graphs braille_zero_2023 --rules per-layer --timings exact --replicas 4 \
+        --no-probes [--finetune] --out bench/results/lava_netx_agreement_replicas.json
 
 Not run in CI. Steps:
 
@@ -533,6 +535,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--graphs", nargs="*", default=None, help="case names (default: all)")
     ap.add_argument("--rules", nargs="*", default=list(RULES), choices=RULES)
     ap.add_argument("--timings", nargs="*", default=list(TIMINGS), choices=TIMINGS)
+    ap.add_argument("--replicas", type=int, default=1, help="compile with --replicas K (lowering/replicate.py)")
+    ap.add_argument("--finetune", action="store_true", help="compile with --finetune (its defaults; minutes per bundle)")
     ap.add_argument("--samples", type=int, default=3)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--quick", action="store_true", help="2 samples, the small graphs only")
@@ -555,6 +559,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         if tmp is not None:
             tmp.cleanup()
     result["seconds"] = round(time.perf_counter() - t_start, 1)
+    result["replicas"], result["finetuned"] = args.replicas, args.finetune
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(result, indent=1, default=str) + "\n")
     print(f"\nwritten {args.out} ({result['seconds']:.0f} s)")
@@ -576,8 +581,13 @@ def run(args, py: Path, versions: dict[str, str], work: Path, samples: int) -> d
             for rule in args.rules:
                 row = Row(case.name, rule, timing)
                 rows.append(row)
-                bundle = work / f"{case.name}__{rule}__{timing}.net"
+                tag = (f"__replicas{args.replicas}" if args.replicas > 1 else "") + ("__finetuned" if args.finetune else "")
+                bundle = work / f"{case.name}__{rule}__{timing}{tag}.net"
                 opts = dict(case.options, scale=rule, timing=timing)
+                if args.replicas > 1:
+                    opts["replicas"] = args.replicas
+                if args.finetune:
+                    opts["finetune"] = True
                 if case.params is not None:
                     opts["params"] = str(case.params)
                 try:

@@ -25,8 +25,9 @@ NIR = Path(__file__).resolve().parents[1] / "data" / "nir"
 ZERO = NIR / "braille_zero_2023.nir"
 
 
-def _biased_chain() -> Graph:
-    """12 -> 9 (recurrent, Dense and LIF current biases, a delayed input edge) -> 5 (voltage bias)."""
+def _biased_chain(late: int = 0) -> Graph:
+    """12 -> 9 (recurrent, Dense and LIF current biases, a delayed input edge; ``late``: the delay of the edge
+    fc1 -> h) -> 5 (voltage bias)."""
     rng = np.random.default_rng(3)
     g = Graph(dt=1e-3)
     g.add("in", Input(12))
@@ -37,17 +38,17 @@ def _biased_chain() -> Graph:
     g.add("o", LIF(5, tau_syn=5e-3, tau_mem=2e-2, threshold=1.0, bias=np.full(5, 0.02), bias_placement="voltage"))
     g.add("read", Readout(5))
     g.add("out", Output(5))
-    for a, b, d in (("in", "fc1", 2), ("fc1", "h", 0), ("h", "rec", 1), ("rec", "h", 0), ("h", "fc2", 0),
+    for a, b, d in (("in", "fc1", 2), ("fc1", "h", late), ("h", "rec", 1), ("rec", "h", 0), ("h", "fc2", 0),
                     ("fc2", "o", 0), ("o", "read", 0), ("read", "out", 0)):
         g.connect(a, b, d)
     return g
 
 
 @pytest.mark.parametrize("copies", [2, 3])
-@pytest.mark.parametrize("which", ["zero", "chain", "subtract"])
+@pytest.mark.parametrize("which", ["zero", "chain", "late chain", "subtract"])
 def test_replicated_graph_spikes_equal_the_model(which, copies):
-    if which == "chain":
-        graph = _biased_chain()
+    if which.endswith("chain"):
+        graph = _biased_chain(late=1 if which == "late chain" else 0)
     else:
         path = ZERO if which == "zero" else NIR / "braille_noDelay_noBias_subtract.nir"
         graph = load_model(path, LoadOptions(dt=1e-4, reset=None if which == "zero" else "subtract"))
@@ -57,7 +58,7 @@ def test_replicated_graph_spikes_equal_the_model(which, copies):
     a = simulate(graph, x, record="spikes").spikes
     b = simulate(rep, x, record="spikes").spikes
     assert record["replicas"] == copies and record["relay"] in rep and record["relay"] not in graph
-    late = 2 if which == "chain" else 0            # the input edge's delay is kept before the relays
+    late = 2 if which.endswith("chain") else 0     # the input edge's delay is kept before the relays
     seen = np.zeros_like(x)
     seen[:, late:] = x[:, :x.shape[1] - late]
     assert np.array_equal(b[record["relay"]].numpy()[..., :12 * copies], np.tile(seen, (1, 1, copies)))
@@ -92,6 +93,20 @@ def test_compile_replicated_is_exact_and_as_portable_as_the_plain_bundle():
     assert rep.network.metadata["compile_options"]["replicas"] == 2
     assert ({g.feature for g in netx_runnable(rep.network)} == {g.feature for g in netx_runnable(plain.network)})
     assert rep.network.t_sample == plain.network.t_sample + 1       # the relay's step of latency
+
+
+@pytest.mark.parametrize("late", [0, 1])
+def test_compile_replicated_chains_exactly(late):
+    """Biases on the first population's Dense, recurrent Dense and LIF current; the Dense -> LIF edge with and
+    without a delay (then the biases stay on the population, not on the always-on relays)."""
+    from snncc.targets.loihi.lowering.lower import lower_artefact
+
+    graph = _biased_chain(late)
+    graph.node("o").bias = None          # (a voltage bias on a shifted population has no exact Loihi form)
+    art = lower_artefact(graph, {"scale": "per-layer", "time_steps": 64, "replicas": 2})
+    v = art.validation
+    assert v["timing_exact"] and v["quantized_params_exact"] and v["kernel_exact"]
+    assert art.network.metadata["replication"]["always_on_relays"] == (2 if late == 0 else 0)
 
 
 def test_check_reads_a_replicated_bundle_as_the_model(tmp_path, capsys):

@@ -62,7 +62,9 @@ def replicate(graph: Graph, copies: int) -> tuple[Graph, dict[str, Any] | None]:
     g = graph.copy()
     inp, first = layers[0].pre, layers[0]
     width = g.node(inp).width
-    start0 = [t for t in current_biases(g, first.lif) if t.start == 0]
+    # the relays' always-on columns reach the population through its feed-forward Dense: from step 0 only if
+    # that edge has no delay (otherwise the biases stay where they are, lowered as any current bias)
+    start0 = [t for t in current_biases(g, first.lif) if t.start == 0] if g.delay(first.ff, first.lif) == 0 else []
     bias0 = start0[0].vector.copy() if start0 else None
     for origin in (start0[0].origins if start0 else ()):
         g.node(origin).bias = None          # carried by the always-on relays from step 0
