@@ -36,7 +36,11 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-from numba import config, njit
+
+from snncc.interrupts import sigint_deferred
+
+with sigint_deferred():   # numba's C init would turn a Ctrl-C into an ImportError (snncc/interrupts.py)
+    from numba import config, njit
 
 from snncc.targets.xylo.chip import CORE
 

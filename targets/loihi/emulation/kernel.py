@@ -47,8 +47,12 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-from numba import config, njit, types
-from numba.extending import overload
+
+from snncc.interrupts import sigint_deferred
+
+with sigint_deferred():   # numba's C init would turn a Ctrl-C into an ImportError (snncc/interrupts.py)
+    from numba import config, njit, types
+    from numba.extending import overload
 
 from snncc.errors import SnnccError
 from snncc.targets.loihi.chip import DECAY_ONE, DECAY_SHIFT, Q_BITS, U_BITS   # globals: numba freezes them

@@ -9,8 +9,12 @@ on the source's core.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from snncc.interrupts import sigint_deferred
+
+with sigint_deferred():   # numba's C init would turn a Ctrl-C into an ImportError (snncc/interrupts.py)
+    import numba
 
 
 @numba.njit(cache=True, nogil=True)
