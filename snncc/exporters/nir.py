@@ -183,14 +183,15 @@ def graph_to_nir(graph: Graph, step: float | None = None) -> tuple[Any, ExportRe
 
 
 def _current_bias_on_dense(graph: Graph) -> Graph:
-    """``graph`` with every LIF current bias moved into the bias of a Dense that feeds the LIF with delay 0
+    """``graph`` with every LIF current bias moved into the bias of a Dense that feeds only that LIF, with delay 0
     (the same term: a Dense bias enters the current at every step from t = 0); NIR has no LIF current bias.
     A LIF without such a Dense keeps its bias (``_cuba`` refuses it)."""
     moved = None
     for name, op in graph.items():
         if not (isinstance(op, LIF) and op.bias is not None and op.bias_placement == "current"):
             continue
-        feeds = [p for p in graph.predecessors(name) if isinstance(graph.node(p), Dense) and graph.delay(p, name) == 0]
+        feeds = [p for p in graph.predecessors(name) if isinstance(graph.node(p), Dense) and graph.delay(p, name) == 0
+                 and graph.successors(p) == [name]]          # a Dense that feeds only this LIF
         if not feeds:
             continue
         moved = moved or graph.copy()
