@@ -75,7 +75,7 @@ def nir_goal(name, args):
     from snncc.finetune.inputs import split_inputs
     from snncc.finetune.teacher import run_teacher
     from snncc.frontends import LoadOptions, load_model
-    from snncc.targets.loihi.finetune import deployed_counts, finetune_loihi
+    from snncc.targets.loihi.finetune import finetune_loihi, network_counts
     from snncc.targets.loihi.lowering.lower import lower_model
 
     if name == "subtract":
@@ -109,12 +109,7 @@ def nir_goal(name, args):
     rules = {}
     for rule in ("per-layer", "fine", "auto"):   # untuned, as the goals state them: without replicas
         low = lower_model(graph, dict(options, scale=rule, t_sample=args.steps, replicas=None))
-
-        class Fixed:   # the untuned network in the student's place (deployed_counts only calls export)
-            def export(self, net=low.network):
-                return net
-
-        counts = deployed_counts(low, args.steps)(Fixed(), held)
+        counts = network_counts(low, args.steps, low.network, held)
         rules[rule] = {"rule": low.quant_record.rule, "reason": low.quant_record.reason,
                        **argmax_agreement(teacher, counts).as_dict()}
     out["untuned_rules_on_held_out"] = rules

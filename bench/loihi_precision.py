@@ -46,21 +46,11 @@ from snncc.frontends import LoadOptions, load_model  # noqa: E402
 from snncc.passes.current_bias import BiasTerm, current_biases, restore_biases  # noqa: E402
 from snncc.rounding import damped, round_with_feedback  # noqa: E402
 from snncc.targets.loihi import rescale  # noqa: E402
-from snncc.targets.loihi.finetune import deployed_counts  # noqa: E402
+from snncc.targets.loihi.finetune import network_counts  # noqa: E402
 from snncc.targets.loihi.lowering.lower import lower_model  # noqa: E402
 
 GRAPH = ROOT / "tests" / "data" / "nir" / "braille_zero_2023.nir"
 SUBTRACT = ROOT / "tests" / "data" / "nir" / "braille_noDelay_noBias_subtract.nir"
-
-
-class Fixed:
-    """A network in the student's place (``deployed_counts`` only calls export)."""
-
-    def __init__(self, network):
-        self.network = network
-
-    def export(self):
-        return self.network
 
 
 def main() -> None:
@@ -77,7 +67,7 @@ def main() -> None:
     teacher = run_teacher(low.trained, held, names, voltage=False).counts
 
     def chip(network) -> float:
-        return argmax_agreement(teacher, deployed_counts(low, 256)(Fixed(network), held)).value
+        return argmax_agreement(teacher, network_counts(low, 256, network, held)).value
 
     def calibration(samples: int):
         x = split.x[split.train[:samples]]
@@ -115,6 +105,16 @@ def main() -> None:
     for k, v in ladder.items():
         print(f"  {k}: {v:.3f}", flush=True)
 
+    float_h: dict[int, np.ndarray] = {}
+
+    def layer_h(k: int) -> np.ndarray:
+        """Layer k's damped second moments (teacher spikes on the calibration inputs, the float decays), once."""
+        if k not in float_h:
+            op = low.order.node(low.layers[k].lif)
+            a, b = (float(np.ravel(d)[0]) for d in op.decays(low.order.dt))
+            float_h[k] = damped(rescale.kernel_moments(low, k, x512, s512, a, b), rescale.DAMPING)
+        return float_h[k]
+
     def set_rows(g, c, m, n_in: int, n_terms: int) -> None:
         """Layer ``c``'s float rows ``m`` (``rescale._float_rows``' column order) written back into ``g``."""
         g.node(c.ff).weight = m[:, :n_in]
@@ -134,10 +134,7 @@ def main() -> None:
                 chosen = np.ones(w.shape[1], bool)
             else:
                 s = 254.0 / np.max(np.abs(w), axis=1)
-                op = low.order.node(c.lif)
-                a, b = (float(np.ravel(d)[0]) for d in op.decays(low.order.dt))
-                h = damped(rescale.kernel_moments(low, k, x512, s512, a, b), rescale.DAMPING)
-                q = 2.0 * round_with_feedback(h, w * s[:, None], 2.0, -128, 127) / s[:, None]
+                q = 2.0 * round_with_feedback(layer_h(k), w * s[:, None], 2.0, -128, 127) / s[:, None]
                 chosen = np.zeros(w.shape[1], bool)
                 chosen[:n_in] = "input" in parts
                 chosen[n_in:n_in + n_terms] = "biases" in parts
@@ -178,9 +175,7 @@ def main() -> None:
             if w.shape[1] > n_in + n_terms:
                 parts.append(np.abs(w[:, n_in + n_terms:]).max(axis=1) / copies)
             s = 254.0 / np.maximum.reduce(parts)
-            op = low.order.node(c.lif)
-            a, b = (float(np.ravel(d)[0]) for d in op.decays(low.order.dt))
-            h = damped(rescale.kernel_moments(low, k, x512, s512, a, b), rescale.DAMPING)
+            h = layer_h(k)
             top = np.full(w.shape[1], 127.0 * copies)
             top[:n_in], top[n_in:n_in + n_terms] = 127.0 * k_in, 127.0
             set_rows(g, c, 2.0 * round_with_feedback(h, w * s[:, None], 2.0, -top, top) / s[:, None], n_in, n_terms)
@@ -191,7 +186,7 @@ def main() -> None:
         rl = lower_model(graph, {"scale": "per-layer", "t_sample": 256, "replicas": copies})
         rn = tuple(c.lif for c in rl.layers)
         net = rescale.rescaled(rl, rl.network, x512, run_teacher(rl.trained, x512, rn, voltage=False).spikes)
-        return argmax_agreement(teacher, deployed_counts(rl, 256)(Fixed(net), held)).value
+        return argmax_agreement(teacher, network_counts(rl, 256, net, held)).value
 
     replication = {}
     for k in (2, 4, 8):

@@ -50,21 +50,21 @@ def loihi_student(lowered, steps: int, **kwargs):
     return DifferentiableLoihi(lowered.network, names, lowered.timing_record.shifts, steps, **kwargs)
 
 
-def deployed_counts(lowered, steps: int) -> Callable[[Any, np.ndarray], np.ndarray]:
-    """``(student, x) -> counts``: the student's exported network run by the bit-exact emulator, output
-    spike counts over the model's own steps (population shifts undone)."""
+def network_counts(lowered, steps: int, network, x: np.ndarray) -> np.ndarray:
+    """Output spike counts (B, classes) of ``network`` (``lowered``'s layout, any registers) on ``x``, run by the
+    bit-exact emulator, over the model's own ``steps`` (population shifts undone)."""
     from snncc.targets.loihi.checks.exactness import lead_steps, loihi_spikes, pad
     from snncc.targets.loihi.emulation.emulator import emulate
 
     trec = lowered.timing_record
-    last = lowered.layers[-1].lif
+    res = emulate(network, pad(x, lead_steps(trec.shifts, trec.output_shift)), record="all")
+    spikes = loihi_spikes(res, network, lowered.layers, trec.shifts, steps)
+    return spikes[lowered.layers[-1].lif].sum(axis=1, dtype=np.int64)
 
-    def run(student, x: np.ndarray) -> np.ndarray:
-        net = student.export()
-        res = emulate(net, pad(x, lead_steps(trec.shifts, trec.output_shift)), record="all")
-        return loihi_spikes(res, net, lowered.layers, trec.shifts, steps)[last].sum(axis=1, dtype=np.int64)
 
-    return run
+def deployed_counts(lowered, steps: int) -> Callable[[Any, np.ndarray], np.ndarray]:
+    """``(student, x) -> counts``: the student's exported network through ``network_counts``."""
+    return lambda student, x: network_counts(lowered, steps, student.export(), x)
 
 
 CALIBRATION_SAMPLES = 512   # training inputs whose teacher spikes give the compensated rounding its statistics

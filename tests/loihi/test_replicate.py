@@ -158,25 +158,20 @@ def test_replicas_make_the_per_neuron_start_agree_better():
     """The point of it: fine-tuning's per-neuron start (rescale.py) on braille_zero, 4 copies against none,
     on the same seeded held-out inputs (measured by bench/finetune_goals.py at full size: 0.90 -> 0.94)."""
     from snncc.finetune.inputs import split_inputs
-    from snncc.targets.loihi.finetune import deployed_counts
+    from snncc.targets.loihi.finetune import network_counts
     from snncc.targets.loihi.lowering.lower import lower_model
     from snncc.targets.loihi.rescale import rescaled
 
     graph = load_model(ZERO, LoadOptions(dt=1e-4))
     split = split_inputs(width=12, steps=128, density=0.08, train=128, validation=1, held_out=300, seed=0)
     held, cal = split.x[split.held_out], split.x[split.train]
+    teacher = run_teacher(graph, held, ("lif1.lif", "lif2"), voltage=False).counts
     figures = {}
     for k in (1, 4):
         low = lower_model(graph, {"scale": "per-layer", "t_sample": 128, "replicas": k})
         names = tuple(c.lif for c in low.layers)
         net = rescaled(low, low.network, cal, run_teacher(low.trained, cal, names, voltage=False).spikes)
-
-        class Fixed:
-            def export(self, n=net):
-                return n
-
-        teacher = run_teacher(graph, held, ("lif1.lif", "lif2"), voltage=False).counts
-        figures[k] = argmax_agreement(teacher, deployed_counts(low, 128)(Fixed(), held)).value
+        figures[k] = argmax_agreement(teacher, network_counts(low, 128, net, held)).value
     assert figures[4] > figures[1] + 0.02, figures
 
 

@@ -195,8 +195,9 @@ def lower_artefact(graph: Graph, options: dict[str, Any], progress: Progress | N
 
     lowered = lower_model(graph, options, progress)
     notes: list[str] = list(lowered.notes)
-    if "replication" in lowered.network.metadata:
-        notes.append(replication_note(lowered.network.metadata["replication"]))
+    replication = lowered.network.metadata.get("replication")
+    if replication is not None:
+        notes.append(replication_note(replication))
     network, plan = lowered.network, None
     if needs_relays(lowered.network):
         network, plan = relay_network(lowered.network)   # the mapper's relays: the bundle holds them
@@ -220,8 +221,8 @@ def lower_artefact(graph: Graph, options: dict[str, Any], progress: Progress | N
                                               validation["relays"]["spike_agreement"].items())
                      + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
                      + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
-    replicated = "replication" in lowered.network.metadata     # its relays and copies are populations of their own
-    liveness = calibration_liveness(lowered.trained if replicated else graph, lowered)
+    # a replicated graph's relays and copies are populations of their own
+    liveness = calibration_liveness(lowered.trained if replication is not None else graph, lowered)
     portability = portability_record(network, lowered.quant_record)
     if progress is not None:
         progress(1, 1, VALIDATING)
