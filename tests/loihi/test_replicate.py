@@ -200,3 +200,22 @@ def test_replicas_refused_for_a_single_population(tmp_path, capsys):
     lines = [ln for ln in err.strip().splitlines() if ln.startswith("snncc: error")]
     assert code == 2 and len(lines) == 1 and "--replicas" in lines[0] and "feeds another" in lines[0], err
     assert not out.exists()
+
+
+def test_an_adapted_graph_nir_refuses_leaves_no_bundle(tmp_path, capsys, monkeypatch):
+    """compile --finetune --finetune-out builds the adapted NIR before writing anything: when NIR refuses it,
+    one line, exit 2, and neither the bundle nor the NIR file exists."""
+    import snncc.exporters.nir as nir_export
+    from snncc.errors import SnnccError
+
+    def refuse(graph, step=None):
+        raise SnnccError("a LIF bias on the current has no NIR equivalent", field="node 'x'.bias")
+
+    monkeypatch.setattr(nir_export, "nir_bytes", refuse)
+    out, adapted = tmp_path / "t.net", tmp_path / "adapted.nir"
+    code, _, err = run_cli(["compile", str(ZERO), "--dt", "1e-4", "--scale", "per-layer", "--time-steps", "32", "-o",
+                            str(out), "--finetune", "--finetune-samples", "16", "--finetune-epochs", "1",
+                            "--finetune-out", str(adapted)], capsys)
+    lines = [ln for ln in err.strip().splitlines() if ln.startswith("snncc: error")]
+    assert code == 2 and len(lines) == 1 and "no NIR equivalent" in lines[0], err
+    assert not out.exists() and not adapted.exists()
