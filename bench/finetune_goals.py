@@ -147,7 +147,11 @@ def xylo_goal(args):
     task = TaskSet("task-like Braille (SYNTHETIC)", tx, None,
                    f"{args.task_samples} samples of the letters Space, A, E, I, O, U, Y, events th 1 merged per taxel")
     wall0, cpu0 = time.time(), time.process_time()
-    low = lower(graph, {"time_steps": args.steps})
+    options = {"time_steps": args.steps}
+    if args.replicas > 1:
+        options["replicas"] = args.replicas
+        command += f" --replicas {args.replicas}"
+    low = lower(graph, options)
     result = finetune_lowered(low, split, config=_config(args, XYLO_LR), task_sets=[task], progress=_progress("xylo"))
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
     rec = result.record.as_dict()
@@ -237,7 +241,8 @@ def main(argv=None):
     ap.add_argument("--w-windows", type=float, default=1.0)
     ap.add_argument("--w-voltage", type=float, default=0.0)
     ap.add_argument("--no-search", action="store_true", help="skip the starting-point search")
-    ap.add_argument("--replicas", type=int, default=1, help="Loihi goals: --replicas K (precision by replication)")
+    ap.add_argument("--replicas", type=int, default=1, help="Loihi and Xylo goals: --replicas K (Loihi: precision by replication; Xylo: K replicas, "
+                    "each rounded on its own)")
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--max-cpu-s", type=float, default=None)
     ap.add_argument("--rsnn", type=Path)

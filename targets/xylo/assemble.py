@@ -32,9 +32,15 @@ class PopulationRecord:
     gain: dict[str, float]      # chip units per threshold: min / median / max
     notes: list[str] = field(default_factory=list)
     units: tuple[float, ...] = ()   # per neuron, chip units per IR threshold (not in the record: the gain spread is)
+    copies: int = 1                 # replicas side by side in ``neurons`` (copy k: the k-th block of equal size)
 
     def as_dict(self) -> dict[str, Any]:
-        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items() if k != "units"}
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()
+                if k != "units" and (k != "copies" or v != 1)}
+
+    def copy_neurons(self) -> np.ndarray:
+        """(copies, n) chip neuron indices: row k is copy k of the population."""
+        return np.arange(self.neurons[0], self.neurons[1]).reshape(self.copies, -1)
 
 
 def _currents(pop: HiddenFloat, trains: dict[str, np.ndarray]) -> np.ndarray:

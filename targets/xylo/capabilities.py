@@ -38,6 +38,7 @@ if TYPE_CHECKING:
 CHIP_KEYS = ("syns61201", "syns63300", "syns65302")            # = chip.CHIPS (tested)
 RULES = ("auto", "direct", "single", "single-identified", "relayed")   # = lowering.RULES (tested)
 MODEL_VERBS = ("lower", "check", "agree", "map")
+MAX_REPLICAS = 8                # = lowering.MAX_REPLICAS (tested)
 RANDOM_STEPS = 256                                             # steps of report's and agree's random samples
 DEFAULT_AGREEMENT_SAMPLES = 1000                               # a 95 % interval of about +-0.03
 
@@ -56,6 +57,12 @@ class XyloOptions(TargetOptions):
         "to the float graph's voltages), 'relayed' (the same with sigma-delta relay neurons adding a third kernel "
         "term), or 'auto' (default: each measured in snncc's emulator, the best kept).",
         choices=RULES, rule=f"rule must be one of {', '.join(RULES)}", capabilities=MODEL_VERBS)
+    replicas: int | None = option(
+        "Replicas of the hidden network, each fitted and rounded on its own calibration inputs (its relays a step "
+        "coarser), the output neurons reading each with 1/K of the weights: the copies' rounding errors partly "
+        "average out (costs K times the hidden neurons and their synaptic events). Default 1.",
+        minimum=1, maximum=MAX_REPLICAS, rule=f"replicas must be a whole number from 1 to {MAX_REPLICAS}",
+        capabilities=MODEL_VERBS)
     allow_reset_change: bool = option(
         "Accept a model that resets to zero, deployed with reset by subtraction (Xylo's; snncc check measures the "
         "cost).", default=False, capabilities=("lower", "check", "agree"))

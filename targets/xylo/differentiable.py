@@ -98,7 +98,8 @@ def deliver(isyn: torch.Tensor, counts: torch.Tensor, w: torch.Tensor) -> torch.
 
 class DifferentiableXylo(torch.nn.Module):
     """A ``XyloSpec`` as a trainable model (module doc). ``hidden``: IR population name -> the hidden neurons
-    (indices into the XyloSpec's N) that carry it, in the population's neuron order; ``output``: the name of the
+    (indices into the XyloSpec's N) that carry it, in the population's neuron order (or (copies, n) for a
+    replicated population: its spikes and voltages read as the copies' mean); ``output``: the name of the
     population Xylo's output neurons carry (the last of ``populations``); ``steps``: time steps per sample."""
 
     def __init__(self, spec: XyloSpec, steps: int, hidden: dict[str, Any] | None = None, output: str = "output", *,
@@ -201,7 +202,7 @@ class DifferentiableXylo(torch.nn.Module):
             if forced:
                 ev = ev.clone()
                 for idx, f in forced:
-                    ev[:, idx] = f[:, t]
+                    ev[:, idx] = f[:, t, None] if idx.dim() == 2 else f[:, t]     # every replica forced alike
             isyn_o = isyn_o - shift_decay(isyn_o, self.dash_syn_out)
             dv_o = sat16(wrap_ste(-shift_decay(v_o, self.dash_mem_out), BITS) + isyn_o.sum(-1))
             v_o = sat16(v_o + sat16(dv_o + bias_out))
@@ -213,9 +214,8 @@ class DifferentiableXylo(torch.nn.Module):
         out = torch.stack(outs, 1)
         spikes = torch.stack(hid, 1)
         voltage = torch.stack(volt, 1)
-        run = StudentRun(counts=out.sum(1), spikes={p: spikes[:, :, torch.as_tensor(i, device=x.device)]
-                                                    for p, i in self.hidden.items()},
-                         voltage={p: voltage[:, :, torch.as_tensor(i, device=x.device)] for p, i in self.hidden.items()})
+        run = StudentRun(counts=out.sum(1), spikes={p: _population(spikes, i) for p, i in self.hidden.items()},
+                         voltage={p: _population(voltage, i) for p, i in self.hidden.items()})
         run.spikes[self.populations[-1]] = out
         if record:
             run.states = {"vmem": torch.stack([r[0] for r in rec], 1), "isyn": torch.stack([r[1][..., 0] for r in rec], 1),
@@ -251,3 +251,10 @@ class DifferentiableXylo(torch.nn.Module):
             weights_out=ints(self._int8(self.w_out), s.weights_out), threshold=ints(self._theta(self.theta), s.threshold),
             threshold_out=ints(self._theta(self.theta_out), s.threshold_out), bias=ints(self._bias(self.bias), s.bias),
             bias_out=ints(self._bias(self.bias_out), s.bias_out))
+
+
+def _population(x: torch.Tensor, idx: np.ndarray) -> torch.Tensor:
+    """A population's neurons of (B, T, N): ``idx`` (n,), or (copies, n) for a replicated population, whose
+    copies are averaged (what the readout sees of them)."""
+    sel = x[:, :, torch.as_tensor(idx, device=x.device)]
+    return sel.mean(2) if np.ndim(idx) == 2 else sel

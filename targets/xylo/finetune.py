@@ -100,7 +100,8 @@ def lowered_student(low, steps: int, *, learn=("weights", "thresholds", "biases"
     """The differentiable arithmetic of a ``lowering.XyloLowered`` in the model's time (``lowered_student.py``)."""
     from snncc.targets.xylo.lowered_student import ChipTimeStudent
 
-    hidden = {r.name: np.arange(r.neurons[0], r.neurons[1]) for r in low.populations if r.role == "hidden"}
+    hidden = {r.name: r.copy_neurons() if r.copies > 1 else np.arange(r.neurons[0], r.neurons[1])
+              for r in low.populations if r.role == "hidden"}
     out = next(r for r in low.populations if r.role == "output")
     readout = [np.arange(r.neurons[0], r.neurons[1]) for r in low.populations if r.role == "readout"]
     return ChipTimeStudent(low.xylo_spec, steps, hidden, out.name, input_pad=low.timing.input_pad,

@@ -26,7 +26,7 @@ the chosen rule again on all of them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -50,6 +50,7 @@ DEFAULT_STEPS = 256
 DEFAULT_DENSITY = 0.08
 IDENTIFY_SCALE = 2.0      # regression weight exp(-|V - theta| / (2 theta)) (0.5-4 measured; 2 among the best)
 IDENTIFY_RIDGE = 1e-3     # pull towards the kernel fit, relative to the mean curvature
+MAX_REPLICAS = 8          # --replicas: copies of the hidden network (each calibrated on its own inputs)
 RELAYED_RIDGE = 1e-4      # relayed fits: pull towards zero (1e-3 to 3e-5 measured; 1e-4 among the best)
 PROVISIONAL_SHIFTS = (0, 0)   # the input and recurrent shifts the relays' events are first computed under
 PAIRS_TRIED = 2
@@ -202,7 +203,8 @@ def _hidden(s: _Source, method: str, dashes: tuple[int, int] | None) -> quantize
 
 def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: list[tuple[int, int]] | None,
                     identified: bool, chip: XyloChip, timing: XyloTiming | None = None,
-                    relayed: bool = False, readout: str = "output") -> tuple[dict, list[PopulationRecord]]:
+                    relayed: bool = False, readout: str = "output",
+                    replicas: list[list[_Source]] = ()) -> tuple[dict, list[PopulationRecord]]:
     """A spec for one rule: hidden populations ``method`` (single: dash pair per population, kernel or
     identified weights, rounding with error feedback), the readout population on the output neurons
     (``readout`` "output"), or on hidden neurons like the others, copied exactly to the output neurons one
@@ -212,40 +214,40 @@ def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: l
     ``PROVISIONAL_SHIFTS``, and fitted again under the shifts the assembly chose if they differ (then kept).
     Relayed fits are pulled
     towards zero, not towards the two-exponential kernel: its cancelling coefficients (about 7 thresholds
-    per unit weight on the Braille RSNN) cost more in int8 rounding than they gain (docs/xylo_lowering.md)."""
-    on_hidden = sources if readout == "hidden" else sources[:-1]
-    plan = relay_plan(on_hidden, pairs) if relayed else []
+    per unit weight on the Braille RSNN) cost more in int8 rounding than they gain (docs/xylo_lowering.md).
+    ``replicas``: more copies of ``sources``, each calibrated on its own inputs (``replica_sources``): every
+    hidden population is placed once per copy, fitted and rounded on that copy's inputs (copy k's relays a step
+    coarser, ``replica_events_max``), and the readout takes each copy's spikes with 1/K of its weights
+    (``readout`` "output" only; ``merge_replica_records`` folds the copies' records into one per population)."""
+    copies = [sources] + list(replicas)
+    k_all = len(copies)
+    if k_all > 1 and readout != "output":
+        raise SnnccError("internal check failed: replicas need the readout on the output neurons", field="rule")
+    on_hidden = [c if readout == "hidden" else c[:-1] for c in copies]
+    plans = [relay_plan(h, pairs, replica_events_max(k)) if relayed else [] for k, h in enumerate(on_hidden)]
     shifts: tuple[int, int] | None = None
     ridge = RELAYED_RIDGE if relayed else IDENTIFY_RIDGE
-    for _ in range(2 if plan else 1):
-        if plan:
-            if timing is None:
-                raise SnnccError("internal check failed: a relayed candidate needs the lowering's timing", field="rule")
-            relay_trains(on_hidden, plan, timing, shifts)
-        hidden = []
-        for i, s in enumerate(on_hidden):
-            pop = _hidden(s, method, None if pairs is None else pairs[i])
-            if plan:
-                pop = _with_relays(pop, s, plan)
-            if method == "single":
-                if identified:
-                    pop = quantize.identify_hidden(pop, s.trains, s.v_pre, IDENTIFY_SCALE, ridge)
-                else:
-                    pop = quantize.hidden_hessians(pop, s.trains, s.v_pre, IDENTIFY_SCALE, ridge)
-            hidden.append(pop)
-        limits = {p.name: hidden_state_limit(p, s.trains, s.v_pre) for p, s in zip(hidden, on_hidden)}
+    for _ in range(2 if plans[0] else 1):
+        per_copy, plan, limits = [], [], {}
+        for k, (hid, copy_plan) in enumerate(zip(on_hidden, plans)):
+            if copy_plan:
+                if timing is None:
+                    raise SnnccError("internal check failed: a relayed candidate needs the lowering's timing",
+                                     field="rule")
+                relay_trains(hid, copy_plan, timing, shifts)
+            pops = [_fit_hidden(s, method, None if pairs is None else pairs[i], identified, copy_plan, ridge)
+                    for i, s in enumerate(hid)]
+            lims = [hidden_state_limit(p, s.trains, s.v_pre) for p, s in zip(pops, hid)]
+            if k_all > 1:
+                copy_plan = _as_replica(pops, copy_plan, k)
+            limits.update({p.name: lim for p, lim in zip(pops, lims)})
+            per_copy.append(pops)
+            plan += copy_plan
+        hidden = [pops[i] for i in range(len(per_copy[0])) for pops in per_copy]     # a population's copies adjoin
         if readout == "hidden":
             out, out_limit = None, None
         else:
-            last = sources[-1]
-            out = quantize.output_native(last.pop.lif, last.pop.pre, last.alpha, last.beta, last.theta, last.w_ff,
-                                         last.bias_v, last.bias_i, bias_source=last.bias_lag == 0)
-            pre = last.trains[last.pop.pre]
-            if out.bias_source:
-                pre = np.concatenate([pre, last.trains[quantize.BIAS_SOURCE]], axis=2)
-            if identified:
-                out = quantize.identify_output(out, pre, _own(last), last.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
-            out_limit = output_state_limit(out, pre, last.v_pre)
+            out, out_limit = _fit_output(sources[-1], identified, k_all)
         spec, records = assemble(hidden, out, n_inputs, sources[0].pop.pre, limits, out_limit,
                                  "feedback" if method == "single" else "nearest", relays=plan, shifts=shifts)
         chosen = (int(spec["weight_shift_in"]), int(spec["weight_shift_rec"]))
@@ -254,7 +256,109 @@ def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: l
         shifts = chosen
     if chip.synapses_per_hidden < 2:          # one synaptic current: the weights' last axis has one entry
         spec["weights_in"], spec["weights_rec"] = spec["weights_in"][:, :, :1], spec["weights_rec"][:, :, :1]
+    if k_all > 1:
+        records = merge_replica_records(records, k_all)
     return spec, records
+
+
+def _fit_hidden(s: _Source, method: str, dashes: tuple[int, int] | None, identified: bool,
+                plan: list[relays.Relay], ridge: float) -> quantize.HiddenFloat:
+    """One population on hidden neurons, fitted on ``s``'s calibration traces."""
+    pop = _hidden(s, method, dashes)
+    if plan:
+        pop = _with_relays(pop, s, plan)
+    if method == "single":
+        if identified:
+            return quantize.identify_hidden(pop, s.trains, s.v_pre, IDENTIFY_SCALE, ridge)
+        return quantize.hidden_hessians(pop, s.trains, s.v_pre, IDENTIFY_SCALE, ridge)
+    return pop
+
+
+def _fit_output(last: _Source, identified: bool, copies: int) -> tuple[quantize.OutputFloat, np.ndarray]:
+    """The readout population on the output neurons, fitted on ``last``'s traces; with ``copies`` > 1 its
+    presynaptic population is placed ``copies`` times (``_as_replica`` names): each copy's spikes with 1/copies
+    of the weights (the copies' columns are equal, so the fit and the rounding with error feedback share each
+    weight among them)."""
+    out = quantize.output_native(last.pop.lif, last.pop.pre, last.alpha, last.beta, last.theta, last.w_ff,
+                                 last.bias_v, last.bias_i, bias_source=last.bias_lag == 0)
+    pre = last.trains[last.pop.pre]
+    if copies > 1:
+        n_src = pre.shape[2]
+        out.source = replica_name(last.pop.pre, 0)
+        out.weight = np.concatenate([out.weight[:, :n_src] / copies] * copies + [out.weight[:, n_src:]], axis=1)
+        pre = np.concatenate([pre] * copies, axis=2)
+    if out.bias_source:
+        pre = np.concatenate([pre, last.trains[quantize.BIAS_SOURCE]], axis=2)
+    if identified:
+        out = quantize.identify_output(out, pre, _own(last), last.v_pre, IDENTIFY_SCALE, IDENTIFY_RIDGE)
+    return out, output_state_limit(out, pre, last.v_pre)
+
+
+# -- replicas ------------------------------------------------------------------------------------------------
+REPLICA_SEED_STRIDE = 7919     # copy k calibrates on seed + k * stride (seeded random inputs)
+REPLICA_EVENTS_STEP = 4        # copy k's relays: EVENTS_MAX - 4 k events a step at most (a different quantization)
+REPLICA_EVENTS_MIN = 14
+
+
+def replica_name(name: str, k: int) -> str:
+    """The name copy ``k`` of a population (or of its relays' source) takes inside a replicated spec."""
+    return f"{name}#{k}"
+
+
+def replica_events_max(k: int) -> int:
+    """Copy k's relays quantize a step coarser than copy k - 1's, so the copies' relay errors differ (measured on
+    the Braille RSNN, 4 copies, hidden spikes read by the float readout: 0.850 with equal relays, 0.857 with
+    30 / 26 / 22 / 18 events)."""
+    return max(relays.EVENTS_MAX - REPLICA_EVENTS_STEP * k, REPLICA_EVENTS_MIN)
+
+
+def _as_replica(pops: list[quantize.HiddenFloat], plan: list[relays.Relay], k: int) -> list[relays.Relay]:
+    """Rename copy ``k``'s populations, the sources they read and their relays (``replica_name``; the input and the
+    bias source stay shared), in place; returns copy k's relays under their new names."""
+    names = {p.name: replica_name(p.name, k) for p in pops}
+    renamed = dict(names)
+    out = []
+    for r in plan:
+        source = names.get(r.source, r.source)
+        new = relays.Relay(source, r.n, r.dash, r.events_max, tag="" if source != r.source else f"#{k}")
+        renamed[r.name] = new.name
+        out.append(new)
+    for p in pops:
+        p.name = renamed[p.name]
+        p.weights = {renamed.get(src, src): w for src, w in p.weights.items()}
+        p.columns = [(renamed.get(src, src), syn) for src, syn in p.columns]
+    return out
+
+
+def merge_replica_records(records: list[PopulationRecord], copies: int) -> list[PopulationRecord]:
+    """One record per population over its adjoining copies (``copies`` set; units concatenated, gains spread over
+    all of them), in the place of its first copy; relay records keep their copy's name."""
+    groups: dict[str, list[PopulationRecord]] = {}
+    order: list[PopulationRecord | str] = []
+    for r in records:
+        base, sep, k = r.name.rpartition("#")
+        if r.role == "relay" or not sep or not k.isdigit():
+            order.append(r)
+            continue
+        if base not in groups:
+            groups[base] = []
+            order.append(base)
+        groups[base].append(r)
+    out = []
+    for item in order:
+        if isinstance(item, PopulationRecord):
+            out.append(item)
+            continue
+        parts = groups[item]
+        first = parts[0]
+        units = tuple(u for p in parts for u in p.units)
+        size = first.neurons[1] - first.neurons[0]
+        out.append(PopulationRecord(
+            item, first.role, first.method, (first.neurons[0], parts[-1].neurons[1]), first.dashes, first.fit,
+            first.rounding, {"min": float(min(units)), "median": float(np.median(units)), "max": float(max(units))},
+            list(first.notes) + [f"{copies} replicas of {size} neurons each, side by side"], units=units,
+            copies=copies))
+    return out
 
 
 def _with_relays(pop: quantize.HiddenFloat, s: _Source, plan: list[relays.Relay]) -> quantize.HiddenFloat:
@@ -269,7 +373,8 @@ def _with_relays(pop: quantize.HiddenFloat, s: _Source, plan: list[relays.Relay]
 
 
 # -- relays ------------------------------------------------------------------------------------------------
-def relay_plan(hidden: list[_Source], pairs: list[tuple[int, int]] | None) -> list[relays.Relay]:
+def relay_plan(hidden: list[_Source], pairs: list[tuple[int, int]] | None,
+               events_max: int = relays.EVENTS_MAX) -> list[relays.Relay]:
     """The relays a relayed candidate adds to the populations on ``hidden`` neurons: one per channel of the
     input and of every hidden population that feeds a hidden population (its own recurrence or the next one);
     each takes the *faster* synapse dash of the first population it feeds: relayed through the slower one, its
@@ -280,11 +385,11 @@ def relay_plan(hidden: list[_Source], pairs: list[tuple[int, int]] | None) -> li
     for k, s in enumerate(hidden):
         fast = int(pairs[k][0]) if pairs is not None else 2
         if k == 0:
-            plan.append(relays.Relay(s.pop.pre, s.raw[s.pop.pre].shape[2], fast))
+            plan.append(relays.Relay(s.pop.pre, s.raw[s.pop.pre].shape[2], fast, events_max))
         feeds_next = k + 1 < len(hidden)
         if s.pop.rec is not None or feeds_next:
             d = fast if s.pop.rec is not None else int(pairs[k + 1][0]) if pairs is not None else 2
-            plan.append(relays.Relay(s.pop.lif, s.raw[s.pop.lif].shape[2], d))
+            plan.append(relays.Relay(s.pop.lif, s.raw[s.pop.lif].shape[2], d, events_max))
     return plan
 
 
@@ -377,9 +482,10 @@ class Candidate:
     readout: str = "output"
 
 
-def candidate_rules(sources: list[_Source], rule: str, chip: XyloChip) -> list[Candidate]:
+def candidate_rules(sources: list[_Source], rule: str, chip: XyloChip, replicas: int = 1) -> list[Candidate]:
     """The candidates of ``rule`` (``single`` needs two synaptic currents per hidden neuron: not on Xylo IMU;
-    ``relayed`` also needs room for its relays, and tries the readout on hidden neurons where they fit)."""
+    ``relayed`` also needs room for its relays, and tries the readout on hidden neurons where they fit, except
+    with ``replicas``, whose copies the output neurons read)."""
     if chip.synapses_per_hidden < 2:
         if rule not in ("auto", "direct"):
             raise SnnccError(f"the {rule} rule needs two synaptic currents per hidden neuron; {chip.name} has "
@@ -403,7 +509,7 @@ def candidate_rules(sources: list[_Source], rule: str, chip: XyloChip) -> list[C
                 out.append(Candidate(f"relayed dashes {label}", "single", pairs, True, True))
             elif rule == "relayed":
                 raise SnnccError(room, field="--rule")
-            if relay_room(sources, every, chip, copies=len(sources[-1].theta)) is None:
+            if replicas == 1 and relay_room(sources, every, chip, copies=len(sources[-1].theta)) is None:
                 out.append(Candidate(f"relayed dashes {label}, readout on hidden neurons "
                                      f"(dashes {every[-1][0]},{every[-1][1]}) copied to the output neurons",
                                      "single", every, True, True, "hidden"))
@@ -424,6 +530,50 @@ def relay_room(hidden: list[_Source], pairs: list[tuple[int, int]], chip: XyloCh
         return (f"the relayed rule places {total} hidden neurons; {chip.name} lets input weights reach the first "
                 f"{chip.max_input_expansion} and output weights leave the last {chip.max_output_expansion}")
     return None
+
+
+def replica_room(spec: dict[str, Any], replicas: int, chip: XyloChip) -> str | None:
+    """None when ``replicas`` copies of ``spec``'s hidden neurons (the bias source shared) fit ``chip``, else why
+    not, in one line."""
+    if replicas == 1:
+        return None
+    n = int(np.asarray(spec["threshold"]).size)
+    bias_source = int(_has_bias_source(spec))
+    total = replicas * (n - bias_source) + bias_source
+    if total > min(chip.max_hidden, chip.max_input_expansion, chip.max_output_expansion):
+        return (f"{replicas} replicas need {total:,} hidden neurons ({n - bias_source} each"
+                f"{' and the bias source' if bias_source else ''}); {chip.name} has {chip.max_hidden:,}"
+                + ("" if chip.max_input_expansion >= total and chip.max_output_expansion >= total else
+                   f" and lets input weights reach {chip.max_input_expansion} and output weights leave "
+                   f"{chip.max_output_expansion}"))
+    return None
+
+
+def _has_bias_source(spec: dict[str, Any]) -> bool:
+    """Whether the last hidden neuron is the always-on bias source (no input, memoryless, V = bias = threshold)."""
+    k = int(np.asarray(spec["threshold"]).size) - 1
+    return bool(k >= 0 and not np.any(spec["weights_in"][:, k]) and not np.any(spec["weights_rec"][:, k])
+                and int(spec["dash_mem"][k]) == 0 and int(spec["bias"][k]) == int(spec["threshold"][k])
+                == quantize.SINGLE_THRESHOLD)
+
+
+def replica_sources(ref: Graph, sources: list[_Source], opts: dict[str, Any], x: np.ndarray,
+                    replicas: int) -> list[list[_Source]]:
+    """Copies 1 .. replicas-1 of ``sources``, each calibrated on its own inputs: seeded random inputs of seed
+    ``seed + k * REPLICA_SEED_STRIDE`` (as the calibration inputs), or, for given inputs, a seeded resample of
+    them with replacement."""
+    out = []
+    seed = int(opts.get("seed", 1))
+    for k in range(1, replicas):
+        if opts.get("calibration") is not None:
+            rng = np.random.default_rng(seed + k * REPLICA_SEED_STRIDE)
+            xk = x[rng.integers(0, x.shape[0], x.shape[0])]
+        else:
+            xk = _calibration_inputs(dict(opts, seed=seed + k * REPLICA_SEED_STRIDE), x.shape[2])
+        copy = [replace(s, trains={}, raw={}, v_pre=None) for s in sources]
+        _calibrate(ref, copy, xk)
+        out.append(copy)
+    return out
 
 
 def lowering_settings(options: Any) -> dict[str, Any]:
@@ -465,7 +615,10 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     emulator = opts.get("emulator")      # (spec, chip inputs (B, T', C)) -> output spikes (B, T', Nout); None: the twin
     best = None
     readout_timing = {"output": timing, "hidden": solve_timing(ref, pops, readout_extra=1)}
-    for cand in candidate_rules(sources, rule, chip):
+    replicas = int(opts.get("replicas") or 1)
+    if not 1 <= replicas <= MAX_REPLICAS:
+        raise SnnccError(f"replicas must be a whole number from 1 to {MAX_REPLICAS}", field="--replicas")
+    for cand in candidate_rules(sources, rule, chip, replicas):
         ctiming = readout_timing[cand.readout]
         spec, records = build_candidate(sources, n_in, cand.method, cand.pairs, cand.identified, chip, ctiming,
                                         cand.relayed, cand.readout)
@@ -480,13 +633,25 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
             best = (agr, cand, spec, records, twin)
     agr, chosen, spec, records, twin = best
     name, timing = chosen.name, readout_timing[chosen.readout]
-    if x.shape[0] > 1 and bool(opts.get("refit", True)):
-        # the chosen rule, fitted again on every calibration sample (the selection half too)
+    if replicas > 1 or (x.shape[0] > 1 and bool(opts.get("refit", True))):
+        # the chosen rule, fitted again on every calibration sample (the selection half too); replicas: each
+        # further copy on its own inputs
+        room = replica_room(spec, replicas, chip)
+        if room:
+            raise SnnccError(room, field="--replicas")
         _calibrate(ref, sources, x)
+        extra = replica_sources(ref, sources, opts, x, replicas)
         spec, records = build_candidate(sources, n_in, chosen.method, chosen.pairs, chosen.identified, chip, timing,
-                                        chosen.relayed, chosen.readout)
+                                        chosen.relayed, chosen.readout, extra)
         spec["dt"] = float(ref.dt)
         twin = spec_graph(spec, ref.dt)
+        if replicas > 1:
+            name = f"{name}, {replicas} replicas"
+            chip_x = measure.chip_window(sel_x, timing.input_pad, timing.output_lag)
+            out = emulator(spec, chip_x) if emulator is not None else _emulate(spec, chip_x)
+            counts = measure.read_window(np.asarray(out), timing.output_lag, sel_x.shape[1]).sum(axis=1)
+            candidates[name] = dict(measure.agreement(counts, float_sel).as_dict(),
+                                    note="the selection half is among this spec's calibration inputs")
     design_rules.check_spec(spec, chip)
     notes = list(timing.notes) + fold.notes()
     rates = _event_rates(spec, measure.chip_window(x, timing.input_pad, timing.output_lag))

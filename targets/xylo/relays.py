@@ -47,23 +47,31 @@ def relay_name(source: str) -> str:
 @dataclass(frozen=True)
 class Relay:
     """The relays of one source: ``n`` neurons fed 0/1 events (the input's spikes, single-rule neurons' spikes),
-    their synapse dash."""
+    their synapse dash; ``events_max`` (at most ``EVENTS_MAX``) the events a step the current may ask for (fewer:
+    a coarser, different quantization, for the replicas of a network); ``tag`` tells apart the relays of one
+    source in different replicas."""
 
     source: str
     n: int
     dash: int
+    events_max: int = EVENTS_MAX
+    tag: str = ""
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.events_max <= EVENTS_MAX:
+            raise ValueError(f"relay events_max {self.events_max} outside 1..{EVENTS_MAX}")
 
     @property
     def name(self) -> str:
         """The relays' source name (a key of a ``HiddenFloat``'s weights, of the trains and the layout)."""
-        return relay_name(self.source)
+        return relay_name(self.source) + self.tag
 
     def registers(self, shift: int) -> tuple[int, int]:
         """(int8 input weight, threshold) under the input matrix's left ``shift``: the largest weight whose current
         stays in range, and the smallest threshold that can never reach the cap (``current_bound``)."""
         w8 = int(max(1, min(CORE.weight_max, CURRENT_BUDGET >> int(shift))))
         chip_w = w8 << int(shift)
-        theta = -(-current_bound(chip_w, self.dash) // EVENTS_MAX)
+        theta = -(-current_bound(chip_w, self.dash) // self.events_max)
         return w8, int(min(max(theta, 1), CORE.state_max))
 
     def gain(self, shift: int) -> float:
