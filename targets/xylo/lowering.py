@@ -356,8 +356,8 @@ def merge_replica_records(records: list[PopulationRecord], copies: int) -> list[
         out.append(PopulationRecord(
             item, first.role, first.method, (first.neurons[0], parts[-1].neurons[1]), first.dashes, first.fit,
             first.rounding, {"min": float(min(units)), "median": float(np.median(units)), "max": float(max(units))},
-            list(first.notes) + [f"{copies} replicas of {size} neurons each, side by side"], units=units,
-            copies=copies))
+            list(dict.fromkeys(n for p in parts for n in p.notes))
+            + [f"{copies} replicas of {size} neurons each, side by side"], units=units, copies=copies))
     return out
 
 
@@ -666,7 +666,9 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
                        calibration={"inputs": _describe(opts, x), "fit_samples": int(fit_x.shape[0]),
                                     "selection_samples": int(sel_x.shape[0]), "metric": "argmax agreement with the "
                                     "float graph over clear-winner samples, of the network spec run in "
-                                    + ("the given emulator" if emulator is not None else "snncc's bit-exact emulator")},
+                                    + ("the given emulator" if emulator is not None else "snncc's bit-exact emulator"),
+                                    **({"replicas": replicas, "replica_inputs": _describe_replicas(opts)}
+                                       if replicas > 1 else {})},
                        real_time=rt.as_dict())
 
 
@@ -684,6 +686,14 @@ def _calibration_inputs(opts: dict[str, Any], width: int) -> np.ndarray:
     if not 0 < density <= 1:
         raise SnnccError(f"spike density must be in (0, 1], got {density}", field="--density")
     return (np.random.default_rng(seed).random((samples, steps, width)) < density).astype(np.uint8)
+
+
+def _describe_replicas(opts: dict[str, Any]) -> str:
+    seed = int(opts.get("seed", 1))
+    how = ("a seeded resample (with replacement) of the given spike trains, seed"
+           if opts.get("calibration") is not None else "seeded random spike trains as copy 0's, seed")
+    return (f"copy 0: the calibration inputs; copy k: {how} {seed} + {REPLICA_SEED_STRIDE} k; copy k's relays at most "
+            f"{relays.EVENTS_MAX} - {REPLICA_EVENTS_STEP} k events a step (at least {REPLICA_EVENTS_MIN})")
 
 
 def _describe(opts: dict[str, Any], x: np.ndarray) -> str:

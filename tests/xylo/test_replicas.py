@@ -65,6 +65,16 @@ def test_replicas_are_independent_blocks_that_differ(replicated):
     assert thetas[0] < thetas[1] < thetas[2]                    # relays of copy k a step coarser
 
 
+def test_replicas_of_given_calibration_inputs_fit_on_resamples_of_them(model):
+    x = spikes(np.random.default_rng(9), 24, 80, 6, 0.15)
+    low = lower(model, {"rule": "single-identified", "calibration": x, "replicas": 2})
+    blocks = next(p for p in low.populations if p.role == "hidden").copy_neurons()
+    w_in = low.spec["weights_in"].astype(int)
+    assert not np.array_equal(w_in[:, blocks[0]], w_in[:, blocks[1]])
+    cal = low.record()["calibration"]
+    assert cal["replicas"] == 2 and "seeded resample" in cal["replica_inputs"]
+
+
 def test_a_replicated_spec_runs_unchanged_in_xylosim(replicated):
     low = replicated
     x = spikes(np.random.default_rng(11), 24, 80, 6, 0.15)
@@ -204,6 +214,7 @@ def test_replicas_of_two_hidden_layers_with_biases(rule):
     n_plain, n = plain.spec["threshold"].size, low.spec["threshold"].size
     assert n - 1 == 3 * (n_plain - 1)                        # one shared bias source, the last hidden neuron
     assert low.spec["bias"][n - 1] == low.spec["threshold"][n - 1]
+    assert any(f"hidden neuron {n - 1} is the always-on bias source" in note for note in hidden[1].notes)
     h1, h2 = hidden[0].copy_neurons(), hidden[1].copy_neurons()
     w_rec = low.spec["weights_rec"]
     for k in range(3):                                      # copy k of h2 reads copy k of h1 only
