@@ -595,6 +595,9 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     rule = opts.get("rule") or "auto"
     if rule not in RULES:
         raise SnnccError(f"rule must be one of {', '.join(RULES)}", field="--rule")
+    replicas = 1 if opts.get("replicas") is None else int(opts["replicas"])
+    if not 1 <= replicas <= MAX_REPLICAS:
+        raise SnnccError(f"replicas must be a whole number from 1 to {MAX_REPLICAS}", field="--replicas")
     from snncc.targets.xylo import rules as design_rules
 
     trained = graph
@@ -615,19 +618,21 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     emulator = opts.get("emulator")      # (spec, chip inputs (B, T', C)) -> output spikes (B, T', Nout); None: the twin
     best = None
     readout_timing = {"output": timing, "hidden": solve_timing(ref, pops, readout_extra=1)}
-    replicas = int(opts.get("replicas") or 1)
-    if not 1 <= replicas <= MAX_REPLICAS:
-        raise SnnccError(f"replicas must be a whole number from 1 to {MAX_REPLICAS}", field="--replicas")
+
+    def selection_agreement(spec: dict, at: XyloTiming) -> measure.Agreement:
+        """``spec`` run on the selection half (the given emulator, else snncc's), against the float graph."""
+        chip_x = measure.chip_window(sel_x, at.input_pad, at.output_lag)
+        out = emulator(spec, chip_x) if emulator is not None else _emulate(spec, chip_x)
+        return measure.agreement(measure.read_window(np.asarray(out), at.output_lag, sel_x.shape[1]).sum(axis=1),
+                                 float_sel)
+
     for cand in candidate_rules(sources, rule, chip, replicas):
         ctiming = readout_timing[cand.readout]
         spec, records = build_candidate(sources, n_in, cand.method, cand.pairs, cand.identified, chip, ctiming,
                                         cand.relayed, cand.readout)
         spec["dt"] = float(ref.dt)
         twin = spec_graph(spec, ref.dt)
-        chip_x = measure.chip_window(sel_x, ctiming.input_pad, ctiming.output_lag)
-        out = emulator(spec, chip_x) if emulator is not None else _emulate(spec, chip_x)
-        counts = measure.read_window(np.asarray(out), ctiming.output_lag, sel_x.shape[1]).sum(axis=1)
-        agr = measure.agreement(counts, float_sel)
+        agr = selection_agreement(spec, ctiming)
         candidates[cand.name] = agr.as_dict()
         if best is None or agr.agreement > best[0].agreement:
             best = (agr, cand, spec, records, twin)
@@ -647,10 +652,7 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
         twin = spec_graph(spec, ref.dt)
         if replicas > 1:
             name = f"{name}, {replicas} replicas"
-            chip_x = measure.chip_window(sel_x, timing.input_pad, timing.output_lag)
-            out = emulator(spec, chip_x) if emulator is not None else _emulate(spec, chip_x)
-            counts = measure.read_window(np.asarray(out), timing.output_lag, sel_x.shape[1]).sum(axis=1)
-            candidates[name] = dict(measure.agreement(counts, float_sel).as_dict(),
+            candidates[name] = dict(selection_agreement(spec, timing).as_dict(),
                                     note="the selection half is among this spec's calibration inputs")
     design_rules.check_spec(spec, chip)
     notes = list(timing.notes) + fold.notes()

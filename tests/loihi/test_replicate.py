@@ -219,3 +219,13 @@ def test_an_adapted_graph_nir_refuses_leaves_no_bundle(tmp_path, capsys, monkeyp
     lines = [ln for ln in err.strip().splitlines() if ln.startswith("snncc: error")]
     assert code == 2 and len(lines) == 1 and "no NIR equivalent" in lines[0], err
     assert not out.exists() and not adapted.exists()
+
+
+def test_the_library_refuses_zero_replicas():
+    """``replicas=0`` given to the library (not through the CLI's check) is refused, not read as 1."""
+    from snncc.errors import SnnccError
+    from snncc.targets.loihi.lowering.lower import lower_model
+
+    with pytest.raises(SnnccError, match="replicas must be a whole number from 1 to 16") as err:
+        lower_model(load_model(ZERO, LoadOptions(dt=1e-4)), {"scale": "per-layer", "replicas": 0})
+    assert err.value.field == "--replicas"

@@ -226,3 +226,10 @@ def test_replicas_of_two_hidden_layers_with_biases(rule):
     mine = emulate(XyloSpec(**low.spec), chip_x, record=True)
     assert np.array_equal(vendor.output_spikes, mine.output_spikes) and np.array_equal(vendor.spikes, mine.spikes)
     assert vendor.output_spikes.sum() > 20 and vendor.spikes[:, :, h2.ravel()].sum() > 20
+
+
+@pytest.mark.parametrize("value", [0, 9])
+def test_the_library_refuses_bad_replicas_before_any_work(model, value):
+    with pytest.raises(SnnccError, match="replicas must be a whole number from 1 to 8") as err:
+        lower(model, dict(QUICK, replicas=value, calibration_samples=10**9))   # never drawn: refused first
+    assert err.value.field == "--replicas"

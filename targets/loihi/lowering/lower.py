@@ -103,7 +103,8 @@ def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | Non
     rule = options.get("scale") or "auto"
     frame = frame_shape(graph)           # the input frame (C, H, W) before convolutions are folded
     graph, fold = fold_linear(graph)     # Conv -> connection matrix; linear chains -> one projection
-    graph, replication = replicate(graph, int(options.get("replicas") or 1))   # --replicas (replicate.py)
+    copies = 1 if options.get("replicas") is None else int(options["replicas"])     # --replicas (replicate.py)
+    graph, replication = replicate(graph, copies)
     layers = chain(graph)
     deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
     order, trec = lower_timing(deployed, timing_mode)   # exact timing returns ``deployed`` itself where it can
