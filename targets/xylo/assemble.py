@@ -84,7 +84,10 @@ def output_state_limit(out: OutputFloat, pre: np.ndarray, v_pre: np.ndarray) -> 
 def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: int, input_source: str,
              limits: dict[str, np.ndarray], out_limit: np.ndarray | None, rounding: str,
              relays: list[relay_rules.Relay] = (), shifts: tuple[int, int] | None = None) -> tuple[dict, list[PopulationRecord]]:
-    """The spec dict and a record per population. ``limits``: per hidden population its state-limited gains;
+    """The spec dict and a record per population. ``rounding``: "feedback" (error feedback under each population's
+    hessians where it has them), "nearest", or "none" (weights left unrounded, float64 in chip units: a spec only the
+    float twin runs, to measure what rounding costs; thresholds, biases, dashes and relays as the chip has them).
+    ``limits``: per hidden population its state-limited gains;
     ``relays`` (``relays.py``): placed after the populations, their registers under the matrices' shifts;
     ``shifts``: the input and recurrent matrices' left shifts (None: chosen here, ``choose_gains``).
     ``output`` None: the readout population is the last of ``hidden`` and the output neurons copy its spikes
@@ -124,8 +127,10 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
         state[starts[BIAS_SOURCE]] = SINGLE_THRESHOLD - 1
     gains, (s_in, s_rec) = choose_gains(state, [w_in_max, w_rec_max], shifts)
     gains = np.floor(gains)
+    unrounded = rounding == "none"
+    w_type = np.float64 if unrounded else np.int8
     spec: dict[str, Any] = {
-        "weights_in": np.zeros((n_inputs, n, 2), np.int8), "weights_rec": np.zeros((n, n, 2), np.int8),
+        "weights_in": np.zeros((n_inputs, n, 2), w_type), "weights_rec": np.zeros((n, n, 2), w_type),
         "dash_syn": np.zeros(n, np.uint8), "dash_syn_2": np.zeros(n, np.uint8), "dash_mem": np.zeros(n, np.uint8),
         "threshold": np.zeros(n, np.int16), "bias": np.zeros(n, np.int16),
         "weight_shift_in": int(s_in), "weight_shift_rec": int(s_rec),
@@ -149,7 +154,9 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
                     blocks.append((src, k, row.size))
             c, st = np.concatenate(coeffs), np.concatenate(steps)
             h = p.hessians[j] if (rounding == "feedback" and p.hessians is not None) else None
-            if h is not None and h.shape[0] == c.size + 1:          # the constant column: the bias register
+            if unrounded:
+                ints, bias_units = c / st, p.bias[j] * g[j]
+            elif h is not None and h.shape[0] == c.size + 1:          # the constant column: the bias register
                 c_full = np.concatenate([c, [p.bias[j]]])
                 st_full = np.concatenate([st, [1.0 / g[j]]])
                 low = np.concatenate([np.full(c.size, WEIGHT_MIN), [-STATE_MAX]])
@@ -161,7 +168,7 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
                 bias_units = p.bias[j] * g[j]
             at = 0
             for src, k, size in blocks:
-                vals = ints[at:at + size].astype(np.int8)
+                vals = ints[at:at + size].astype(w_type)
                 at += size
                 if src == input_source:
                     spec["weights_in"][:, s0 + j, k] = vals
@@ -215,13 +222,13 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
     o_gain, (s_out,) = choose_gains(out_limit * output.theta, [o_max])
     o_gain = np.floor(o_gain)
     g = o_gain / output.theta
-    w_out = np.zeros((n, m), np.int8)
+    w_out = np.zeros((n, m), w_type)
     src0 = starts[output.source]
     n_src = output.weight.shape[1] - (1 if output.bias_source else 0)
     for j in range(m):
         st = np.full(output.weight.shape[1], 2.0 ** s_out / g[j])
         h = output.hessians[j] if (rounding == "feedback" and output.hessians is not None) else None
-        ints = to_int(output.weight[j], st, h).astype(np.int8)
+        ints = output.weight[j] / st if unrounded else to_int(output.weight[j], st, h).astype(np.int8)
         w_out[src0:src0 + n_src, j] = ints[:n_src]
         if output.bias_source:
             w_out[starts[BIAS_SOURCE], j] = ints[n_src]

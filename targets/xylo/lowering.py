@@ -204,7 +204,7 @@ def _hidden(s: _Source, method: str, dashes: tuple[int, int] | None) -> quantize
 def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: list[tuple[int, int]] | None,
                     identified: bool, chip: XyloChip, timing: XyloTiming | None = None,
                     relayed: bool = False, readout: str = "output",
-                    replicas: list[list[_Source]] = ()) -> tuple[dict, list[PopulationRecord]]:
+                    replicas: list[list[_Source]] = (), rounding: str | None = None) -> tuple[dict, list[PopulationRecord]]:
     """A spec for one rule: hidden populations ``method`` (single: dash pair per population, kernel or
     identified weights, rounding with error feedback), the readout population on the output neurons
     (``readout`` "output"), or on hidden neurons like the others, copied exactly to the output neurons one
@@ -218,7 +218,8 @@ def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: l
     ``replicas``: more copies of ``sources``, each calibrated on its own inputs (``replica_sources``): every
     hidden population is placed once per copy, fitted and rounded on that copy's inputs (copy k's relays a step
     coarser, ``replica_events_max``), and the readout takes each copy's spikes with 1/K of its weights
-    (``readout`` "output" only; ``merge_replica_records`` folds the copies' records into one per population)."""
+    (``readout`` "output" only; ``merge_replica_records`` folds the copies' records into one per population).
+    ``rounding``: "none" leaves the weights unrounded (``assemble``); else the method's own rounding."""
     copies = [sources] + list(replicas)
     k_all = len(copies)
     if k_all > 1 and readout != "output":
@@ -249,7 +250,7 @@ def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: l
         else:
             out, out_limit = _fit_output(sources[-1], identified, k_all)
         spec, records = assemble(hidden, out, n_inputs, sources[0].pop.pre, limits, out_limit,
-                                 "feedback" if method == "single" else "nearest", relays=plan, shifts=shifts)
+                                 rounding or ("feedback" if method == "single" else "nearest"), relays=plan, shifts=shifts)
         chosen = (int(spec["weight_shift_in"]), int(spec["weight_shift_rec"]))
         if chosen == (shifts or PROVISIONAL_SHIFTS):
             break                                  # the relays' events were computed under these shifts
@@ -586,7 +587,9 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     (RULES), allow_reset_change, calibration (an array (B, T, C) of 0/1 spikes) or calibration_samples /
     time_steps / density / seed;
     emulator: a callable (spec dict, chip inputs) -> output spikes that measures candidates (default: snncc's
-    bit-exact emulator)."""
+    bit-exact emulator); rounding: "none" leaves every weight unrounded (a float spec in chip units that only the float
+    twin runs: a measurement of what rounding costs, bench/xylo_loss_sources.py; it needs ``emulator``, and the spec
+    is neither checked against the chip's rules nor estimated for real time)."""
     opts = dict(options or {})
     try:
         chip = get_chip(opts.get("chip"))
@@ -598,6 +601,11 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     replicas = 1 if opts.get("replicas") is None else int(opts["replicas"])
     if not 1 <= replicas <= MAX_REPLICAS:
         raise SnnccError(f"replicas must be a whole number from 1 to {MAX_REPLICAS}", field="--replicas")
+    unrounded = opts.get("rounding") == "none"
+    if opts.get("rounding") not in (None, "none"):
+        raise SnnccError("rounding must be 'none' or left out", field="rounding")
+    if unrounded and opts.get("emulator") is None:
+        raise SnnccError("an unrounded spec needs an emulator that runs float weights (the twin)", field="rounding")
     from snncc.targets.xylo import rules as design_rules
 
     trained = graph
@@ -629,7 +637,7 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     for cand in candidate_rules(sources, rule, chip, replicas):
         ctiming = readout_timing[cand.readout]
         spec, records = build_candidate(sources, n_in, cand.method, cand.pairs, cand.identified, chip, ctiming,
-                                        cand.relayed, cand.readout)
+                                        cand.relayed, cand.readout, rounding=opts.get("rounding"))
         spec["dt"] = float(ref.dt)
         twin = spec_graph(spec, ref.dt)
         agr = selection_agreement(spec, ctiming)
@@ -647,18 +655,21 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
         _calibrate(ref, sources, x)
         extra = replica_sources(ref, sources, opts, x, replicas)
         spec, records = build_candidate(sources, n_in, chosen.method, chosen.pairs, chosen.identified, chip, timing,
-                                        chosen.relayed, chosen.readout, extra)
+                                        chosen.relayed, chosen.readout, extra, rounding=opts.get("rounding"))
         spec["dt"] = float(ref.dt)
         twin = spec_graph(spec, ref.dt)
         if replicas > 1:
             name = f"{name}, {replicas} replicas"
             candidates[name] = dict(selection_agreement(spec, timing).as_dict(),
                                     note="the selection half is among this spec's calibration inputs")
-    design_rules.check_spec(spec, chip)
     notes = list(timing.notes) + fold.notes()
-    rates = _event_rates(spec, measure.chip_window(x, timing.input_pad, timing.output_lag))
-    rt = design_rules.real_time(spec, float(ref.dt), rates)
-    notes.append(rt.line())
+    real_time: dict[str, Any] = {"note": "not estimated: the weights are unrounded (a measurement, not a spec)"}
+    if not unrounded:
+        design_rules.check_spec(spec, chip)
+        rates = _event_rates(spec, measure.chip_window(x, timing.input_pad, timing.output_lag))
+        rt = design_rules.real_time(spec, float(ref.dt), rates)
+        notes.append(rt.line())
+        real_time = rt.as_dict()
     notes += _bias_notes(sources, records, timing)
     if any(r.method == "direct" for r in records):
         notes.append("direct rule: a hidden neuron fires up to 31 spikes per step on the chip where the IR fires one "
@@ -671,7 +682,7 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
                                     + ("the given emulator" if emulator is not None else "snncc's bit-exact emulator"),
                                     **({"replicas": replicas, "replica_inputs": _describe_replicas(opts)}
                                        if replicas > 1 else {})},
-                       real_time=rt.as_dict())
+                       real_time=real_time)
 
 
 def _calibration_inputs(opts: dict[str, Any], width: int) -> np.ndarray:

@@ -160,3 +160,40 @@ def test_relayed_rule_is_refused_in_one_line_where_it_cannot_fit(model):
     with pytest.raises(SnnccError, match="relayed rule places .* hidden neurons; Xylo Audio 3") as err:
         lower(big, dict(QUICK, rule="relayed", chip="syns65302", density=0.1))
     assert "\n" not in str(err.value)
+
+
+def test_an_unrounded_lowering_changes_only_the_weights(model):
+    """rounding="none" (bench/xylo_loss_sources.py measures what rounding costs with it): the same rule, dashes,
+    thresholds, biases, shifts and relays as the written spec; every weight the float chip units it was rounded from
+    (error feedback moves some by a few steps); refused without a float emulator."""
+    from snncc.targets.xylo.twin import spec_graph
+
+    def twin(spec, chip_x):
+        return simulate(spec_graph(spec, model.dt), chip_x, record="spikes").spikes["output"].numpy()
+
+    opts = dict(QUICK, rule="relayed", replicas=2)       # replicas: one candidate, so both choose the same
+    written = lower(model, opts)
+    unrounded = lower(model, dict(opts, rounding="none", emulator=twin))
+    assert unrounded.rule == written.rule and "not estimated" in unrounded.real_time["note"]
+    weights = ("weights_in", "weights_rec", "weights_out")
+    for key, value in written.spec.items():
+        if key in weights:
+            got = unrounded.spec[key]
+            assert got.dtype == np.float64 and value.dtype == np.int8
+            used = (value != 0) | (got != 0)
+            diff = np.abs(got[used] - value[used])
+            assert np.any(got[used] != np.round(got[used]))                       # not integers
+            assert diff.mean() < 3 and np.corrcoef(got[used], value[used])[0, 1] > 0.99, key
+        elif isinstance(value, np.ndarray):
+            assert np.array_equal(unrounded.spec[key], value), key
+        else:
+            assert unrounded.spec[key] == value, key
+    for rec in (r for r in written.populations if r.role == "relay"):        # relays keep their integer registers
+        a, b = rec.neurons
+        assert np.array_equal(unrounded.spec["weights_in"][:, a:b], written.spec["weights_in"][:, a:b])
+    x = spikes(np.random.default_rng(3), 4, 40, 6, 0.15)
+    assert simulate(unrounded.twin, unrounded.chip_input(x), record="spikes").spikes["output"].shape[0] == 4
+    with pytest.raises(SnnccError, match="needs an emulator"):
+        lower(model, dict(opts, rounding="none"))
+    with pytest.raises(SnnccError, match="rounding must be"):
+        lower(model, dict(opts, rounding="fast"))

@@ -1,0 +1,74 @@
+"""bench/xylo_loss_by_layer.py and bench/xylo_loss_sources.py swap one layer or one approximation at a time: where
+nothing is swapped they must reproduce the unswapped runs exactly (the first checks it every run). Here on a small
+replicated chain written by ``snncc compile``."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from snncc.ir.serialize import save_graph
+from snncc.targets.xylo.lowering import lower, twin_counts
+from snncc.targets.xylo.spec import XyloSpec
+from snncc_test_helpers import run_cli
+
+from xylo_models import chain, spikes
+
+BENCH = Path(__file__).resolve().parents[2] / "bench"
+QUICK = {"calibration_samples": 16, "time_steps": 40, "density": 0.15}
+
+
+def _bench(name: str):
+    spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def model():
+    return chain(np.random.default_rng(5), n_in=6, n_hidden=12, n_out=3, beta=0.85, alpha_o=0.45, beta_o=0.7)
+
+
+def test_layer_swaps_reproduce_the_artefact(tmp_path, capsys, model):
+    """The float readout driven by the float hidden spikes is the float graph, the chip readout driven by the
+    chip's hidden spikes is the emulator (one_seed exits otherwise); every copy of a replicated artefact is read."""
+    bench = _bench("xylo_loss_by_layer")
+    path = tmp_path / "chain.snnir"
+    save_graph(model, path)
+    out = tmp_path / "rep.xylo"
+    code, _, err = run_cli(["compile", path, "--target", "xylo", "--rule", "relayed", "--replicas", "2",
+                            "--calibration-samples", "16", "--time-steps", "40", "-o", out], capsys)
+    assert code == 0, err
+    manifest = json.loads((out / "manifest.json").read_text())
+    got = bench.one_seed(model, XyloSpec.load_npz(out / "spec.npz"), manifest, 24, 3, 0.15, steps=40)
+    names = set(got["figures"])
+    assert {"chip", "float readout, chip hidden (copies' mean)", "float readout, chip hidden copy 0",
+            "float readout, chip hidden copy 1", "chip readout, float hidden"} == names
+    assert all(a.counted + a.ties_or_silent == 24 for a in got["figures"].values())
+    assert got["outputs"]["chip"].shape == (24, 3) and got["outputs"]["chip"].sum() > 0
+
+
+def test_loss_sources_removes_one_approximation_at_a_time(model):
+    """Relays 1x finer and uncapped are the twin itself; 100x finer changes the relays' registers only; the twin
+    emulator runs an unrounded spec."""
+    bench = _bench("xylo_loss_sources")
+    low = lower(model, dict(QUICK, rule="relayed", replicas=2))
+    x = spikes(np.random.default_rng(4), 16, 40, 6, 0.15)
+    assert np.array_equal(twin_counts(bench.finer_relays(low, 1.0), low.timing, x), twin_counts(low.twin, low.timing, x))
+    fine = bench.finer_relays(low, 100.0)
+    relay_cells = np.concatenate([np.arange(*r.neurons) for r in low.populations if r.role == "relay"])
+    theta = fine.node("hidden").threshold
+    assert np.allclose(theta[relay_cells] * 100, low.twin.node("hidden").threshold[relay_cells])
+    others = np.setdiff1d(np.arange(theta.size), relay_cells)
+    assert np.array_equal(theta[others], low.twin.node("hidden").threshold[others])
+    unrounded = lower(model, dict(QUICK, rule="relayed", replicas=2, rounding="none",
+                                  emulator=bench.twin_emulator(model.dt)))
+    assert unrounded.spec["weights_rec"].dtype == np.float64
+    assert twin_counts(unrounded.twin, unrounded.timing, x).shape == (16, 3)
