@@ -9,8 +9,8 @@ the weights as float chip units). On the same seeded random spike trains (SYNTHE
 the goal's held-out seed 0) it measures argmax agreement with the float graph (clear-winner rule, 95 % Wilson
 interval) of, one approximation removed at a time:
 
-    chip              the spec in snncc's bit-exact emulator (equal to XyloSim)
-    twin              the spec's float twin (twin.py): the chip without its integer state arithmetic
+    chip              the written spec dict in snncc's bit-exact emulator (equal to XyloSim)
+    twin              its float twin (twin.py): the chip without its integer state arithmetic
     unrounded         the unrounded spec's twin: also without int8 weight rounding
     fine relays       the same with every relay --relay-factor times finer (its threshold and the weights of its
                       events divided by the factor, events per step uncapped): nearly without relay quantization
@@ -44,7 +44,7 @@ from snncc.threads import one_thread  # noqa: E402
 
 
 def twin_emulator(dt: float):
-    """(spec dict, chip inputs) -> output spikes of the spec's float twin: runs unrounded specs."""
+    """(spec dict, chip inputs) -> output spikes of that spec dict's float twin: runs unrounded specs."""
     def run(spec: dict, chip_x: np.ndarray) -> np.ndarray:
         with one_thread():
             return simulate(spec_graph(spec, dt), chip_x, record="spikes").spikes["output"].numpy()

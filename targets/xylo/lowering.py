@@ -588,8 +588,8 @@ def lower(graph: Graph, options: dict[str, Any] | None = None) -> XyloLowered:
     time_steps / density / seed;
     emulator: a callable (spec dict, chip inputs) -> output spikes that measures candidates (default: snncc's
     bit-exact emulator); rounding: "none" leaves every weight unrounded (a float spec in chip units that only the float
-    twin runs: a measurement of what rounding costs, bench/xylo_loss_sources.py; it needs ``emulator``, and the spec
-    is neither checked against the chip's rules nor estimated for real time)."""
+    twin runs: a measurement of what rounding costs, bench/xylo_loss_sources.py; it needs ``emulator``, and such a
+    spec is neither checked against the chip's rules nor estimated for real time)."""
     opts = dict(options or {})
     try:
         chip = get_chip(opts.get("chip"))
