@@ -161,7 +161,8 @@ def main() -> None:
     graph = load_model(Path(args.model), LoadOptions(dt=args.dt, reset=args.reset))
     seeds = [int(s) for s in args.seeds.split(",")]
     result = {"artefact": str(art), "model": args.model, "rule": manifest["quantization"]["rule"],
-              "inputs": f"{args.samples} seeded random spike trains per seed (density {args.density}), {args.steps} steps "
+              "inputs": f"{args.samples} seeded random spike trains per seed (density {args.density}), "
+                        f"{args.steps} steps "
                         "(SYNTHETIC)", "seeds": {}}
     pooled_chip, pooled_counts = [], []
     for seed in seeds:

@@ -84,10 +84,12 @@ def main() -> None:
     graph = load_model(Path(args.model), LoadOptions(dt=args.dt, reset=args.reset))
     opts = {"rule": args.rule, "replicas": args.replicas}
     chip_low = lower(graph, opts)
-    # the unrounded lowering measures its candidates in the twin and could choose another readout: keep the written one's
+    # the unrounded lowering measures its candidates in the twin and could choose another readout: keep the
+    # written one's
     on_hidden = "readout on hidden neurons" in chip_low.rule
     every_candidate = lowering.candidate_rules
-    lowering.candidate_rules = lambda *a, **k: [c for c in every_candidate(*a, **k) if (c.readout == "hidden") == on_hidden]
+    lowering.candidate_rules = lambda *a, **k: [c for c in every_candidate(*a, **k)
+                                                if (c.readout == "hidden") == on_hidden]
     try:
         float_low = lower(graph, dict(opts, rounding="none", emulator=twin_emulator(graph.dt)))
     finally:

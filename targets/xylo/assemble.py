@@ -85,8 +85,9 @@ def assemble(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: in
              limits: dict[str, np.ndarray], out_limit: np.ndarray | None, rounding: str,
              relays: list[relay_rules.Relay] = (), shifts: tuple[int, int] | None = None) -> tuple[dict, list[PopulationRecord]]:
     """The spec dict and a record per population. ``rounding``: "feedback" (error feedback under each population's
-    hessians where it has them), "nearest", or "none" (weights left unrounded, float64 in chip units: a spec only the
-    float twin runs, to measure what rounding costs; thresholds, biases, dashes and relays as the chip has them).
+    hessians where it has them), "nearest", or "none" (weights left unrounded and unclipped, float64 in chip units:
+    a spec only the float twin runs, to measure what rounding costs; thresholds, biases, dashes and relays as the
+    chip has them).
     ``limits``: per hidden population its state-limited gains;
     ``relays`` (``relays.py``): placed after the populations, their registers under the matrices' shifts;
     ``shifts``: the input and recurrent matrices' left shifts (None: chosen here, ``choose_gains``).

@@ -204,7 +204,8 @@ def _hidden(s: _Source, method: str, dashes: tuple[int, int] | None) -> quantize
 def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: list[tuple[int, int]] | None,
                     identified: bool, chip: XyloChip, timing: XyloTiming | None = None,
                     relayed: bool = False, readout: str = "output",
-                    replicas: list[list[_Source]] = (), rounding: str | None = None) -> tuple[dict, list[PopulationRecord]]:
+                    replicas: list[list[_Source]] = (),
+                    rounding: str | None = None) -> tuple[dict, list[PopulationRecord]]:
     """A spec for one rule: hidden populations ``method`` (single: dash pair per population, kernel or
     identified weights, rounding with error feedback), the readout population on the output neurons
     (``readout`` "output"), or on hidden neurons like the others, copied exactly to the output neurons one
@@ -250,7 +251,8 @@ def build_candidate(sources: list[_Source], n_inputs: int, method: str, pairs: l
         else:
             out, out_limit = _fit_output(sources[-1], identified, k_all)
         spec, records = assemble(hidden, out, n_inputs, sources[0].pop.pre, limits, out_limit,
-                                 rounding or ("feedback" if method == "single" else "nearest"), relays=plan, shifts=shifts)
+                                 rounding or ("feedback" if method == "single" else "nearest"),
+                                 relays=plan, shifts=shifts)
         chosen = (int(spec["weight_shift_in"]), int(spec["weight_shift_rec"]))
         if chosen == (shifts or PROVISIONAL_SHIFTS):
             break                                  # the relays' events were computed under these shifts

@@ -61,7 +61,8 @@ def test_loss_sources_removes_one_approximation_at_a_time(model):
     bench = _bench("xylo_loss_sources")
     low = lower(model, dict(QUICK, rule="relayed", replicas=2))
     x = spikes(np.random.default_rng(4), 16, 40, 6, 0.15)
-    assert np.array_equal(twin_counts(bench.finer_relays(low, 1.0), low.timing, x), twin_counts(low.twin, low.timing, x))
+    assert np.array_equal(twin_counts(bench.finer_relays(low, 1.0), low.timing, x),
+                          twin_counts(low.twin, low.timing, x))
     fine = bench.finer_relays(low, 100.0)
     relay_cells = np.concatenate([np.arange(*r.neurons) for r in low.populations if r.role == "relay"])
     theta = fine.node("hidden").threshold
