@@ -41,11 +41,12 @@ from snncc.targets.xylo import measure  # noqa: E402
 from snncc.targets.xylo.emulator import decay, emulate, sat16  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
 from snncc.targets.xylo.weights import effective_weights  # noqa: E402
+from snncc.targets.xylo.written import read_artefact  # noqa: E402
 from snncc.threads import one_thread  # noqa: E402
 
 
-def readout_parts(graph) -> tuple[str, Dense, LIF]:
-    """(hidden LIF name, its Dense, the readout LIF): the chain hidden -> Dense -> LIF this bench handles."""
+def readout_parts(graph) -> tuple[str, Dense, str]:
+    """(hidden LIF name, its Dense, the readout LIF's name): the chain hidden -> Dense -> LIF this bench handles."""
     lifs = [n for n, op in graph.items() if isinstance(op, LIF)]
     (dense_name,) = graph.predecessors(lifs[-1])
     dense = graph.node(dense_name)
@@ -56,7 +57,7 @@ def readout_parts(graph) -> tuple[str, Dense, LIF]:
           and graph.delay(hidden, dense_name) == 0 and graph.delay(dense_name, lifs[-1]) == 0)
     if not ok:
         raise SystemExit("this bench handles one hidden LIF read by Dense -> LIF (euler, subtract, no bias, delay 0)")
-    return hidden, dense, out
+    return hidden, dense, lifs[-1]
 
 
 def float_readout(s: np.ndarray, dense: Dense, lif: LIF, dt: float) -> np.ndarray:
@@ -100,7 +101,8 @@ def chip_readout(spec: XyloSpec, events: np.ndarray) -> np.ndarray:
 def one_seed(graph, spec: XyloSpec, manifest: dict, samples: int, seed: int, density: float,
              steps: int = 256) -> dict[str, dict]:
     """The figures of the module docstring on ``samples`` seeded random spike trains of ``seed``."""
-    hidden, dense, lif = readout_parts(graph)
+    hidden, dense, last = readout_parts(graph)
+    lif = graph.node(last)
     q = manifest["quantization"]
     (pop,) = [p for p in q["populations"] if p["name"] == hidden and p["role"] == "hidden"]
     copies = int(pop.get("copies", 1))
@@ -112,7 +114,7 @@ def one_seed(graph, spec: XyloSpec, manifest: dict, samples: int, seed: int, den
     with one_thread():
         ref = simulate(graph, x, record="spikes")
     h_float = ref.spikes[hidden].numpy()
-    o_float = ref.spikes[_last(graph)].numpy()
+    o_float = ref.spikes[last].numpy()
     counts = o_float.sum(axis=1)
     if not np.array_equal(float_readout(h_float, dense, lif, graph.dt), o_float):
         raise SystemExit("internal check failed: the float readout does not reproduce the float graph")
@@ -138,10 +140,6 @@ def one_seed(graph, spec: XyloSpec, manifest: dict, samples: int, seed: int, den
     return {"figures": figures, "counts": counts, "outputs": {"chip": chip}}
 
 
-def _last(graph) -> str:
-    return [n for n, op in graph.items() if isinstance(op, LIF)][-1]
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("artefact")
@@ -156,8 +154,8 @@ def main() -> None:
     args = ap.parse_args()
 
     art = Path(args.artefact)
-    manifest = json.loads((art / "manifest.json").read_text())
-    spec = XyloSpec.load_npz(art / "spec.npz")
+    written = read_artefact(art)                 # manifest and spec.npz, checked against the recorded hash
+    manifest, spec = written.manifest, written.spec
     graph = load_model(Path(args.model), LoadOptions(dt=args.dt, reset=args.reset))
     seeds = [int(s) for s in args.seeds.split(",")]
     result = {"artefact": str(art), "model": args.model, "rule": manifest["quantization"]["rule"],
