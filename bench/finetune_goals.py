@@ -151,6 +151,9 @@ def xylo_goal(args):
     if args.replicas > 1:
         options["replicas"] = args.replicas
         command += f" --replicas {args.replicas}"
+    if args.relays != "fast":
+        options["relays"] = args.relays
+        command += f" --relays {args.relays}"
     low = lower(graph, options)
     result = finetune_lowered(low, split, config=_config(args, XYLO_LR), task_sets=[task], progress=_progress("xylo"))
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
@@ -243,6 +246,8 @@ def main(argv=None):
     ap.add_argument("--no-search", action="store_true", help="skip the starting-point search")
     ap.add_argument("--replicas", type=int, default=1, help="Loihi and Xylo goals: --replicas K (Loihi: precision by replication; Xylo: K replicas, "
                     "each rounded on its own)")
+    ap.add_argument("--relays", default="fast", choices=("fast", "both"),
+                    help="Xylo goal: --relays (relays at the faster synapse dash, or at both)")
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--max-cpu-s", type=float, default=None)
     ap.add_argument("--rsnn", type=Path)

@@ -72,3 +72,20 @@ def argmax_agreement(reference: np.ndarray, other: np.ndarray) -> Agreement:
     low, high = wilson(agree, n)
     return Agreement(agree / n if n else math.nan, low, high, agree, n, int(ref.shape[0]),
                      int(ref.shape[0]) - n - silent, silent)
+
+
+def argmax_hits(reference: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """(clear,) bool: per clear-winner sample of ``reference``, whether ``other``'s argmax equals it."""
+    ref, oth = np.asarray(reference), np.asarray(other)
+    clear = clear_winners(ref)
+    return (np.argmax(ref, axis=1) == np.argmax(oth, axis=1))[clear]
+
+
+def sign_test(better: int, worse: int) -> float:
+    """One-sided exact sign (McNemar) test: P(X >= better) for X ~ Binomial(better + worse, 1/2), the chance of a
+    paired gain at least this large if neither side were better (1.0 when nothing differs)."""
+    n = better + worse
+    if n == 0:
+        return 1.0
+    return min(1.0, sum(math.comb(n, i) for i in range(better, n + 1)) / 2 ** n)
+

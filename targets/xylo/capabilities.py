@@ -39,6 +39,7 @@ CHIP_KEYS = ("syns61201", "syns63300", "syns65302")            # = chip.CHIPS (t
 RULES = ("auto", "direct", "single", "single-identified", "relayed")   # = lowering.RULES (tested)
 MODEL_VERBS = ("lower", "check", "agree", "map")
 MAX_REPLICAS = 8                # = lowering.MAX_REPLICAS (tested)
+RELAY_SETS = ("fast", "both")   # = lowering.RELAY_SETS (tested)
 RANDOM_STEPS = 256                                             # steps of report's and agree's random samples
 DEFAULT_AGREEMENT_SAMPLES = 1000                               # a 95 % interval of about +-0.03
 
@@ -63,13 +64,20 @@ class XyloOptions(TargetOptions):
         "average out (costs K times the hidden neurons and their synaptic events). Default 1.",
         minimum=1, maximum=MAX_REPLICAS, rule=f"replicas must be a whole number from 1 to {MAX_REPLICAS}",
         capabilities=MODEL_VERBS)
+    relays: str | None = option(
+        "Relays of the relayed rule: 'fast' (default: one sigma-delta relay per presynaptic channel, at the faster "
+        "synapse dash) or 'both' (two, one at each synapse dash: a finer kernel fit, fitted on 1024 calibration "
+        "samples unless --calibration-samples says otherwise; costs a second relay neuron per channel, twice the "
+        "relays' events and a lowering several times slower).",
+        choices=RELAY_SETS, rule=f"relays must be one of {', '.join(RELAY_SETS)}", capabilities=MODEL_VERBS)
     allow_reset_change: bool = option(
         "Accept a model that resets to zero, deployed with reset by subtraction (Xylo's; snncc check measures the "
         "cost).", default=False, capabilities=("lower", "check", "agree"))
     time_steps: int | None = option("Steps of each seeded calibration sample (default 256).", minimum=1,
                                     rule="time steps must be a whole number >= 1", capabilities=("lower",))
     calibration_samples: int | None = option(
-        "Seeded random calibration samples the rule is fitted and chosen on (default 256; SYNTHETIC).", minimum=2,
+        "Seeded random calibration samples the rule is fitted and chosen on (default 256, 1024 with --relays both; "
+        "SYNTHETIC).", minimum=2,
         rule="calibration samples must be a whole number >= 2", capabilities=("lower",))
     seed: int = 1
 

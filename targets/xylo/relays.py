@@ -33,7 +33,8 @@ import numpy as np
 from snncc.targets.xylo.chip import CORE
 
 RELAY_DASH_MEM = 15          # V loses max(V >> 15, sign V): one unit per step, an integrator
-CURRENT_BUDGET = 3360        # largest chip weight: a channel firing on every step keeps i < 8 w < 32767 (dash <= 3)
+CURRENT_BUDGET = 3360        # largest chip weight: a channel firing on every step keeps i < 8 w < 32767 (dash <= 3;
+                             # halved for each dash above 3, so the current stays in range at every dash)
 EVENTS_MAX = 30              # at most 30 events from the current (+1 from the remainder): never the cap of 31, so the
                              # membrane never winds up (a capped relay keeps the excess and fires on long after)
 PREFIX = "relay of "
@@ -49,13 +50,14 @@ class Relay:
     """The relays of one source: ``n`` neurons fed 0/1 events (the input's spikes, single-rule neurons' spikes),
     their synapse dash; ``events_max`` (at most ``EVENTS_MAX``) the events a step the current may ask for (fewer:
     a coarser, different quantization, for the replicas of a network); ``tag`` tells apart the relays of one
-    source in different replicas."""
+    source in different replicas; ``second`` marks a source's second set (another dash), named apart."""
 
     source: str
     n: int
     dash: int
     events_max: int = EVENTS_MAX
     tag: str = ""
+    second: bool = False          # the source's second relay set (``--relays both``: the slower synapse dash)
 
     def __post_init__(self) -> None:
         if not 1 <= self.events_max <= EVENTS_MAX:
@@ -64,12 +66,13 @@ class Relay:
     @property
     def name(self) -> str:
         """The relays' source name (a key of a ``HiddenFloat``'s weights, of the trains and the layout)."""
-        return relay_name(self.source) + self.tag
+        return relay_name(self.source) + self.tag + (f" (dash {self.dash})" if self.second else "")
 
     def registers(self, shift: int) -> tuple[int, int]:
         """(int8 input weight, threshold) under the input matrix's left ``shift``: the largest weight whose current
         stays in range, and the smallest threshold that can never reach the cap (``current_bound``)."""
-        w8 = int(max(1, min(CORE.weight_max, CURRENT_BUDGET >> int(shift))))
+        budget = CURRENT_BUDGET >> max(0, int(self.dash) - 3)       # slower dashes hold a larger current
+        w8 = int(max(1, min(CORE.weight_max, budget >> int(shift))))
         chip_w = w8 << int(shift)
         theta = -(-current_bound(chip_w, self.dash) // self.events_max)
         return w8, int(min(max(theta, 1), CORE.state_max))

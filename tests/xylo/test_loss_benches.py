@@ -1,6 +1,6 @@
 """bench/xylo_loss_by_layer.py and bench/xylo_loss_sources.py swap one layer or one approximation at a time: where
 nothing is swapped they must reproduce the unswapped runs exactly (the first checks it every run). Here on a small
-replicated chain written by ``snncc compile``."""
+replicated chain written by ``snncc compile``; and bench/xylo_paired.py's paired comparison."""
 
 from __future__ import annotations
 
@@ -13,8 +13,10 @@ import numpy as np
 import pytest
 
 from snncc.ir.serialize import save_graph
+from snncc.targets.xylo.emulator import emulate
 from snncc.targets.xylo.lowering import lower, twin_counts
 from snncc.targets.xylo.spec import XyloSpec
+from snncc.targets.xylo.written import read_artefact
 from snncc_test_helpers import run_cli
 
 from xylo_models import chain, spikes
@@ -73,3 +75,32 @@ def test_loss_sources_removes_one_approximation_at_a_time(model):
                                   emulator=bench.twin_emulator(model.dt)))
     assert unrounded.spec["weights_rec"].dtype == np.float64
     assert twin_counts(unrounded.twin, unrounded.timing, x).shape == (16, 3)
+
+
+def test_paired_comparison_counts_what_only_one_artefact_gets_right(tmp_path, capsys, model):
+    """bench/xylo_paired.py: an artefact against itself differs on no sample (p = 1); its chip counts are the emulator's
+    read in the manifest's window; the exact McNemar p of a lopsided split is small, of an even one 1."""
+    bench = _bench("xylo_paired")
+    assert bench.mcnemar(0, 0) == 1.0 and bench.mcnemar(5, 5) == 1.0 and bench.mcnemar(20, 2) < 0.001
+    path = tmp_path / "chain.snnir"
+    save_graph(model, path)
+    out = tmp_path / "one.xylo"
+    code, _, err = run_cli(["compile", path, "--target", "xylo", "--rule", "relayed", "--calibration-samples", "16",
+                            "--time-steps", "40", "-o", out], capsys)
+    assert code == 0, err
+    result = tmp_path / "paired.json"
+    argv = ["xylo_paired.py", str(out), str(out), "--model", str(path), "--samples", "30", "--steps", "40",
+            "--density", "0.15", "--seeds", "1,2", "--out", str(result)]
+    old, sys.argv = sys.argv, argv
+    try:
+        bench.main()
+    finally:
+        sys.argv = old
+    rows = json.loads(result.read_text())["artefacts"]
+    assert rows[1]["vs_first"] == {"only_this": 0, "only_first": 0, "mcnemar_p": 1.0}
+    assert rows[0]["pooled"] == rows[1]["pooled"] and rows[0]["counted"] > 20
+    x = spikes(np.random.default_rng(4), 5, 40, 6, 0.15)
+    written = read_artefact(out)
+    fed = np.pad(x, ((0, 0), (written.input_pad, max(written.input_pad, written.output_lag)), (0, 0))).astype(np.uint8)
+    want = emulate(written.spec, fed).output_spikes[:, written.output_lag:written.output_lag + 40].sum(axis=1)
+    assert np.array_equal(bench.chip_counts(written, x), want)

@@ -28,6 +28,20 @@ def _relay_spec(n, w8, shift, theta, dash):
     return spec
 
 
+def _xylosim_equals_emulate(low, x):
+    """XyloSim runs the lowered spec on ``x`` (fed the lowering's timing) with the output and hidden events and the
+    membranes of snncc's emulator; returns XyloSim's run."""
+    from snncc.targets.xylo.emulator import emulate
+    from snncc.targets.xylo.spec import XyloSpec
+
+    chip_x = low.chip_input(x)
+    vendor = run_xylosim(low.spec, chip_x, record=True)
+    mine = emulate(XyloSpec(**low.spec), chip_x, record=True)
+    assert np.array_equal(vendor.output_spikes, mine.output_spikes)
+    assert np.array_equal(vendor.spikes, mine.spikes) and np.array_equal(vendor.vmem, mine.vmem)
+    return vendor
+
+
 @pytest.mark.parametrize("shift,dash", [(0, 3), (3, 2), (8, 2)])
 def test_relay_events_are_the_chips(shift, dash):
     """``relay_events`` (what the identification sees) equals XyloSim's hidden events for the same registers,
@@ -51,7 +65,7 @@ def test_relay_events_are_the_chips(shift, dash):
     assert np.all(np.abs(mine.sum(axis=1) - want) <= 0.03 * want + 2)
 
 
-@pytest.mark.parametrize("dash", [1, 2, 3])
+@pytest.mark.parametrize("dash", [1, 2, 3, 4, 6])          # 4, 6: a slower pair's second relay set (--relays both)
 def test_relays_never_reach_the_cap_so_never_wind_up(dash):
     """A channel with an event on every step (the densest 0/1 train): the relay stays below 31 events a step, so
     no excess piles up in its membrane, and it falls silent within a few steps of its input stopping."""
@@ -59,7 +73,7 @@ def test_relays_never_reach_the_cap_so_never_wind_up(dash):
         r = relays.Relay("x", 1, dash)
         w8, theta = r.registers(shift)
         assert (w8 << shift) * (1 << dash) < 32767           # the current stays in range
-        z = np.zeros((1, 300, 1), np.int64)
+        z = np.zeros((1, 200 + 14 * (1 << dash), 1), np.int64)
         z[0, :200] = 1
         ev = relays.relay_events(z, dash, w8, shift, theta)
         assert ev.max() <= 30 and ev[0, 150:200].min() >= 25   # near the bound, never the cap
@@ -111,14 +125,7 @@ def test_relayed_rule_runs_unchanged_in_xylosim_and_follows_the_float_graph(mode
     relay = [p for p in rec["populations"] if p["role"] == "relay"]
     assert [p["neurons"][1] - p["neurons"][0] for p in relay] == [6, 12]      # one per input channel, per neuron
     x = spikes(np.random.default_rng(11), 60, 80, 6, 0.15)
-    from snncc.targets.xylo.emulator import emulate
-    from snncc.targets.xylo.spec import XyloSpec
-
-    chip_x = low.chip_input(x)
-    vendor = run_xylosim(low.spec, chip_x, record=True)
-    mine = emulate(XyloSpec(**low.spec), chip_x, record=True)
-    assert np.array_equal(vendor.output_spikes, mine.output_spikes)
-    assert np.array_equal(vendor.spikes, mine.spikes) and np.array_equal(vendor.vmem, mine.vmem)
+    vendor = _xylosim_equals_emulate(low, x)
     r0, r1 = relay[1]["neurons"]
     assert vendor.spikes[:, :, r0:r1].max() >= 2          # relays emit several events a step
     counts = low.read_output(vendor.output_spikes, x.shape[1]).sum(axis=1)
@@ -197,3 +204,59 @@ def test_an_unrounded_lowering_changes_only_the_weights(model):
         lower(model, dict(opts, rounding="none"))
     with pytest.raises(SnnccError, match="rounding must be"):
         lower(model, dict(opts, rounding="fast"))
+
+
+def test_relays_at_both_dashes_run_unchanged_in_xylosim(model):
+    """``relays="both"``: every relayed source gets a second relay set at the slower synapse dash (named apart),
+    in each copy of a replicated network; the spec still runs unchanged in XyloSim, state for state, and follows
+    the float graph."""
+    one = lower(model, dict(QUICK, rule="relayed"))
+    low = lower(model, dict(QUICK, rule="relayed", relays="both", replicas=2))
+    assert low.rule.startswith("relayed") and "relays at both dashes" in low.rule
+    relay = [p for p in low.populations if p.role == "relay"]
+    assert [p.name for p in relay] == ["relay of input#0", "relay of input#0 (dash 3)", "relay of hidden#0",
+                                       "relay of hidden#0 (dash 3)", "relay of input#1", "relay of input#1 (dash 3)",
+                                       "relay of hidden#1", "relay of hidden#1 (dash 3)"]
+    assert [p.dashes["dash_syn"] for p in relay] == [[2], [3]] * 4
+    n_one = one.spec["threshold"].size
+    assert low.spec["threshold"].size == 2 * (n_one + 6 + 12)          # a second relay per channel, per copy
+    x = spikes(np.random.default_rng(11), 60, 80, 6, 0.15)
+    vendor = _xylosim_equals_emulate(low, x)
+    for p in relay:                                                        # every relay set is active
+        assert vendor.spikes[:, :, p.neurons[0]:p.neurons[1]].max() >= 2, p.name
+    counts = low.read_output(vendor.output_spikes, x.shape[1]).sum(axis=1)
+    agr = measure.agreement(counts, simulate(model, x, record="spikes").spikes["out"].numpy().sum(axis=1))
+    assert agr.counted > 30 and agr.agreement >= 0.75, agr.line()
+
+
+def test_relays_at_both_dashes_default_to_more_calibration_and_bad_values_are_refused(model):
+    from snncc.targets.xylo.lowering import BOTH_CALIBRATION_SAMPLES, DEFAULT_CALIBRATION_SAMPLES, _calibration_inputs
+
+    assert _calibration_inputs({"relays": "both", "time_steps": 3}, 2).shape == (BOTH_CALIBRATION_SAMPLES, 3, 2)
+    assert _calibration_inputs({"time_steps": 3}, 2).shape[0] == DEFAULT_CALIBRATION_SAMPLES
+    assert _calibration_inputs({"relays": "both", "time_steps": 3, "calibration_samples": 8}, 2).shape[0] == 8
+    with pytest.raises(SnnccError, match="relays must be one of fast, both") as err:
+        lower(model, dict(QUICK, relays="slow"))
+    assert err.value.field == "--relays"
+
+
+def test_relays_both_from_the_command_line(tmp_path, capsys, model):
+    """``--relays both`` through ``snncc compile``: the manifest names the rule and the calibration it used; a bad
+    value is one line, exit 2, nothing written."""
+    import json
+
+    from snncc.ir.serialize import save_graph
+    from snncc_test_helpers import run_cli
+
+    path = tmp_path / "chain.snnir"
+    save_graph(model, path)
+    out = tmp_path / "both.xylo"
+    quick = ["--rule", "relayed", "--calibration-samples", "16", "--time-steps", "40"]
+    code, _, err = run_cli(["compile", path, "--target", "xylo", "--relays", "both", *quick, "-o", out], capsys)
+    assert code == 0, err
+    q = json.loads((out / "manifest.json").read_text())["quantization"]
+    assert "relays at both dashes" in q["rule"] and q["calibration"]["inputs"].startswith("16 seeded")
+    assert sum(p["role"] == "relay" for p in q["populations"]) == 4
+    bad = tmp_path / "bad.xylo"
+    code, _, err = run_cli(["compile", path, "--target", "xylo", "--relays", "slow", *quick, "-o", bad], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--relays" in err and not bad.exists(), err
