@@ -208,7 +208,7 @@ def test_an_unrounded_lowering_changes_only_the_weights(model):
 
 def test_relays_at_both_dashes_run_unchanged_in_xylosim(model):
     """``relays="both"``: every relayed source gets a second relay set at the slower synapse dash (named apart),
-    in each copy of a replicated network; the spec still runs unchanged in XyloSim, state for state, and follows
+    in each copy of a replicated network; the spec dict still runs unchanged in XyloSim, state for state, and follows
     the float graph."""
     one = lower(model, dict(QUICK, rule="relayed"))
     low = lower(model, dict(QUICK, rule="relayed", relays="both", replicas=2))
