@@ -26,9 +26,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
 from tests.xylo.oracle import XyloSimOracle  # noqa: E402
 from snncc import api  # noqa: E402
-from snncc.frontends import LoadOptions, load_model  # noqa: E402
 from snncc.ir.nodes import LIF  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
 from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
@@ -40,12 +40,7 @@ from snncc.threads import one_thread  # noqa: E402
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("artefact")
-    ap.add_argument("--model", default=str(ROOT / "tests" / "data" / "nir" / "braille_noDelay_noBias_subtract.nir"))
-    ap.add_argument("--dt", type=float, default=1e-4)
-    ap.add_argument("--reset", default="subtract")
-    ap.add_argument("--samples", type=int, default=1000)
-    ap.add_argument("--steps", type=int, default=256)
-    ap.add_argument("--density", type=float, default=0.08)
+    model_arguments(ap)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default=str(ROOT / "bench" / "results" / "xylo_artefact_goal.json"))
     args = ap.parse_args()
@@ -67,7 +62,7 @@ def main() -> None:
     theirs = XyloSimOracle(XyloSpec.load_npz(art / "spec.npz")).run(fed).output_spikes[:, lag:lag + x.shape[1]]
     xylosim_s = time.perf_counter() - t0
     identical = bool(np.array_equal(ours, theirs))
-    graph = load_model(Path(args.model), LoadOptions(dt=args.dt, reset=args.reset))
+    graph = load(args)
     last = [n for n, op in graph.items() if isinstance(op, LIF)][-1]
     with one_thread():
         float_counts = simulate(graph, x, record="spikes").spikes[last].numpy().sum(axis=1)
@@ -81,10 +76,7 @@ def main() -> None:
     print(f"XyloSim on spec.npz == snncc emulate: {identical} ({result['differing_entries']} differing entries, "
           f"{result['output_spikes_total']} output spikes)")
     print(f"agreement with the float graph [{result['rule']}]: {agr.line()}")
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(result, indent=1))
-    print(f"wrote {out}")
+    write_result(args.out, result)
 
 
 if __name__ == "__main__":

@@ -24,7 +24,6 @@ With several seeds the figures are also pooled over all samples.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -33,7 +32,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from snncc.frontends import LoadOptions, load_model  # noqa: E402
+from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
 from snncc.ir.nodes import LIF, Dense  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
 from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
@@ -143,12 +142,7 @@ def one_seed(graph, spec: XyloSpec, manifest: dict, samples: int, seed: int, den
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("artefact")
-    ap.add_argument("--model", default=str(ROOT / "tests" / "data" / "nir" / "braille_noDelay_noBias_subtract.nir"))
-    ap.add_argument("--dt", type=float, default=1e-4)
-    ap.add_argument("--reset", default="subtract")
-    ap.add_argument("--samples", type=int, default=1000)
-    ap.add_argument("--steps", type=int, default=256)
-    ap.add_argument("--density", type=float, default=0.08)
+    model_arguments(ap)
     ap.add_argument("--seeds", default="0")
     ap.add_argument("--out", default=str(ROOT / "bench" / "results" / "xylo_loss_by_layer.json"))
     args = ap.parse_args()
@@ -156,7 +150,7 @@ def main() -> None:
     art = Path(args.artefact)
     written = read_artefact(art)                 # manifest and spec.npz, checked against the recorded hash
     manifest, spec = written.manifest, written.spec
-    graph = load_model(Path(args.model), LoadOptions(dt=args.dt, reset=args.reset))
+    graph = load(args)
     seeds = [int(s) for s in args.seeds.split(",")]
     result = {"artefact": str(art), "model": args.model, "rule": manifest["quantization"]["rule"],
               "inputs": f"{args.samples} seeded random spike trains per seed (density {args.density}), "
@@ -175,10 +169,7 @@ def main() -> None:
         pooled = measure.agreement(np.concatenate(pooled_chip), np.concatenate(pooled_counts))
         result["pooled_chip"] = pooled.as_dict()
         print(f"chip, pooled over seeds {args.seeds}: {pooled.line()}")
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(result, indent=1))
-    print(f"wrote {out}")
+    write_result(args.out, result)
 
 
 if __name__ == "__main__":

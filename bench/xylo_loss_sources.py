@@ -22,7 +22,6 @@ loop) and the readout's own decays (bench/xylo_loss_by_layer.py splits the reado
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -31,7 +30,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from snncc.frontends import LoadOptions, load_model  # noqa: E402
+from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
 from snncc.ir.nodes import LIF  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
 from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
@@ -68,20 +67,15 @@ def finer_relays(lowered, factor: float):
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--model", default=str(ROOT / "tests" / "data" / "nir" / "braille_noDelay_noBias_subtract.nir"))
-    ap.add_argument("--dt", type=float, default=1e-4)
-    ap.add_argument("--reset", default="subtract")
+    model_arguments(ap)
     ap.add_argument("--rule", default="relayed")
     ap.add_argument("--replicas", type=int, default=1)
-    ap.add_argument("--samples", type=int, default=1000)
-    ap.add_argument("--steps", type=int, default=256)
-    ap.add_argument("--density", type=float, default=0.08)
     ap.add_argument("--seeds", default="5,6")
     ap.add_argument("--relay-factor", type=float, default=100.0)
     ap.add_argument("--out", default=str(ROOT / "bench" / "results" / "xylo_loss_sources.json"))
     args = ap.parse_args()
 
-    graph = load_model(Path(args.model), LoadOptions(dt=args.dt, reset=args.reset))
+    graph = load(args)
     opts = {"rule": args.rule, "replicas": args.replicas}
     chip_low = lower(graph, opts)
     # the unrounded lowering measures its candidates in the twin and could choose another readout: keep the
@@ -119,10 +113,7 @@ def main() -> None:
         agr = measure.agreement(np.concatenate(parts), ref)
         result["stages"][name] = agr.as_dict()
         print(f"{name:12s} {agr.line()}")
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(result, indent=1))
-    print(f"wrote {out}")
+    write_result(args.out, result)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,6 @@ two-sided McNemar p of that split -- a paired test, far more sensitive than comp
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from math import comb
 from pathlib import Path
@@ -23,7 +22,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from snncc.frontends import LoadOptions, load_model  # noqa: E402
+from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
 from snncc.ir.nodes import LIF  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
 from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
@@ -53,18 +52,11 @@ def chip_counts(written, x: np.ndarray) -> np.ndarray:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("artefacts", nargs="+")
-    ap.add_argument("--model", default=str(ROOT / "tests" / "data" / "nir" / "braille_noDelay_noBias_subtract.nir"))
-    ap.add_argument("--dt", type=float, default=None, help="NIR only (default 1e-4)")
-    ap.add_argument("--reset", default=None, help="NIR only (default subtract)")
-    ap.add_argument("--samples", type=int, default=1000)
-    ap.add_argument("--steps", type=int, default=256)
-    ap.add_argument("--density", type=float, default=0.08)
+    model_arguments(ap)
     ap.add_argument("--seeds", default="0,5,6,7,8,9,10,11")
     ap.add_argument("--out", default=str(ROOT / "bench" / "results" / "xylo_paired.json"))
     args = ap.parse_args()
-    nir = Path(args.model).suffix == ".nir"      # NIR stores no dt and no reset; snncc's IR states both
-    graph = load_model(Path(args.model), LoadOptions(dt=args.dt if args.dt or not nir else 1e-4,
-                                                     reset=args.reset if args.reset or not nir else "subtract"))
+    graph = load(args)
     written = [read_artefact(a) for a in args.artefacts]
     width = written[0].manifest["network"]["inputs"]
     seeds = [int(s) for s in args.seeds.split(",")]
@@ -95,10 +87,7 @@ def main() -> None:
         seeds_line = ", ".join(f"{s}: {v['agreement']:.3f}" for s, v in per_seed[i].items())
         print(f"{path} ({row['rule']}): pooled {h.mean():.4f} [{lo:.3f}, {hi:.3f}] over {h.size}; per seed {seeds_line}"
               + ("" if i == 0 else f"; vs {args.artefacts[0]}: +{better} -{worse}, McNemar p = {mcnemar(better, worse):.3g}"))
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(result, indent=1))
-    print(f"wrote {out}")
+    write_result(args.out, result)
 
 
 if __name__ == "__main__":

@@ -395,23 +395,19 @@ def relay_plan(hidden: list[_Source], pairs: list[tuple[int, int]] | None,
     sees the cascades of both grid poles: the basis a^n, n a^n, b^n, n b^n (two of each pole). On the Braille
     RSNN's kernels (poles 0.75 and 0.85) the least-squares error of the kernel falls from 2 % to 0.2 %; the fit
     has twice the relay columns and needs more calibration (``BOTH_CALIBRATION_SAMPLES``)."""
+    def relays_of(source: str, width: int, fed: int) -> list[relays.Relay]:
+        """``source``'s relay sets at the dashes of population ``fed`` (the faster; with ``both`` the slower too)."""
+        pair = tuple(int(v) for v in pairs[fed]) if pairs is not None else (2, 3)
+        dashes = pair[:2] if both and pair[0] != pair[1] else pair[:1]
+        return [relays.Relay(source, width, d, events_max, second=i > 0) for i, d in enumerate(dashes)]
+
     plan = []
     for k, s in enumerate(hidden):
-        pair = tuple(int(v) for v in pairs[k]) if pairs is not None else (2, 3)
         if k == 0:
-            plan += [relays.Relay(s.pop.pre, s.raw[s.pop.pre].shape[2], d, events_max, second=i > 0)
-                     for i, d in enumerate(_relay_dashes(pair, both))]
-        feeds_next = k + 1 < len(hidden)
-        if s.pop.rec is not None or feeds_next:
-            fed = pair if s.pop.rec is not None else tuple(int(v) for v in pairs[k + 1]) if pairs is not None else (2, 3)
-            plan += [relays.Relay(s.pop.lif, s.raw[s.pop.lif].shape[2], d, events_max, second=i > 0)
-                     for i, d in enumerate(_relay_dashes(fed, both))]
+            plan += relays_of(s.pop.pre, s.raw[s.pop.pre].shape[2], 0)
+        if s.pop.rec is not None or k + 1 < len(hidden):
+            plan += relays_of(s.pop.lif, s.raw[s.pop.lif].shape[2], k if s.pop.rec is not None else k + 1)
     return plan
-
-
-def _relay_dashes(pair: tuple[int, ...], both: bool) -> tuple[int, ...]:
-    """The dashes a source's relay sets take: the pair's faster one, and with ``both`` its slower one too."""
-    return tuple(pair[:2]) if both and pair[0] != pair[1] else tuple(pair[:1])
 
 
 def relay_trains(hidden: list[_Source], plan: list[relays.Relay], timing: XyloTiming,
