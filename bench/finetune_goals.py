@@ -120,7 +120,8 @@ def nir_goal(name, args):
     else:
         out["goal"] = "fine-tuned per-layer >= fine without fine-tuning"
         out["met"] = bool(after >= rules["fine"]["value"])
-    out["practical"] = {"cpu_s": cpu, "wall_s": wall, "under_5_min_cpu": bool(cpu < 300)}
+    out["practical"] = {"cpu_s": cpu, "wall_s": wall, "under_5_min_cpu": bool(cpu < 300),
+                        "under_5_min_wall": bool(wall < 300)}
     print("\n".join(result.record.lines()), flush=True)
     print(f"  untuned on the same held-out inputs: " + ", ".join(f"{k} {v['value']:.3f}" for k, v in rules.items()))
     print(f"  goal: {out['goal']}: {'met' if out['met'] else 'NOT met'}; {cpu:.0f} s CPU, {wall:.0f} s wall", flush=True)
@@ -165,7 +166,8 @@ def xylo_goal(args):
            "forward_check": result.forward_check, "wall_s": wall, "cpu_s": cpu,
            "goal": ">= 0.85 argmax agreement with the float graph on random inputs, task-like the same or better",
            "met": bool(after >= 0.85), "task_like_not_worse": bool(task_after >= task_before),
-           "practical": {"cpu_s": cpu, "wall_s": wall, "under_5_min_cpu": bool(cpu < 300)}}
+           "practical": {"cpu_s": cpu, "wall_s": wall, "under_5_min_cpu": bool(cpu < 300),
+                         "under_5_min_wall": bool(wall < 300)}}
     print("\n".join(result.record.lines()), flush=True)
     print(f"  rule {low.rule}; goal: {out['goal']}: {'met' if out['met'] else 'NOT met'}; task-like "
           f"{task_before:.3f} -> {task_after:.3f}; {cpu:.0f} s CPU, {wall:.0f} s wall", flush=True)

@@ -30,6 +30,8 @@ def benches(quick: bool) -> list[tuple[str, list[str], Path | None]]:
          + (["--batch", "256", "--single", "16"] if quick else []), RESULTS / "emulator.json"),
         ("xylo_emulator", ["bench_xylo_emulator.py", "--out", str(RESULTS / "xylo_emulator.json")]
          + (["--quick"] if quick else []), RESULTS / "xylo_emulator.json"),
+        ("xylo_finetune_speed", ["bench_xylo_finetune.py", "--out", str(RESULTS / "xylo_finetune_speed.json")]
+         + (["--quick"] if quick else []), RESULTS / "xylo_finetune_speed.json"),
         ("emulator_cnn", ["bench_emulator_cnn.py", "--out", str(RESULTS / "emulator_cnn.json")]
          + (["--samples", "4", "--repeat", "3"] if quick else []), RESULTS / "emulator_cnn.json"),
         ("jetson", ["bench_jetson.py", "--json-out", str(RESULTS / "jetson.json")]

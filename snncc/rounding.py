@@ -36,17 +36,18 @@ def round_with_feedback(h: np.ndarray, c: np.ndarray, step, low=-128, high=127,
     n = c.shape[1]
     step = np.broadcast_to(np.asarray(step, np.float64), (n,))
     low, high = np.broadcast_to(low, (n,)), np.broadcast_to(high, (n,))
-    hinv = np.linalg.inv(np.asarray(h, np.float64))
-    free = np.ones(n, bool)
+    order = np.array([i for i in np.argsort(-np.diag(h), kind="stable") if i != last]
+                     + ([last] if last is not None else []), np.int64)
+    # in rounding order, the coefficients still free are always a suffix: plain slices, no index copies
+    hinv = np.linalg.inv(np.asarray(h, np.float64))[np.ix_(order, order)]
+    c, step, low, high = c[:, order], step[order], low[order], high[order]
+    k = np.zeros(c.shape, np.int64)
+    for i in range(n):
+        k[:, i] = np.clip(np.round(c[:, i] / step[i]), low[i], high[i]).astype(np.int64)
+        err = c[:, i] - k[:, i] * step[i]
+        if i + 1 < n:
+            c[:, i + 1:] -= np.outer(err, hinv[i + 1:, i] / hinv[i, i])
+            hinv[i + 1:, i + 1:] -= np.outer(hinv[i + 1:, i], hinv[i, i + 1:]) / hinv[i, i]
     out = np.zeros(c.shape, np.int64)
-    order = [i for i in np.argsort(-np.diag(h), kind="stable") if i != last] + ([last] if last is not None else [])
-    for i in order:
-        k = np.clip(np.round(c[:, i] / step[i]), low[i], high[i]).astype(np.int64)
-        out[:, i] = k
-        err = c[:, i] - k * step[i]
-        free[i] = False
-        idx = np.flatnonzero(free)
-        if idx.size:
-            c[:, idx] -= np.outer(err, hinv[idx, i] / hinv[i, i])
-            hinv[np.ix_(idx, idx)] -= np.outer(hinv[idx, i], hinv[i, idx]) / hinv[i, i]
+    out[:, order] = k
     return out[0] if one else out

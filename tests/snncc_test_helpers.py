@@ -76,3 +76,16 @@ def build_workspace(directory) -> None:
     rng = np.random.default_rng(0)
     np.save(d / "spikes.npy", (rng.random((2, 20, 48)) < 0.1).astype(np.uint8))
     np.save(d / "x.npy", (rng.random((2, 20, 24)) < 0.1).astype(np.uint8))
+
+
+def load_bench(name: str):
+    """The script ``bench/<name>.py`` as a module (benches are scripts, not a package)."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(name, Path(__file__).resolve().parents[1] / "bench" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod

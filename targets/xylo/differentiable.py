@@ -1,7 +1,11 @@
 """Xylo Audio 2's v2-core arithmetic as a differentiable torch model, for deployment fine-tuning.
 
-The forward pass computes ``emulator.reference_run``'s rules exactly (docs/xylo.md; float64 tensors
-holding integers, exact below 2**53), for specs without aliases and with thresholds >= 1:
+The forward pass computes ``emulator.reference_run``'s rules exactly (docs/xylo.md), for specs without
+aliases and with thresholds >= 1, in tensors of ``compute_dtype``: float32 on the CPU, float64 elsewhere
+(a GPU may round float32 products to TF32). float32 is exact here: every value the chip keeps is an
+integer below 2**24 in magnitude (int16 states, 16-bit weights times at most 31 events), and a sum of
+deliveries that could pass 2**24 leaves the int16 range first, so ``deliver`` replays it one addition
+at a time:
 
     w_eff = wrap16(w << shift)                                     w: int8 shadows, rounded (straight through)
     Isyn_s[k] = sat16(... sat16(Isyn_s[k] + c_0 w_0k) ... + c_j w_jk)   inputs of step t (no delay), then the
@@ -75,36 +79,126 @@ def shift_decay(x: torch.Tensor, dash: torch.Tensor) -> torch.Tensor:
     return torch.where(d == 0, torch.sign(x).detach(), d)
 
 
+def compute_dtype(device=None) -> torch.dtype:
+    """float32 on the CPU (exact for the chip's integers, module doc; about twice as fast), float64 elsewhere."""
+    return torch.float32 if torch.device(device or "cpu").type == "cpu" else torch.float64
+
+
 def sat16(x: torch.Tensor) -> torch.Tensor:
     return x.clamp(STATE_MIN, STATE_MAX)
 
 
-def deliver(isyn: torch.Tensor, counts: torch.Tensor, w: torch.Tensor) -> torch.Tensor:
+def deliver(isyn: torch.Tensor, counts: torch.Tensor, w: torch.Tensor, replay=None) -> torch.Tensor:
     """sat16 after each addition, in pre-synaptic order: ``isyn`` (B, N, S) + ``counts`` (B, P) events through
     ``w`` (P, N, S). The sum at once where no partial sum can leave the range (bounded by the positive and the
-    negative contributions: counts are >= 0), else the additions one by one."""
-    total = isyn + torch.einsum("bp,pns->bns", counts, w)
+    negative contributions: counts are >= 0), else the additions one by one, over ``counts``' columns in the order
+    ``replay`` (default: as they stand; a column left out must have zero weights)."""
+    added = torch.einsum("bp,pns->bns", counts, w)
     with torch.no_grad():
-        high = isyn + torch.einsum("bp,pns->bns", counts, w.clamp(min=0.0))
-        low = isyn + torch.einsum("bp,pns->bns", counts, w.clamp(max=0.0))
-        safe = bool((high <= STATE_MAX).all()) and bool((low >= STATE_MIN).all())
-    if safe:
-        return total
+        negative = torch.einsum("bp,pns->bns", counts, w.clamp(max=0.0))
+    if _in_range(isyn, added, negative):
+        return isyn + added
+    return _replay(isyn, counts, w, replay)
+
+
+def _in_range(isyn: torch.Tensor, added: torch.Tensor, negative: torch.Tensor) -> bool:
+    """No partial sum of a delivery leaves int16: isyn plus all negative contributions, and isyn plus all positive
+    ones (``added`` - ``negative``; exact: integers), stay in range."""
+    with torch.no_grad():
+        low = isyn + negative
+        high = low + (added - 2.0 * negative)
+        return bool((high <= STATE_MAX).all()) and bool((low >= STATE_MIN).all())
+
+
+def _replay(isyn: torch.Tensor, counts: torch.Tensor, w: torch.Tensor, order=None) -> torch.Tensor:
+    """The additions one by one, in pre-synaptic order (the columns of ``counts`` in ``order``, default as they
+    stand), sat16 after each (the chip's loop)."""
     out = isyn
-    for j in range(counts.shape[1]):
+    for j in range(counts.shape[1]) if order is None else order:
         out = sat16(out + counts[:, j, None, None] * w[j])
     return out
+
+
+def recurrent_blocks(w_rec: torch.Tensor) -> list[np.ndarray]:
+    """The hidden neurons split into the connected components of the recurrent weights (N, N, S) != 0, each
+    sorted (a replicated network's copies: one block each). No weight joins two blocks, so each block's
+    currents take only the inputs and its own neurons' events."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    joined = (w_rec.detach() != 0).any(-1).cpu().numpy()
+    count, label = connected_components(csr_matrix(joined), directed=True, connection="weak")
+    return [np.flatnonzero(label == k) for k in range(count)]
+
+
+class _Blocks:
+    """The hidden neurons reordered so that each recurrent block (``recurrent_blocks``) is contiguous, each kept
+    in index order: a step's currents are delivered one block at a time, each taking the inputs and its own
+    neurons' events only, with the same sums and the same replay order per neuron as over the whole network
+    (sources outside a block add nothing to it). One block: the identity, delivered whole."""
+
+    def __init__(self, blocks: list[np.ndarray], device):
+        self.order = np.concatenate(blocks)
+        self.single = len(blocks) == 1
+        self.perm = torch.as_tensor(self.order, device=device)
+        self.back = torch.as_tensor(np.argsort(self.order, kind="stable"), device=device)   # position of neuron i
+        edges = np.cumsum([0] + [len(b) for b in blocks])
+        self.spans = list(zip(edges[:-1].tolist(), edges[1:].tolist()))
+
+    def neurons(self, t: torch.Tensor, dim: int = -1) -> torch.Tensor:
+        """``t`` with its hidden-neuron axis ``dim`` in block order."""
+        return t if self.single else t.index_select(dim, self.perm)
+
+    def restore(self, t: torch.Tensor, dim: int = -1) -> torch.Tensor:
+        """``t`` (block order along ``dim``) back in the XyloSpec's neuron order."""
+        return t if self.single else t.index_select(dim, self.back)
+
+    def delivery(self, w_in: torch.Tensor, w_rec: torch.Tensor):
+        """``(isyn, inputs, events) -> isyn`` in block order, ``w_in`` (Nin, N, S) and ``w_rec`` (N, N, S) given in
+        block order."""
+        if self.single:
+            w = torch.cat([w_in, w_rec], 0)
+            return lambda isyn, x, ev: deliver(isyn, torch.cat([x, ev], 1), w)
+        weights = [torch.cat([w_in[:, a:b], w_rec[a:b, a:b]], 0) for a, b in self.spans]
+
+        def one_by_one(isyn, x, ev):
+            return torch.cat([deliver(isyn[:, a:b], torch.cat([x, ev[:, a:b]], 1), w)
+                              for (a, b), w in zip(self.spans, weights)], 1)
+
+        sizes = {b - a for a, b in self.spans}
+        if len(sizes) > 1:
+            return one_by_one
+        # blocks of one size (replicas): every block's sums in one batched product
+        k, m, n_in, syn = len(self.spans), sizes.pop(), w_in.shape[0], w_in.shape[2]
+        stacked = torch.stack(weights).reshape(k, n_in + m, m * syn)
+        stacked_negative = stacked.detach().clamp(max=0.0)
+
+        def batched(isyn, x, ev):
+            b = x.shape[0]
+            counts = torch.cat([x.unsqueeze(0).expand(k, b, n_in), ev.reshape(b, k, m).transpose(0, 1)], 2)
+            added = torch.bmm(counts, stacked).reshape(k, b, m, syn).transpose(0, 1).reshape(b, k * m, syn)
+            with torch.no_grad():
+                negative = (torch.bmm(counts, stacked_negative).reshape(k, b, m, syn).transpose(0, 1)
+                            .reshape(b, k * m, syn))
+            if _in_range(isyn, added, negative):
+                return isyn + added
+            return one_by_one(isyn, x, ev)
+
+        return batched
 
 
 class DifferentiableXylo(torch.nn.Module):
     """A ``XyloSpec`` as a trainable model (module doc). ``hidden``: IR population name -> the hidden neurons
     (indices into the XyloSpec's N) that carry it, in the population's neuron order (or (copies, n) for a
     replicated population: its spikes and voltages read as the copies' mean); ``output``: the name of the
-    population Xylo's output neurons carry (the last of ``populations``); ``steps``: time steps per sample."""
+    population Xylo's output neurons carry (the last of ``populations``); ``steps``: time steps per sample;
+    ``dtype``: default ``compute_dtype(device)``; ``by_blocks``: run the recurrent blocks one at a time
+    (``_Blocks``; the same values), for a student whose synapse layout is kept: a weight between two blocks is
+    zero and gets no gradient there, as the layout would discard it."""
 
     def __init__(self, spec: XyloSpec, steps: int, hidden: dict[str, Any] | None = None, output: str = "output", *,
                  learn=("weights", "thresholds", "biases"), slope: float = 5.0, unit=None, unit_out=None,
-                 device=None):
+                 device=None, dtype: torch.dtype | None = None, by_blocks: bool = False):
         super().__init__()
         if any(spec.aliases[k] for k in range(spec.n_hidden)):
             raise SnnccError("fine-tuning a Xylo network with aliases is not supported", field="aliases")
@@ -113,7 +207,8 @@ class DifferentiableXylo(torch.nn.Module):
         self.spec, self.steps, self.slope = spec, int(steps), float(slope)
         self.hidden = {name: np.asarray(idx, np.int64) for name, idx in (hidden or {}).items()}
         self.populations = tuple(self.hidden) + (output,)
-        as_t = dict(dtype=torch.float64, device=device)
+        as_t = dict(dtype=dtype or compute_dtype(device), device=device)
+        self.by_blocks = bool(by_blocks)
         self._as_t = as_t
 
         def param(a, kind):
@@ -176,25 +271,32 @@ class DifferentiableXylo(torch.nn.Module):
         theta, theta_out = self._theta(self.theta), self._theta(self.theta_out)
         bias, bias_out = self._bias(self.bias), self._bias(self.bias_out)
         cap_h, cap_o = CORE.max_hidden_spikes, CORE.max_output_spikes
-        zeros = dict(dtype=torch.float64, device=x.device)
+        zeros = dict(dtype=x.dtype, device=x.device)
         isyn = torch.zeros((b, n, CORE.hidden_synapse_states), **zeros)
         v = torch.zeros((b, n), **zeros)
         isyn_o = torch.zeros((b, n_out, 1), **zeros)
         v_o = torch.zeros((b, n_out), **zeros)
         ev = torch.zeros((b, n), **zeros)
-        forced = [(torch.as_tensor(self.hidden[p], device=x.device), torch.as_tensor(f, **zeros))
+        # the hidden neurons run in block order (``_Blocks``); what leaves forward is in the XyloSpec's order
+        order = _Blocks(recurrent_blocks(w_rec) if self.by_blocks else [np.arange(n)], x.device)
+        forced = [(order.back[torch.as_tensor(self.hidden[p], device=x.device)], torch.as_tensor(f, **zeros))
                   for p, f in (force or {}).items() if p in self.hidden]
         w_in_full = torch.cat([w_in, w_in.new_zeros((w_in.shape[0], n - n_ien, w_in.shape[2]))], 1)
-        w_hidden = torch.cat([w_in_full, w_rec], 0)              # inputs first, then last step's hidden events
-        w_output = w_out[:, :, None]
+        to_hidden = order.delivery(order.neurons(w_in_full, 1), order.neurons(order.neurons(w_rec, 1), 0))
+        # the output synapses read every hidden event in block order (zero rows for the neurons that reach no
+        # output neuron) and, where a sum leaves int16, replay them in the chip's order
+        oen = order.back[n - n_oen:].tolist()
+        w_output = w_out.new_zeros((n, n_out)).index_copy(0, order.back[n - n_oen:], w_out)[:, :, None]
+        dash_syn, dash_mem = order.neurons(self.dash_syn, 0), order.neurons(self.dash_mem)
+        theta, bias = order.neurons(theta), order.neurons(bias)
+        u = theta.detach() if self.unit is None else order.neurons(self.unit)
         hid, volt, outs, rec = [], [], [], []
         for t in range(t_steps):
-            isyn = deliver(isyn, torch.cat([x[:, t], ev], 1), w_hidden)
-            isyn_o = deliver(isyn_o, ev[:, n - n_oen:], w_output)
-            isyn = isyn - shift_decay(isyn, self.dash_syn)
-            dv = sat16(wrap_ste(-shift_decay(v, self.dash_mem), BITS) + isyn.sum(-1))
+            isyn = to_hidden(isyn, x[:, t], ev)
+            isyn_o = deliver(isyn_o, ev, w_output, oen)
+            isyn = isyn - shift_decay(isyn, dash_syn)
+            dv = sat16(wrap_ste(-shift_decay(v, dash_mem), BITS) + isyn.sum(-1))
             v = sat16(v + sat16(dv + bias))
-            u = theta.detach() if self.unit is None else self.unit
             volt.append((v - theta + u) / u)                 # V in IR thresholds (an offset threshold removed)
             ev = events(v, theta, cap_h, self.slope, u)
             v = v - ev * theta
@@ -210,10 +312,11 @@ class DifferentiableXylo(torch.nn.Module):
             v_o = v_o - o * theta_out
             outs.append(o)
             if record:
-                rec.append((v.detach().clone(), isyn.detach().clone(), v_o.detach().clone(), isyn_o.detach().clone()))
+                rec.append((order.restore(v.detach()).clone(), order.restore(isyn.detach(), 1).clone(),
+                            v_o.detach().clone(), isyn_o.detach().clone()))
         out = torch.stack(outs, 1)
-        spikes = torch.stack(hid, 1)
-        voltage = torch.stack(volt, 1)
+        spikes = order.restore(torch.stack(hid, 1))
+        voltage = order.restore(torch.stack(volt, 1))
         run = StudentRun(counts=out.sum(1), spikes={p: _population(spikes, i) for p, i in self.hidden.items()},
                          voltage={p: _population(voltage, i) for p, i in self.hidden.items()})
         run.spikes[self.populations[-1]] = out

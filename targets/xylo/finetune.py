@@ -143,8 +143,8 @@ def forward_equals_emulator(student, x: np.ndarray) -> str:
 
     from snncc.targets.xylo.emulator import emulate
 
-    device = student.core.dash_mem.device
-    chip_x = student.chip_input(torch.as_tensor(np.asarray(x), dtype=torch.float64, device=device))
+    like = student.core.dash_mem
+    chip_x = student.chip_input(torch.as_tensor(np.asarray(x), dtype=like.dtype, device=like.device))
     with torch.no_grad():
         run = student.core(chip_x, record=True)
     em = emulate(student.export(), chip_x.cpu().numpy().astype(np.int64), record=True)

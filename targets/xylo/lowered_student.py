@@ -47,13 +47,14 @@ class ChipTimeStudent(torch.nn.Module):
         self.input_pad, self.output_lag = int(input_pad), int(output_lag)
         self.shifts = {p: int(shifts[p]) for p in hidden}
         self.core = DifferentiableXylo(spec, chip_steps(steps, input_pad, output_lag), hidden, output, learn=learn,
-                                       slope=slope, unit=unit, unit_out=unit_out, device=device)
+                                       slope=slope, unit=unit, unit_out=unit_out, device=device,
+                                       by_blocks=True)          # the layout is kept (``project``)
         self.populations = self.core.populations
         carried = np.zeros(spec.n_hidden, bool)
         for idx in hidden.values():
             carried[np.asarray(idx, np.int64)] = True
         carried[np.asarray(also_learned, np.int64)] = True
-        as_t = dict(dtype=torch.float64, device=device)
+        as_t = dict(dtype=self.core.dash_mem.dtype, device=device)
         # neurons that carry no population keep what reaches them too (a relay's gain, a copy's cancellation)
         self.register_buffer("_fixed_w_in", torch.as_tensor(np.asarray(spec.weights_in, np.float64)[:, ~carried], **as_t))
         self.register_buffer("_fixed_w_rec", torch.as_tensor(np.asarray(spec.weights_rec, np.float64)[:, ~carried], **as_t))
@@ -80,10 +81,10 @@ class ChipTimeStudent(torch.nn.Module):
         return torch.cat([f.new_zeros((b, shift, n)), f, f.new_zeros((b, max(0, total - shift - t), n))], 1)[:, :total]
 
     def forward(self, x: torch.Tensor, force: dict[str, torch.Tensor] | None = None):
-        x = torch.as_tensor(x, dtype=torch.float64, device=self.core.dash_mem.device)
+        x = torch.as_tensor(x, dtype=self.core.dash_mem.dtype, device=self.core.dash_mem.device)
         chip_force = None
         if force:
-            chip_force = {p: self._in_chip_time(torch.as_tensor(f, dtype=torch.float64, device=x.device),
+            chip_force = {p: self._in_chip_time(torch.as_tensor(f, dtype=x.dtype, device=x.device),
                                                 self.shifts[p]) for p, f in force.items() if p in self.shifts}
         run = self.core(self.chip_input(x), chip_force)
         out_name = self.populations[-1]

@@ -178,10 +178,9 @@ def identify_hidden(pop: HiddenFloat, trains: dict[str, np.ndarray], v_pre: np.n
     new = {s: np.zeros_like(m) for s, m in pop.weights.items()}
     bias = pop.bias.copy()
     hessians = []
-    for j in range(pop.n):
+    for j, (h, rhs) in enumerate(identify.normal_equations(d, range(pop.n))):
         prior = np.concatenate([pop.weights[s][k, j] for k in range(2) for s in names]
                                + ([pop.bias[j:j + 1]] if constant else []))
-        h, rhs = identify.normal_equations(d, j)
         c, hr = identify.ridge_towards(h, rhs, prior, ridge)
         hessians.append(hr)
         at = 0
@@ -203,8 +202,7 @@ def hidden_hessians(pop: HiddenFloat, trains: dict[str, np.ndarray], v_pre: np.n
     constant = bool(np.any(pop.bias != 0))
     d = identify.design([trains[s] for s in names], decays, v_pre, pop.theta, scale, constant)
     hs = []
-    for j in range(pop.n):
-        h, _ = identify.normal_equations(d, j)
+    for h, _ in identify.normal_equations(d, range(pop.n)):
         hs.append(h + ridge * max(float(np.trace(h)) / len(h), 1e-12) * np.eye(len(h)))
     pop.hessians = hs
     return pop
@@ -228,8 +226,7 @@ def identify_output(out: OutputFloat, pre: np.ndarray, own: np.ndarray, v_pre: n
         target = v_pre + out.theta[None, None, :] * reset - register
         d = identify.Design(feat.reshape(-1, feat.shape[2]), target.reshape(-1, n),
                             np.exp(-np.abs(v_pre.reshape(-1, n) - out.theta) / (scale * out.theta)))
-        for j in sel:
-            h, rhs = identify.normal_equations(d, j)
+        for j, (h, rhs) in zip(sel, identify.normal_equations(d, sel)):
             c, hr = identify.ridge_towards(h, rhs, out.weight[j], ridge)
             new[j] = c
             hs.append((j, hr))

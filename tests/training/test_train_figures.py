@@ -1,22 +1,15 @@
 """bench/train_figures.py: a tiny run writes the record, per epoch and at the end, with verdicts on
 the selected epoch; a reused set (--data) gives the same figures as a freshly generated one."""
 
-import importlib.util
 import json
-import sys
-from pathlib import Path
 
 import pytest
 
-BENCH = Path(__file__).resolve().parents[2] / "bench" / "train_figures.py"
+from snncc_test_helpers import load_bench
 
 
 def _module():
-    spec = importlib.util.spec_from_file_location("train_figures", BENCH)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_bench("train_figures")
 
 
 @pytest.fixture(scope="module")

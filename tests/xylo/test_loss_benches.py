@@ -4,10 +4,8 @@ replicated chain written by ``snncc compile``; and bench/xylo_paired.py's paired
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,20 +15,15 @@ from snncc.targets.xylo.emulator import emulate
 from snncc.targets.xylo.lowering import lower, twin_counts
 from snncc.targets.xylo.spec import XyloSpec
 from snncc.targets.xylo.written import read_artefact
-from snncc_test_helpers import run_cli
+from snncc_test_helpers import load_bench, run_cli
 
 from xylo_models import chain, spikes
 
-BENCH = Path(__file__).resolve().parents[2] / "bench"
 QUICK = {"calibration_samples": 16, "time_steps": 40, "density": 0.15}
 
 
 def _bench(name: str):
-    spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_bench(name)
 
 
 @pytest.fixture(scope="module")

@@ -93,11 +93,25 @@ def test_identification_recovers_weights_that_explain_the_voltages():
                             fit.u[1] * g.node("w_in").weight[0], fit.u[1] * g.node("w_rec").weight[0]
                             + fit.rho[1] * np.eye(3)[0]])
     np.testing.assert_allclose(d.features @ exact, v_pre[..., 0].reshape(-1), atol=1e-9)
-    h, b = identify.normal_equations(d, 0)
+    [(h, b)] = identify.normal_equations(d, [0])
     y = v_pre[..., 0].reshape(-1)
     prior = exact * 0.5
     c, _ = identify.ridge_towards(h, b, prior, 1e-8)
     assert np.linalg.norm(d.features @ c - y) < 1e-4 * np.linalg.norm(y) < np.linalg.norm(d.features @ prior - y)
+
+
+def test_normal_equations_summed_by_blocks_equal_the_whole_rows():
+    """Blocks of rows (several per design here) give each neuron A^T A and A^T y of its own weighted rows, rows
+    under ROW_FLOOR left out."""
+    rng = np.random.default_rng(4)
+    rows = 2 * identify.ROW_BLOCK + 123
+    d = identify.Design(rng.normal(size=(rows, 5)), rng.normal(size=(rows, 3)), rng.random((rows, 3)) ** 3)
+    for j, (h, b) in zip([2, 0], identify.normal_equations(d, [2, 0])):
+        keep = d.weight[:, j] >= identify.ROW_FLOOR
+        assert 0 < keep.sum() < rows
+        a = d.features[keep] * d.weight[keep, j, None]
+        np.testing.assert_allclose(h, a.T @ a, rtol=1e-12)
+        np.testing.assert_allclose(b, a.T @ (d.target[keep, j] * d.weight[keep, j]), rtol=1e-12)
 
 
 def test_gains_fill_eight_bits_where_states_allow():

@@ -1,0 +1,44 @@
+"""bench/bench_xylo_finetune.py compares the fast paths with the former ones; its baselines must compute what the
+library computes (identical integers, normal equations equal to float rounding), or its ratios mean nothing."""
+
+from __future__ import annotations
+
+from argparse import Namespace
+
+import numpy as np
+
+from snncc.rounding import round_with_feedback
+from snncc.targets.xylo import identify
+from snncc_test_helpers import load_bench
+
+
+def _bench():
+    return load_bench("bench_xylo_finetune")
+
+
+def test_the_baselines_compute_what_the_library_computes():
+    bench = _bench()
+    ro = bench.rounding(Namespace(forms=4, coefficients=15, repeat=1))
+    assert ro["identical_integers"] and ro["speedup"] > 0
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(40, 9))
+    c = rng.normal(scale=30, size=(3, 9))
+    steps, low, high = rng.uniform(0.5, 2, 9), -rng.integers(5, 40, 9), rng.integers(5, 40, 9)
+    assert np.array_equal(bench.former_rounding(a.T @ a, c, steps, low, high, last=4),
+                          round_with_feedback(a.T @ a, c, steps, low, high, last=4))
+    rows = identify.ROW_BLOCK + 500
+    d = identify.Design(rng.normal(size=(rows, 6)), rng.normal(size=(rows, 4)), rng.random((rows, 4)) ** 4)
+    for (h0, b0), (h1, b1) in zip(bench.per_neuron_normal_equations(d, [3, 1]), identify.normal_equations(d, [3, 1])):
+        np.testing.assert_allclose(h1, h0, rtol=1e-12)
+        np.testing.assert_allclose(b1, b0, rtol=1e-12)
+
+
+def test_the_former_arithmetic_is_patched_in_and_restored():
+    bench = _bench()
+    from snncc.targets.xylo import assemble, quantize
+
+    current = identify.normal_equations, assemble.round_with_feedback, quantize.round_with_feedback
+    with bench.former_arithmetic():
+        assert identify.normal_equations is bench.per_neuron_normal_equations
+        assert assemble.round_with_feedback is quantize.round_with_feedback is bench.former_rounding
+    assert (identify.normal_equations, assemble.round_with_feedback, quantize.round_with_feedback) == current
