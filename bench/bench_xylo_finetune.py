@@ -98,9 +98,10 @@ def per_neuron_normal_equations(d, neurons):
     return out
 
 
-def index_set_rounding(h, c, step, low=-128, high=127, last=None):
+def former_rounding(h, c, step, low=-128, high=127, last=None):
     """The former ``round_with_feedback`` (baseline): the free coefficients as an index set, updated by fancy
     indexing after each rounding."""
+    one = np.ndim(c) == 1
     c = np.array(np.asarray(c, np.float64), ndmin=2)
     n = c.shape[1]
     step = np.broadcast_to(np.asarray(step, np.float64), (n,))
@@ -118,12 +119,7 @@ def index_set_rounding(h, c, step, low=-128, high=127, last=None):
         if idx.size:
             c[:, idx] -= np.outer(err, hinv[idx, i] / hinv[i, i])
             hinv[np.ix_(idx, idx)] -= np.outer(hinv[idx, i], hinv[i, idx]) / hinv[i, i]
-    return out
-
-
-def former_rounding(h, c, step, low=-128, high=127, last=None):
-    out = index_set_rounding(h, c, step, low, high, last)
-    return out[0] if np.ndim(c) == 1 else out
+    return out[0] if one else out
 
 
 @contextmanager

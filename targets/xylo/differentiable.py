@@ -88,14 +88,17 @@ def sat16(x: torch.Tensor) -> torch.Tensor:
     return x.clamp(STATE_MIN, STATE_MAX)
 
 
-def deliver(isyn: torch.Tensor, counts: torch.Tensor, w: torch.Tensor, replay=None) -> torch.Tensor:
+def deliver(isyn: torch.Tensor, counts: torch.Tensor, w: torch.Tensor, replay=None,
+            w_negative: torch.Tensor | None = None) -> torch.Tensor:
     """sat16 after each addition, in pre-synaptic order: ``isyn`` (B, N, S) + ``counts`` (B, P) events through
     ``w`` (P, N, S). The sum at once where no partial sum can leave the range (bounded by the positive and the
     negative contributions: counts are >= 0), else the additions one by one, over ``counts``' columns in the order
-    ``replay`` (default: as they stand; a column left out must have zero weights)."""
+    ``replay`` (default: as they stand; a column left out must have zero weights). ``w_negative``: w's negative
+    part, min(w, 0), when the caller keeps it across steps."""
     added = torch.einsum("bp,pns->bns", counts, w)
     with torch.no_grad():
-        negative = torch.einsum("bp,pns->bns", counts, w.clamp(max=0.0))
+        neg_w = w.detach().clamp(max=0.0) if w_negative is None else w_negative
+        negative = torch.einsum("bp,pns->bns", counts, neg_w)
     if _in_range(isyn, added, negative):
         return isyn + added
     return _replay(isyn, counts, w, replay)
@@ -158,12 +161,14 @@ class _Blocks:
         block order."""
         if self.single:
             w = torch.cat([w_in, w_rec], 0)
-            return lambda isyn, x, ev: deliver(isyn, torch.cat([x, ev], 1), w)
+            w_neg = w.detach().clamp(max=0.0)
+            return lambda isyn, x, ev: deliver(isyn, torch.cat([x, ev], 1), w, w_negative=w_neg)
         weights = [torch.cat([w_in[:, a:b], w_rec[a:b, a:b]], 0) for a, b in self.spans]
+        negatives = [w.detach().clamp(max=0.0) for w in weights]
 
         def one_by_one(isyn, x, ev):
-            return torch.cat([deliver(isyn[:, a:b], torch.cat([x, ev[:, a:b]], 1), w)
-                              for (a, b), w in zip(self.spans, weights)], 1)
+            return torch.cat([deliver(isyn[:, a:b], torch.cat([x, ev[:, a:b]], 1), w, w_negative=neg)
+                              for (a, b), w, neg in zip(self.spans, weights, negatives)], 1)
 
         sizes = {b - a for a, b in self.spans}
         if len(sizes) > 1:
@@ -171,7 +176,7 @@ class _Blocks:
         # blocks of one size (replicas): every block's sums in one batched product
         k, m, n_in, syn = len(self.spans), sizes.pop(), w_in.shape[0], w_in.shape[2]
         stacked = torch.stack(weights).reshape(k, n_in + m, m * syn)
-        stacked_negative = stacked.detach().clamp(max=0.0)
+        stacked_negative = torch.stack(negatives).reshape(k, n_in + m, m * syn)
 
         def batched(isyn, x, ev):
             b = x.shape[0]
@@ -287,13 +292,14 @@ class DifferentiableXylo(torch.nn.Module):
         # output neuron) and, where a sum leaves int16, replay them in the chip's order
         oen = order.back[n - n_oen:].tolist()
         w_output = w_out.new_zeros((n, n_out)).index_copy(0, order.back[n - n_oen:], w_out)[:, :, None]
+        w_output_negative = w_output.detach().clamp(max=0.0)
         dash_syn, dash_mem = order.neurons(self.dash_syn, 0), order.neurons(self.dash_mem)
         theta, bias = order.neurons(theta), order.neurons(bias)
         u = theta.detach() if self.unit is None else order.neurons(self.unit)
         hid, volt, outs, rec = [], [], [], []
         for t in range(t_steps):
             isyn = to_hidden(isyn, x[:, t], ev)
-            isyn_o = deliver(isyn_o, ev, w_output, oen)
+            isyn_o = deliver(isyn_o, ev, w_output, oen, w_output_negative)
             isyn = isyn - shift_decay(isyn, dash_syn)
             dv = sat16(wrap_ste(-shift_decay(v, dash_mem), BITS) + isyn.sum(-1))
             v = sat16(v + sat16(dv + bias))

@@ -8,14 +8,10 @@ import pytest
 from snncc_test_helpers import load_bench
 
 
-def _module():
-    return load_bench("train_figures")
-
-
 @pytest.fixture(scope="module")
 def tiny_run(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("figures")
-    tf = _module()
+    tf = load_bench("train_figures")
     out = tmp / "fresh.json"
     assert tf.main(["--reps", "5", "--rsnn-epochs", "2", "--lstm-epochs", "1", "--device", "cpu",
                     "--out", str(out)]) == 0
@@ -58,7 +54,7 @@ def test_a_reused_set_gives_the_same_figures(tiny_run, tmp_path):
     (["--data", "NOWHERE"], "no SYNTHETIC.json"),
 ])
 def test_bad_options_are_one_line_and_exit_2_before_anything_runs(args, says, tmp_path, capsys):
-    tf = _module()
+    tf = load_bench("train_figures")
     out = tmp_path / "r.json"
     argv = [a.replace("NOWHERE", str(tmp_path / "none")) for a in args]
     with pytest.raises(SystemExit) as ex:

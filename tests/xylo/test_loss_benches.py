@@ -22,10 +22,6 @@ from xylo_models import chain, spikes
 QUICK = {"calibration_samples": 16, "time_steps": 40, "density": 0.15}
 
 
-def _bench(name: str):
-    return load_bench(name)
-
-
 @pytest.fixture(scope="module")
 def model():
     return chain(np.random.default_rng(5), n_in=6, n_hidden=12, n_out=3, beta=0.85, alpha_o=0.45, beta_o=0.7)
@@ -34,7 +30,7 @@ def model():
 def test_layer_swaps_reproduce_the_artefact(tmp_path, capsys, model):
     """The float readout driven by the float hidden spikes is the float graph, the chip readout driven by the
     chip's hidden spikes is the emulator (one_seed exits otherwise); every copy of a replicated artefact is read."""
-    bench = _bench("xylo_loss_by_layer")
+    bench = load_bench("xylo_loss_by_layer")
     path = tmp_path / "chain.snnir"
     save_graph(model, path)
     out = tmp_path / "rep.xylo"
@@ -53,7 +49,7 @@ def test_layer_swaps_reproduce_the_artefact(tmp_path, capsys, model):
 def test_loss_sources_removes_one_approximation_at_a_time(model):
     """Relays 1x finer and uncapped are the twin itself; 100x finer changes the relays' registers only; the twin
     emulator runs an unrounded spec."""
-    bench = _bench("xylo_loss_sources")
+    bench = load_bench("xylo_loss_sources")
     low = lower(model, dict(QUICK, rule="relayed", replicas=2))
     x = spikes(np.random.default_rng(4), 16, 40, 6, 0.15)
     assert np.array_equal(twin_counts(bench.finer_relays(low, 1.0), low.timing, x),
@@ -73,7 +69,7 @@ def test_loss_sources_removes_one_approximation_at_a_time(model):
 def test_paired_comparison_counts_what_only_one_artefact_gets_right(tmp_path, capsys, model):
     """bench/xylo_paired.py: an artefact against itself differs on no sample (p = 1); its chip counts are the emulator's
     read in the manifest's window; the exact McNemar p of a lopsided split is small, of an even one 1."""
-    bench = _bench("xylo_paired")
+    bench = load_bench("xylo_paired")
     assert bench.mcnemar(0, 0) == 1.0 and bench.mcnemar(5, 5) == 1.0 and bench.mcnemar(20, 2) < 0.001
     path = tmp_path / "chain.snnir"
     save_graph(model, path)

@@ -12,12 +12,8 @@ from snncc.targets.xylo import identify
 from snncc_test_helpers import load_bench
 
 
-def _bench():
-    return load_bench("bench_xylo_finetune")
-
-
 def test_the_baselines_compute_what_the_library_computes():
-    bench = _bench()
+    bench = load_bench("bench_xylo_finetune")
     ro = bench.rounding(Namespace(forms=4, coefficients=15, repeat=1))
     assert ro["identical_integers"] and ro["speedup"] > 0
     rng = np.random.default_rng(3)
@@ -34,7 +30,7 @@ def test_the_baselines_compute_what_the_library_computes():
 
 
 def test_the_former_arithmetic_is_patched_in_and_restored():
-    bench = _bench()
+    bench = load_bench("bench_xylo_finetune")
     from snncc.targets.xylo import assemble, quantize
 
     current = identify.normal_equations, assemble.round_with_feedback, quantize.round_with_feedback
