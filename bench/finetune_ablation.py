@@ -24,7 +24,7 @@ from snncc.targets.loihi.lowering.differentiable import DifferentiableLoihi
 from snncc.targets.loihi.emulation.emulator import emulate
 from snncc.targets.loihi.checks.exactness import lead_steps, pad, loihi_spikes
 from snncc.finetune.teacher import run_teacher
-from snncc.finetune.agreement import argmax_agreement
+from snncc.measure.agreement import argmax_agreement
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--graph", default="tests/data/nir/braille_noDelay_noBias_subtract.nir")
@@ -152,8 +152,8 @@ def loss_fn(run, tb):
 hist = []
 ev = evaluate(st.export())
 print("before", ev["val"].text(), "| test", ev["test"].text(), flush=True)
-hist.append({"epoch": 0, "val": ev["val"].value, "test": ev["test"].value})
-best = (ev["val"].value, 0, {k: v.clone() for k, v in st.state_dict().items()})
+hist.append({"epoch": 0, "val": ev["val"].share, "test": ev["test"].share})
+best = (ev["val"].share, 0, {k: v.clone() for k, v in st.state_dict().items()})
 it = 0
 for ep in range(1, a.epochs + 1):
     perm = np.random.default_rng(a.seed + ep).permutation(tr)
@@ -169,13 +169,13 @@ for ep in range(1, a.epochs + 1):
         opt.zero_grad(); l.backward(); opt.step(); sched.step(); st.project(); it += 1
         tl += float(l.detach())
     ev = evaluate(st.export())
-    print(f"ep {ep} loss {tl:.3f} val {ev['val'].value:.3f} test {ev['test'].text()} t {time.time()-t0:.0f}s cpu {time.process_time()-c0:.0f}", flush=True)
-    hist.append({"epoch": ep, "val": ev["val"].value, "test": ev["test"].value, "loss": tl})
-    if ev["val"].value > best[0]:
-        best = (ev["val"].value, ep, {k: v.clone() for k, v in st.state_dict().items()})
+    print(f"ep {ep} loss {tl:.3f} val {ev['val'].share:.3f} test {ev['test'].text()} t {time.time()-t0:.0f}s cpu {time.process_time()-c0:.0f}", flush=True)
+    hist.append({"epoch": ep, "val": ev["val"].share, "test": ev["test"].share, "loss": tl})
+    if ev["val"].share > best[0]:
+        best = (ev["val"].share, ep, {k: v.clone() for k, v in st.state_dict().items()})
 st.load_state_dict(best[2])
 ev = evaluate(st.export())
 print("vth", [float(r.shadow[0]) for r in st.vth], "idec", [float(r.shadow[0]) for r in st.idecay], "vdec", [float(r.shadow[0]) for r in st.vdecay])
-print("BEST ep", best[1], "val", ev["val"].value, "test", ev["test"].text(), "time", time.time() - t0, "cpu", time.process_time() - c0)
+print("BEST ep", best[1], "val", ev["val"].share, "test", ev["test"].text(), "time", time.time() - t0, "cpu", time.process_time() - c0)
 if a.out:
     json.dump({"args": vars(a), "hist": hist, "best_epoch": best[1], "test": ev["test"].as_dict(), "time": time.time() - t0, "cpu": time.process_time() - c0}, open(a.out, "w"), indent=1)

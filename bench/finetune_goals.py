@@ -69,7 +69,7 @@ def nir_goal(name, args):
     """One NIR graph: fine-tune the per-layer bundle; compare with the untuned rules on the same inputs."""
     import numpy as np
 
-    from snncc.finetune.agreement import argmax_agreement
+    from snncc.measure.agreement import argmax_agreement
     from snncc.finetune.braille_inputs import nir_braille_inputs
     from snncc.finetune.engine import TaskSet
     from snncc.finetune.inputs import split_inputs
@@ -113,13 +113,13 @@ def nir_goal(name, args):
         rules[rule] = {"rule": low.quant_record.rule, "reason": low.quant_record.reason,
                        **argmax_agreement(teacher, counts).as_dict()}
     out["untuned_rules_on_held_out"] = rules
-    after = out["record"]["held_out_after"]["value"]
+    after = out["record"]["held_out_after"]["share"]
     if name == "subtract":
         out["goal"] = ">= 0.80 argmax agreement with the subtract-reset float graph"
         out["met"] = bool(after >= 0.80)
     else:
         out["goal"] = "fine-tuned per-layer >= fine without fine-tuning"
-        out["met"] = bool(after >= rules["fine"]["value"])
+        out["met"] = bool(after >= rules["fine"]["share"])
     out["practical"] = {"cpu_s": cpu, "wall_s": wall, "under_5_min_cpu": bool(cpu < 300),
                         "under_5_min_wall": bool(wall < 300)}
     print("\n".join(result.record.lines()), flush=True)
@@ -159,9 +159,9 @@ def xylo_goal(args):
     result = finetune_lowered(low, split, config=_config(args, XYLO_LR), task_sets=[task], progress=_progress("xylo"))
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
     rec = result.record.as_dict()
-    after = rec["held_out_after"]["value"]
-    task_after = rec["task"][task.name]["after"]["value"]
-    task_before = rec["task"][task.name]["before"]["value"]
+    after = rec["held_out_after"]["share"]
+    task_after = rec["task"][task.name]["after"]["share"]
+    task_before = rec["task"][task.name]["before"]["share"]
     out = {"graph": path.name, "command": command, "rule": low.rule, "candidates": low.candidates, "record": rec,
            "forward_check": result.forward_check, "wall_s": wall, "cpu_s": cpu,
            "goal": ">= 0.85 argmax agreement with the float graph on random inputs, task-like the same or better",

@@ -39,7 +39,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from snncc.finetune.agreement import argmax_agreement  # noqa: E402
+from snncc.measure.agreement import argmax_agreement  # noqa: E402
 from snncc.finetune.inputs import split_inputs  # noqa: E402
 from snncc.finetune.teacher import run_teacher  # noqa: E402
 from snncc.frontends import LoadOptions, load_model  # noqa: E402
@@ -67,7 +67,7 @@ def main() -> None:
     teacher = run_teacher(low.trained, held, names, voltage=False).counts
 
     def chip(network) -> float:
-        return argmax_agreement(teacher, network_counts(low, 256, network, held)).value
+        return argmax_agreement(teacher, network_counts(low, 256, network, held)).share
 
     def calibration(samples: int):
         x = split.x[split.train[:samples]]
@@ -140,7 +140,7 @@ def main() -> None:
                 chosen[n_in:n_in + n_terms] = "biases" in parts
                 chosen[n_in + n_terms:] = "recurrent" in parts
             set_rows(g, c, np.where(chosen[None, :], q, w), n_in, n_terms)
-        return argmax_agreement(teacher, run_teacher(g, held, names, voltage=False).counts).value
+        return argmax_agreement(teacher, run_teacher(g, held, names, voltage=False).counts).share
 
     sensitivity = {f"float, {' + '.join(p)} rounded (per-neuron 8-bit, error feedback)": float_variant(p)
                    for p in (("input",), ("recurrent",), ("biases",), ("input", "recurrent", "biases"))}
@@ -179,14 +179,14 @@ def main() -> None:
             top = np.full(w.shape[1], 127.0 * copies)
             top[:n_in], top[n_in:n_in + n_terms] = 127.0 * k_in, 127.0
             set_rows(g, c, 2.0 * round_with_feedback(h, w * s[:, None], 2.0, -top, top) / s[:, None], n_in, n_terms)
-        return argmax_agreement(teacher, run_teacher(g, held, names, voltage=False).counts).value
+        return argmax_agreement(teacher, run_teacher(g, held, names, voltage=False).counts).share
 
     def replicated_start(copies: int) -> float:
         """The chip: --replicas ``copies``, per-layer, fine-tuning's per-neuron start (no training)."""
         rl = lower_model(graph, {"scale": "per-layer", "t_sample": 256, "replicas": copies})
         rn = tuple(c.lif for c in rl.layers)
         net = rescale.rescaled(rl, rl.network, x512, run_teacher(rl.trained, x512, rn, voltage=False).spikes)
-        return argmax_agreement(teacher, network_counts(rl, 256, net, held)).value
+        return argmax_agreement(teacher, network_counts(rl, 256, net, held)).share
 
     replication = {}
     for k in (2, 4, 8):
@@ -210,7 +210,7 @@ def main() -> None:
             scale = levels / np.where(top > 0, top, 1.0)
             for p in denses:
                 g.node(p).weight = np.round(g.node(p).weight * scale[:, None]) / scale[:, None]
-        return argmax_agreement(sub_teacher, run_teacher(g, held, pops, voltage=False).counts).value
+        return argmax_agreement(sub_teacher, run_teacher(g, held, pops, voltage=False).counts).share
 
     int8 = {f"{SUBTRACT.name}, float, weights at {n} levels per neuron": levels_of(n) for n in (127, 254, 1024)}
     for k, v in int8.items():

@@ -34,7 +34,7 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from snncc.finetune.agreement import argmax_agreement  # noqa: E402
+from snncc.measure.agreement import argmax_agreement  # noqa: E402
 from snncc.frontends import LoadOptions, load_model  # noqa: E402
 from snncc.models.surrogate import spike  # noqa: E402   (the fast-sigmoid surrogate of snncc's training)
 
@@ -107,7 +107,7 @@ def main() -> None:
 
     def agreement():
         with torch.no_grad():
-            return argmax_agreement(held_counts, student(held)[1].sum(1).numpy()).value
+            return argmax_agreement(held_counts, student(held)[1].sum(1).numpy()).share
 
     opt = torch.optim.Adam(p.values(), lr=args.lr)
     trace = [{"step": 0, "agreement": agreement()}]

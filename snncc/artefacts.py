@@ -1,76 +1,19 @@
-"""Written artefacts: which target wrote one, its SHA-256, and whether it came from a given model.
+"""Which installed target wrote an artefact, and whether it came from a given model.
 
-A target recognises its own artefacts (capability ``identify(path) -> ArtefactIdentity | None``),
-so a third-party target's artefact is found the same way as snncc's. The identity names the files
-that make the artefact (a directory artefact lists them in its manifest) and the model source hash
-the artefact records.
-
-The hash (``artefact_sha256``), stated so anyone can recompute it:
-
-    a file:       SHA-256 of its bytes (``sha256sum FILE``)
-    a directory:  SHA-256 of the text of one line per artefact file, sorted by name,
-                  "<sha256 of the file>  <name>\\n" (``sha256sum NAMES | LC_ALL=C sort -k 2 | sha256sum``
-                  in the directory, with the names the identity lists)
+A target recognises its own artefacts (capability ``identify(path) -> ArtefactIdentity | None``), so a
+third-party target's artefact is found the same way as snncc's. The identity and the artefact's
+SHA-256 are the kit's (``snncc.targets.kit.artefact``); this module asks every installed target.
 """
 
 from __future__ import annotations
 
-import contextlib
-import hashlib
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 from snncc.errors import SnnccError
-
-FILE_RULE = "SHA-256 of the file's bytes"
-DIRECTORY_RULE = ("SHA-256 over the artefact's files: one line '<sha256>  <name>' per file, sorted by name "
-                  "(sha256sum NAMES | LC_ALL=C sort -k 2 | sha256sum)")
-CHUNK = 1 << 20
-
-
-@dataclass
-class ArtefactIdentity:
-    """What a target knows of one of its written artefacts, without running it."""
-
-    target: str                                       # the target's registered name
-    path: str
-    files: list[str] = field(default_factory=list)    # a directory artefact's files (relative names); [] for a file
-    source_sha256: str | None = None                  # the model file's hash the artefact records (None: not recorded)
-    source_file: str | None = None
-    description: str = ""                             # e.g. "Loihi bundle (HDF5, netx layout)"
-
-    @property
-    def is_directory(self) -> bool:
-        return Path(self.path).is_dir()
-
-
-def file_sha256(path: str | Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(CHUNK), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def artefact_sha256(path: str | Path, files: list[str] | None = None) -> tuple[str, str]:
-    """(hex digest, the rule that made it) of the artefact at ``path`` (see the module docstring).
-
-    ``files``: a directory artefact's file names (its identity's); None takes every regular file in
-    it (a target that lists none)."""
-    path = Path(path)
-    if path.is_file():
-        return file_sha256(path), FILE_RULE
-    if not path.is_dir():
-        raise SnnccError("does not exist", file=str(path), field="artefact")
-    names = sorted(files) if files else sorted(str(p.relative_to(path)) for p in path.rglob("*") if p.is_file())
-    lines = []
-    for name in names:
-        member = path / name
-        if not member.is_file():
-            raise SnnccError(f"the artefact lists '{name}', which is missing", file=str(path), field=name)
-        lines.append(f"{file_sha256(member)}  {name}\n")
-    return hashlib.sha256("".join(lines).encode("utf-8")).hexdigest(), DIRECTORY_RULE
+from snncc.targets.kit.artefact import (  # noqa: F401  (the names the verbs use)
+    DIRECTORY_RULE, FILE_RULE, ArtefactIdentity, artefact_sha256, file_sha256,
+)
 
 
 def identify_own(target: Any, path: str | Path) -> ArtefactIdentity | None:
@@ -149,25 +92,3 @@ def check_source(identity: ArtefactIdentity, graph, model: str | Path) -> str | 
         raise SnnccError(f"was compiled from another model (it records source SHA-256 {recorded[:16]}..., "
                          f"{Path(model).name} has {have[:16]}...)", file=identity.path, field="source_sha256")
     return None
-
-
-@contextlib.contextmanager
-def compiled_artefact(target: Any, graph, options: Any = None) -> Iterator[Path]:
-    """Yields the path of the artefact ``snncc compile`` would write for ``graph`` (the target's
-    ``lower`` with ``options``; keys that are no field of the target's option record, such as a
-    check's ``mode``, are left out), written to a temporary directory that is removed afterwards."""
-    import dataclasses
-    import tempfile
-
-    from snncc.targets import capability, target_options
-    from snncc.targets.base import TargetOptions
-
-    if not isinstance(options, TargetOptions):
-        kind = getattr(target, "options_type", TargetOptions)
-        names = {f.name for f in dataclasses.fields(kind)}
-        options = target_options(target, {k: v for k, v in dict(options or {}).items() if k in names}, "lower")
-    artefact = capability(target, "lower")(graph, options)
-    with tempfile.TemporaryDirectory(prefix="snncc-check-") as tmp:
-        path = Path(tmp) / f"artefact.{target.name}"
-        artefact.write(path)
-        yield path

@@ -33,7 +33,8 @@ from typing import Any, Callable
 import numpy as np
 
 from snncc.errors import SnnccError
-from snncc.finetune.agreement import Agreement, argmax_agreement, argmax_hits, sign_test, wilson
+from snncc.measure.agreement import (ArgmaxAgreement, accuracy, argmax_agreement, argmax_hits, count_correlation,
+                                     sign_test)
 from snncc.finetune.inputs import Split
 from snncc.finetune.loss import LossWeights, distillation_loss
 
@@ -103,8 +104,8 @@ class FinetuneRecord:
     validation: list[dict]                # per epoch: agreement on the validation part
     held_out_before: dict
     held_out_after: dict
-    count_correlation_before: float
-    count_correlation_after: float
+    count_correlation_before: float | None     # None: undefined (constant counts)
+    count_correlation_after: float | None
     task: dict[str, dict] = field(default_factory=dict)
     wall_s: float = 0.0
     cpu_s: float = 0.0
@@ -121,8 +122,8 @@ class FinetuneRecord:
                f"{self.inputs['seed']}), {self.steps} optimiser steps on {self.device}, kept epoch {self.kept_epoch} of "
                f"{self.epochs_run}, {self.cpu_s:.0f} s CPU / {self.wall_s:.0f} s wall",
                f"  held-out argmax agreement with the float graph: {_text(b)} -> {_text(a)}",
-               f"  held-out count correlation: {self.count_correlation_before:.4f} -> "
-               f"{self.count_correlation_after:.4f}"]
+               f"  held-out count correlation: {_corr(self.count_correlation_before)} -> "
+               f"{_corr(self.count_correlation_after)}"]
         if len(self.validation) > 1:
             out.append("  validation by epoch: " + ", ".join(_epoch_text(v) for v in self.validation)
                        + f" (a trained epoch is kept only if it beats epoch 0 at one-sided p < {KEEP_P:g})")
@@ -143,25 +144,17 @@ class FinetuneRecord:
 
 
 def _text(d: dict) -> str:
-    return Agreement(**d).text()
+    return ArgmaxAgreement(**d).text()
+
+
+def _corr(v: float | None) -> str:
+    return "undefined (constant counts)" if v is None else f"{v:.4f}"
 
 
 def _pct(d: dict) -> str:
+    if d["value"] is None:
+        return "undefined (no samples)"
     return f"{100 * d['value']:.2f} % [{100 * d['low']:.2f}, {100 * d['high']:.2f}]"
-
-
-def count_correlation(a: np.ndarray, b: np.ndarray) -> float:
-    a, b = np.asarray(a, np.float64).reshape(-1), np.asarray(b, np.float64).reshape(-1)
-    if a.std() == 0 or b.std() == 0:
-        return 1.0 if np.array_equal(a, b) else 0.0
-    return float(np.corrcoef(a, b)[0, 1])
-
-
-def accuracy(pred: np.ndarray, labels: np.ndarray) -> dict:
-    """Share of correct predictions with its 95 % Wilson interval."""
-    k, n = int(np.count_nonzero(pred == labels)), int(labels.size)
-    low, high = wilson(k, n)
-    return {"value": k / n if n else math.nan, "low": low, "high": high, "correct": k, "samples": n}
 
 
 def paired_difference(pred_a: np.ndarray, pred_b: np.ndarray, labels: np.ndarray) -> tuple[float, float, float]:
@@ -225,10 +218,10 @@ def finetune(student, teacher_graph, split: Split, *, config: FinetuneConfig | N
                               progress=lambda d: report(d, split.x.shape[0], "teacher"))
         tasks = {t.name: run_teacher(teacher_graph, t.x, populations, voltage=False) for t in task_sets}
 
-        def agreement_on(idx: np.ndarray, who=None) -> Agreement:
+        def agreement_on(idx: np.ndarray, who=None) -> ArgmaxAgreement:
             return argmax_agreement(teacher.counts[idx], measure(student if who is None else who, split.x[idx]))
 
-        def validation_run() -> tuple[Agreement, np.ndarray]:
+        def validation_run() -> tuple[ArgmaxAgreement, np.ndarray]:
             """The student's validation agreement and its per-sample hits (clear-winner samples)."""
             got = measure(student, split.x[split.validation])
             ref = teacher.counts[split.validation]
@@ -325,15 +318,15 @@ def finetune(student, teacher_graph, split: Split, *, config: FinetuneConfig | N
 
 def _epoch_text(v: dict) -> str:
     """One epoch's validation figure, with its paired comparison with the start where there is one."""
-    text = "undefined" if v["value"] is None or math.isnan(v["value"]) else f"{v['value']:.3f}"
+    text = "undefined" if v["share"] is None else f"{v['share']:.3f}"
     if "vs_start" in v:
         c = v["vs_start"]
         text += f" (+{c['better']}/-{c['worse']}, p {c['p']:.2g})"
     return text
 
 
-def _score(a: Agreement) -> float:
-    return -1.0 if math.isnan(a.value) else a.value
+def _score(a: ArgmaxAgreement) -> float:
+    return -1.0 if a.share is None else a.share
 
 
 def _self_check(student, x: np.ndarray, deployed: np.ndarray) -> None:

@@ -63,7 +63,9 @@ def wilson_interval(k: int, n: int, z: float = Z95) -> tuple[float, float]:
     denom = 1.0 + z * z / n
     centre = (p + z * z / (2 * n)) / denom
     half = z / denom * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return max(0.0, centre - half), min(1.0, centre + half)
+    low = 0.0 if k == 0 else max(0.0, centre - half)      # the exact endpoints (no rounding residue)
+    high = 1.0 if k == n else min(1.0, centre + half)
+    return low, high
 
 
 @dataclass
@@ -110,6 +112,29 @@ def undecided(scores: np.ndarray, spiking: bool = True) -> tuple[np.ndarray, np.
     return tied, silent
 
 
+def decided(scores: np.ndarray, spiking: bool = True) -> np.ndarray:
+    """(B,) bool: the samples of ``scores`` (B, classes) with a single winner (neither tied nor silent)."""
+    tied, silent = undecided(scores, spiking)
+    return ~(tied | silent)
+
+
+def argmax_hits(reference: np.ndarray, target: np.ndarray, spiking: bool = True) -> np.ndarray:
+    """(decided,) bool: per decided sample of ``reference``, whether ``target``'s argmax equals it (the
+    per-sample form of ``argmax_agreement``, for paired comparisons)."""
+    ref, got = np.asarray(reference), np.asarray(target)
+    keep = decided(ref, spiking)
+    return (np.argmax(ref, axis=1) == np.argmax(got, axis=1))[keep]
+
+
+def sign_test(better: int, worse: int) -> float:
+    """One-sided exact sign (McNemar) test of paired hits: P(X >= better) for X ~ Binomial(better + worse, 1/2),
+    the chance of a paired gain at least this large if neither side were better (1.0 when nothing differs)."""
+    n = better + worse
+    if n == 0:
+        return 1.0
+    return min(1.0, sum(math.comb(n, i) for i in range(better, n + 1)) / 2 ** n)
+
+
 def argmax_agreement(reference: np.ndarray, target: np.ndarray, spiking: bool = True) -> ArgmaxAgreement:
     """Agreement of ``target``'s argmax with ``reference``'s over the samples where the reference has a
     single winner (scores (B, classes); spike counts when ``spiking``)."""
@@ -136,6 +161,15 @@ def random_inputs(samples: int, steps: int, width: int, density: float, seed: in
     check_memory(samples * steps * width * 9, f"{samples:,} random samples of {steps} steps x {width} channels",
                  field="--limit")
     return (np.random.default_rng(seed).random((samples, steps, width)) < density).astype(np.uint8)
+
+
+def accuracy(prediction: np.ndarray, labels: np.ndarray) -> dict[str, Any]:
+    """Share of correct predictions with its 95 % Wilson interval: value, low, high, correct, samples
+    (value None without samples)."""
+    pred, lab = np.asarray(prediction).reshape(-1), np.asarray(labels).reshape(-1)
+    k, n = int(np.count_nonzero(pred == lab)), int(lab.size)
+    low, high = wilson_interval(k, n) if n else (None, None)
+    return {"value": k / n if n else None, "low": low, "high": high, "correct": k, "samples": n}
 
 
 def count_correlation(a: np.ndarray, b: np.ndarray) -> float | None:

@@ -78,7 +78,8 @@ def check_model(model: str | Path, *, artefact: str | Path | None = None, target
     ``artefact``: a written artefact to measure; else the model is compiled here as compile would,
     with the target's compile options among ``options`` (``scale``, ``time_steps``, ...). ``options``:
     the target's own and the agreement's; one that does not apply is refused."""
-    from snncc.artefacts import ArtefactIdentity, artefact_sha256, check_source, compiled_artefact, identify, identify_own
+    from snncc.artefacts import ArtefactIdentity, artefact_sha256, check_source, identify, identify_own
+    from snncc.targets.kit.measured import compiled as compiled_artefact
     from snncc.data.check_set import load_check_data
     from snncc.frontends import LoadOptions, load_model
     from snncc.targets import AgreementOptions, capability, get_target, verb_options

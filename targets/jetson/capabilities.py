@@ -83,7 +83,7 @@ class JetsonTarget:
               progress: Progress | None = None) -> Record:
         """The written artefact ``artefact`` (None: the one compile would write, in a temporary directory)
         vs the IR reference on a data set (``lower.check_graph``)."""
-        from snncc.artefacts import compiled_artefact
+        from snncc.targets.kit.measured import compiled as compiled_artefact
         from snncc.targets.jetson.lower import check_graph
 
         settings = self._options(options, "check")
@@ -100,7 +100,7 @@ class JetsonTarget:
               progress: Progress | None = None) -> Record:
         """The written artefact's agreement with the float model without labels (``lower.agree_graph``);
         ``agreement.noise`` (the float model's sensitivity to 8-bit-sized weight noise) is a Loihi figure."""
-        from snncc.artefacts import compiled_artefact
+        from snncc.targets.kit.measured import compiled as compiled_artefact
         from snncc.errors import SnnccError
         from snncc.targets.jetson.lower import agree_graph
 

@@ -1,32 +1,32 @@
-"""Agreement statistics (Wilson interval, clear-winner rule), the teacher's records, task-like inputs."""
+"""Fine-tuning's statistics (the one agreement rule of snncc.measure.agreement, paired accuracy difference), the
+teacher's records, task-like inputs."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 import pytest
 
-from snncc.finetune.agreement import argmax_agreement, clear_winners, wilson
+from snncc.measure.agreement import argmax_agreement, decided, wilson_interval
 from snncc.finetune.engine import paired_difference
 from snncc.finetune.ste import spike
 
 
 def test_wilson_interval_known_values():
-    low, high = wilson(80, 100)
+    low, high = wilson_interval(80, 100)
     assert low == pytest.approx(0.7111, abs=1e-4) and high == pytest.approx(0.8666, abs=1e-4)
-    assert wilson(0, 10)[0] == 0.0 and wilson(10, 10)[1] == 1.0
-    assert all(math.isnan(v) for v in wilson(0, 0))
+    assert wilson_interval(0, 10)[0] == 0.0 and wilson_interval(10, 10)[1] == 1.0     # exact endpoints
+    with pytest.raises(ValueError):
+        wilson_interval(0, 0)
 
 
 def test_clear_winner_rule_leaves_ties_and_silence_out():
     ref = np.array([[3, 1, 0], [2, 2, 0], [0, 0, 0], [0, 5, 1]])
     other = np.array([[3, 0, 0], [2, 0, 0], [1, 0, 0], [0, 0, 9]])
-    assert clear_winners(ref).tolist() == [True, False, False, True]
+    assert decided(ref).tolist() == [True, False, False, True]
     a = argmax_agreement(ref, other)
-    assert (a.agree, a.clear, a.samples, a.tied, a.silent) == (1, 2, 4, 1, 1) and a.value == 0.5
+    assert (a.agreeing, a.decided, a.samples, a.ties, a.silent) == (1, 2, 4, 1, 1) and a.share == 0.5
     none = argmax_agreement(np.zeros((3, 2)), np.zeros((3, 2)))
-    assert math.isnan(none.value) and "undefined" in none.text()    # never reported as 100 %
+    assert none.share is None and none.low is None and "undefined" in none.text()    # never reported as 100 %
 
 
 def test_paired_difference_of_accuracies():

@@ -47,7 +47,7 @@ def test_the_artefact_records_its_finetuning(tuned):
     assert ft["inputs"]["held_out"] == 1000 and ft["inputs"]["source"] == "synthetic"
     for key in ("agreement_before", "agreement_after"):
         a = ft[key]
-        assert a["samples"] == 1000 and a["low"] <= a["value"] <= a["high"]
+        assert a["samples"] == 1000 and a["low"] <= a["share"] <= a["high"]
     assert {"teacher", "training", "evaluating"} <= set(phases)
     # the bundle holds the same record, and the emulator runs it (bit-exact reader and checks)
     import h5py

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from snncc.errors import SnnccError
-from snncc.finetune.agreement import argmax_hits, sign_test
+from snncc.measure.agreement import argmax_hits, sign_test
 from snncc.finetune.engine import KEEP_P, FinetuneConfig, TaskSet
 from snncc.finetune.inputs import split_inputs
 from snncc.finetune.loss import LossWeights
@@ -52,8 +52,8 @@ def test_record_fields_and_validation():
     assert r["inputs"]["seed"] == 0 and r["inputs"]["held_out"] == 40 and r["inputs"]["source"] == "synthetic"
     assert r["steps"] == 2 * 3 and r["epochs_run"] == 2 and len(r["validation"]) == 3
     for a in (r["held_out_before"], r["held_out_after"]):
-        assert a["samples"] == 40 and a["clear"] + a["tied"] + a["silent"] == 40
-        assert a["clear"] == 0 or a["low"] <= a["value"] <= a["high"]
+        assert a["samples"] == 40 and a["decided"] + a["ties"] + a["silent"] == 40
+        assert a["decided"] == 0 or a["low"] <= a["share"] <= a["high"]
     acc = r["task"]["task-like"]["accuracy"]
     assert {"float", "before", "after", "difference", "difference_low", "difference_high"} <= set(acc)
     assert {"teacher", "training", "evaluating"} <= set(events)
@@ -68,8 +68,8 @@ def kept_by_the_rule(validation: list[dict], kept_epoch: int) -> bool:
     """The engine's keep rule: the kept epoch is the first best on validation among epoch 0 and the trained epochs
     that beat epoch 0 by the paired sign test at p < KEEP_P."""
     eligible = [v for v in validation if v["epoch"] == 0 or v["vs_start"]["p"] < KEEP_P]
-    best = max(v["value"] for v in eligible)
-    return kept_epoch == next(v["epoch"] for v in eligible if v["value"] == best)
+    best = max(v["share"] for v in eligible)
+    return kept_epoch == next(v["epoch"] for v in eligible if v["share"] == best)
 
 
 def test_a_trained_epoch_is_kept_only_on_paired_evidence():
@@ -91,8 +91,8 @@ def test_never_worse_on_validation_even_when_training_diverges():
                           lr={"weights": 60.0, "thresholds": 2000.0, "decays": 2000.0, "biases": 1.0})
     out = _run(wild)
     r = out.record
-    first = r.validation[0]["value"]
-    assert max(v["value"] for v in r.validation) >= first
+    first = r.validation[0]["share"]
+    assert max(v["share"] for v in r.validation) >= first
     assert kept_by_the_rule(r.validation, r.kept_epoch)
     if r.kept_epoch == 0:   # the start restored: the held-out figure is unchanged
         assert r.held_out_after == r.held_out_before
@@ -100,7 +100,7 @@ def test_never_worse_on_validation_even_when_training_diverges():
 
 def test_held_out_not_worse_on_the_tiny_graph():
     r = _run(FinetuneConfig(epochs=3, force_epochs=1, batch=16)).record
-    assert r.held_out_after["value"] >= r.held_out_before["value"]
+    assert r.held_out_after["share"] >= r.held_out_before["share"]
 
 
 def test_deterministic_for_a_seed():

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from snncc.finetune.agreement import argmax_agreement
+from snncc.measure.agreement import argmax_agreement
 from snncc.finetune.teacher import run_teacher
 from snncc.frontends import LoadOptions, load_model
 from snncc.ir.graph import Graph
@@ -171,7 +171,7 @@ def test_replicas_make_the_per_neuron_start_agree_better():
         low = lower_model(graph, {"scale": "per-layer", "t_sample": 128, "replicas": k})
         names = tuple(c.lif for c in low.layers)
         net = rescaled(low, low.network, cal, run_teacher(low.trained, cal, names, voltage=False).spikes)
-        figures[k] = argmax_agreement(teacher, network_counts(low, 128, net, held)).value
+        figures[k] = argmax_agreement(teacher, network_counts(low, 128, net, held)).share
     assert figures[4] > figures[1] + 0.02, figures
 
 

@@ -48,7 +48,7 @@ def test_finetune_a_spec_through_the_engine():
     assert r.steps == 2 * 3 and len(r.validation) == 3
     assert kept_by_the_rule(r.validation, r.kept_epoch)
     # the record's held-out figure is the exported spec's, run by the emulator
-    from snncc.finetune.agreement import argmax_agreement
+    from snncc.measure.agreement import argmax_agreement
     from snncc.finetune.teacher import run_teacher
 
     teacher = run_teacher(graph, split.x[split.held_out], ("hidden", "out"), voltage=False)

@@ -62,7 +62,7 @@ def test_the_artefact_directory_records_its_finetuning(tuned, model):
     assert ft["steps"] == 2 * 1 and ft["kept_epoch"] in (0, 1, 2)      # 48 samples = 1 batch of 64, 2 epochs
     for key in ("agreement_before", "agreement_after"):
         a = ft[key]
-        assert 0 <= a["low"] <= a["value"] <= a["high"] <= 1 and a["samples"] == ft["inputs"]["held_out"]
+        assert 0 <= a["low"] <= a["share"] <= a["high"] <= 1 and a["samples"] == ft["inputs"]["held_out"]
     record = ft["record"]
     assert kept_by_the_rule(record["validation"], ft["kept_epoch"])
     assert "equals the differentiable forward pass" in m["validation"]["finetune"]
@@ -74,7 +74,7 @@ def test_the_artefact_directory_records_its_finetuning(tuned, model):
 
 def test_the_held_out_figure_is_the_written_spec_run_by_the_emulator(tuned, model):
     """The manifest's 'after' is re-measured here from spec.npz: the same seeded split, the float graph as trained."""
-    from snncc.finetune.agreement import argmax_agreement
+    from snncc.measure.agreement import argmax_agreement
     from snncc.finetune.inputs import split_inputs
     from snncc.finetune.teacher import run_teacher
     from snncc.frontends import load_model

@@ -257,7 +257,7 @@ def check_model(graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: d
                 progress: Callable[[int], None] | None = None) -> CheckRecord:
     """``check_bundle`` on the bundle ``compile`` would write for ``graph`` with ``options`` (written to a
     temporary directory and read back: the measured network is the file's)."""
-    from snncc.artefacts import compiled_artefact
+    from snncc.targets.kit.measured import compiled as compiled_artefact
     from snncc.targets import get_target
     from snncc.targets.loihi.checks.written import open_bundle
 

@@ -264,7 +264,7 @@ def measure_bundle(graph: Graph, bundle, inputs: np.ndarray | None = None, *, sa
 def measure_agreement(graph: Graph, options: dict[str, Any], inputs: np.ndarray | None = None, **kw) -> AgreementRecord:
     """``measure_bundle`` on the bundle ``compile`` would write for ``graph`` with ``options`` (written to a
     temporary directory and read back: the measured network is the file's)."""
-    from snncc.artefacts import compiled_artefact
+    from snncc.targets.kit.measured import compiled as compiled_artefact
     from snncc.targets import get_target
     from snncc.targets.loihi.checks.written import open_bundle
 
