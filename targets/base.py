@@ -385,7 +385,15 @@ class HasArrays(Protocol):
 
 
 class Emulation(HasArrays, Protocol):
-    """What ``emulate`` returns: the run's size and result, and what the lowering shifted."""
+    """What ``emulate`` returns (and what ``snncc emulate`` writes to its .npz).
+
+    ``arrays()`` holds at least ``output_spikes`` (B, T, N) uint8 (the model's T steps, whatever the target
+    shifted or padded), ``counts`` (B, N) int64 and ``prediction`` (B,) int64 (argmax of the counts, ties to
+    the lowest index); with ``record="all"`` also the target's recorded states, each named
+    ``<population or layer>_<what>`` (``layer1_voltage``), as documented by the target. ``samples``, ``steps``
+    (T) and ``prediction`` are read by the verb; ``summary()`` (plain data: overflow counts, padding, the
+    input layout taken) and ``lines()`` (what the verb prints about the run besides its size) are the
+    target's own, and ``warnings()`` what the user should know but is not the result."""
 
     @property
     def samples(self) -> int: ...
@@ -394,19 +402,13 @@ class Emulation(HasArrays, Protocol):
     def steps(self) -> int: ...
 
     @property
-    def padded_steps(self) -> int: ...
-
-    @property
-    def output_shift(self) -> int: ...
-
-    @property
-    def t_sample(self) -> int: ...
-
-    @property
     def prediction(self) -> np.ndarray: ...
 
-    @property
-    def overflow(self) -> Mapping[str, int]: ...
+    def summary(self) -> Mapping[str, object]: ...
+
+    def lines(self) -> Sequence[str]: ...
+
+    def warnings(self) -> Sequence[str]: ...
 
 
 class RunResult(HasArrays, Protocol):

@@ -30,38 +30,27 @@ class EmulateRecord:
     bundle: str
     output: str
     stream: bool
-    emulation: Emulation     # the target's emulation (samples, steps, prediction, overflow, padded_steps, ...)
+    emulation: Emulation     # the target's emulation (``snncc.targets.base.Emulation``)
+    target: str = ""
 
     def as_dict(self) -> dict[str, object]:
         e = self.emulation
-        return {"bundle": self.bundle, "output": self.output, "samples": e.samples, "steps": e.steps,
-                "mode": "stream" if self.stream else "batch", "prediction": e.prediction,
-                "overflow": e.overflow, "padded_steps": e.padded_steps, "input_layout": self.input_layout()}
-
-    def input_layout(self) -> str | None:
-        """What the emulation did to take the inputs in the model's own shape (``snncc.input_layout``)."""
-        note = getattr(self.emulation, "input_note", None)
-        return note if isinstance(note, str) else None
+        return {"bundle": self.bundle, "target": self.target, "output": self.output, "samples": e.samples,
+                "steps": e.steps, "mode": "stream" if self.stream else "batch", "prediction": e.prediction,
+                **dict(e.summary())}
 
     def warnings(self) -> list[str]:
         """What the user should know but is not the result (the CLI prints it on stderr)."""
-        e = self.emulation
-        if not e.padded_steps and e.output_shift and e.steps < e.t_sample:
-            return [f"the bundle's outputs appear {e.output_shift} step(s) late and the input is shorter than "
-                    f"tSample ({e.t_sample}); the last output steps fall outside the run"]
-        return []
+        return list(self.emulation.warnings())
 
     def render_text(self, console: Console) -> None:
         e = self.emulation
-        if self.input_layout():
-            console.print(f"input: {self.input_layout()}", markup=False)
-        if e.padded_steps:
-            console.print(f"appended {e.padded_steps} blank step(s) to each sample: on Loihi the outputs appear "
-                          f"{e.padded_steps} step(s) later than in the model (see the bundle's timing record)")
+        for line in e.lines():
+            console.print(line, markup=False, soft_wrap=True)
         prediction = e.prediction
         console.print(f"emulated {e.samples} sample(s) x {e.steps} steps ({'stream' if self.stream else 'batch'} "
-                      f"mode); overflow {e.overflow}; predictions "
-                      f"{prediction[:20].tolist()}{' ...' if e.samples > 20 else ''}")
+                      f"mode); predictions {prediction[:20].tolist()}{' ...' if e.samples > 20 else ''}",
+                      markup=False)
         console.print(f"wrote {one_line(self.output)}", markup=False)
 
 
@@ -77,10 +66,11 @@ def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path,
 
     if record not in ("outputs", "all"):
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
-    emulate = capability(target_for(bundle, target, "emulate"), "emulate")
+    tgt = target_for(bundle, target, "emulate")
+    emulate = capability(tgt, "emulate")
     x = load_array(input, npz_inputs=False)
     total = int(x.shape[0]) if x.ndim in (3, 5) else 1   # (B, T, C) or (B, T, C, H, W) frames
     emulation = emulate(Path(bundle), x, record=record, stream=stream, gap=gap, source=str(input),
                         progress=counting(progress, total, "emulating"))
     write_npz_atomic(output, dict(emulation.arrays()))      # zlib level 1: numpy's level 6 took longer than the emulation
-    return EmulateRecord(str(bundle), str(output), stream, emulation)
+    return EmulateRecord(str(bundle), str(output), stream, emulation, getattr(tgt, "name", ""))

@@ -41,24 +41,22 @@ class XyloEmulation:
         return int(self.output_spikes.shape[1])
 
     @property
-    def padded_steps(self) -> int:
-        return 0                          # the model's own T steps are returned, nothing is appended to them
-
-    @property
-    def output_shift(self) -> int:
-        return self.output_lag
-
-    @property
-    def t_sample(self) -> int:
-        return self.steps
-
-    @property
     def prediction(self) -> np.ndarray:
         return np.argmax(self.output_spikes.sum(axis=1, dtype=np.int64), axis=1)
 
     @property
     def overflow(self) -> dict[str, int]:
         return {"input_events_clipped_to_15": self.clipped_inputs}
+
+    def summary(self) -> dict[str, object]:
+        return {"overflow": self.overflow, "feed": {"input_pad": self.input_pad, "output_lag": self.output_lag}}
+
+    def lines(self) -> list[str]:
+        return [f"fed with {self.input_pad} zero step(s) before each sample, outputs read {self.output_lag} step(s) "
+                f"later (the artefact's feed); input events clipped to 15: {self.clipped_inputs}"]
+
+    def warnings(self) -> list[str]:
+        return []
 
     def arrays(self) -> dict[str, np.ndarray]:
         return {"output_spikes": self.output_spikes, "counts": self.output_spikes.sum(axis=1, dtype=np.int64),

@@ -44,6 +44,23 @@ class BundleEmulation:
     def t_sample(self) -> int:
         return int(self.network.t_sample)
 
+    def summary(self) -> dict[str, object]:
+        return {"overflow": self.overflow, "padded_steps": self.padded_steps, "input_layout": self.input_note}
+
+    def lines(self) -> list[str]:
+        out = [f"input: {self.input_note}"] if self.input_note else []
+        if self.padded_steps:
+            out.append(f"appended {self.padded_steps} blank step(s) to each sample: on Loihi the outputs appear "
+                       f"{self.padded_steps} step(s) later than in the model (see the bundle's timing record)")
+        out.append(f"overflow {self.overflow}")
+        return out
+
+    def warnings(self) -> list[str]:
+        if not self.padded_steps and self.output_shift and self.steps < self.t_sample:
+            return [f"the bundle's outputs appear {self.output_shift} step(s) late and the input is shorter than "
+                    f"tSample ({self.t_sample}); the last output steps fall outside the run"]
+        return []
+
     def arrays(self) -> dict[str, np.ndarray]:
         """What OUT.npz holds: outputs, counts, prediction, overflow; layer{i}_* named by HDF5 layer index
         (the model's units only: always-on bias sources are left out)."""
