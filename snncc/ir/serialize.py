@@ -54,6 +54,27 @@ def graph_to_record(g: Graph) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     return record, arrays
 
 
+FINGERPRINT_IGNORES = ("source_file",)     # where the file lay, not what it holds
+
+
+def graph_fingerprint(g: Graph) -> str:
+    """SHA-256 of what ``g`` computes and states: its record (dt, nodes with every field, edges with delays and
+    ports, metadata except ``FINGERPRINT_IGNORES``) as canonical JSON, then each array's dtype, shape and bytes
+    in key order. Two loads of one model file with the same options (dt, reset, ...) give the same fingerprint;
+    any other dt, reset, weight or delay gives another."""
+    import hashlib
+
+    record, arrays = graph_to_record(g)
+    record = dict(record, metadata={k: v for k, v in (record.get("metadata") or {}).items()
+                                    if k not in FINGERPRINT_IGNORES})
+    h = hashlib.sha256(json.dumps(record, sort_keys=True, default=str).encode("utf-8"))
+    for key in sorted(arrays):
+        a = np.ascontiguousarray(arrays[key])
+        h.update(f"\n{key} {a.dtype.str} {a.shape}\n".encode("utf-8"))
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
 def graph_from_record(record: dict[str, Any], arrays: dict[str, np.ndarray]) -> Graph:
     if record.get("format") != FORMAT:
         raise SnnccError(f"not an snncc IR file (format tag {record.get('format')!r})", field="format")

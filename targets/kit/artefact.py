@@ -42,10 +42,24 @@ class ArtefactIdentity:
     source_sha256: str | None = None                  # the model file's hash the artefact records (None: not recorded)
     source_file: str | None = None
     description: str = ""                             # e.g. "Loihi bundle (HDF5, netx layout)"
+    model: dict | None = None                         # ``model_record`` of the graph it was lowered from (None: not
+                                                      # recorded, an artefact of an older snncc)
 
     @property
     def is_directory(self) -> bool:
         return Path(self.path).is_dir()
+
+
+def model_record(graph) -> dict:   # noqa: ANN001 (an IR Graph)
+    """What an artefact records of the model as loaded (``snncc check --artefact`` compares it with the model it is
+    given): the graph's fingerprint (``snncc.ir.serialize.graph_fingerprint``: every weight, delay, reset, dt and
+    stated length), its dt, and each LIF population's reset."""
+    from snncc.ir.nodes import LIF
+    from snncc.ir.serialize import graph_fingerprint
+
+    return {"graph_sha256": graph_fingerprint(graph), "dt": float(graph.dt),
+            "resets": {name: str(op.reset) for name, op in graph.items() if isinstance(op, LIF)},
+            "recording_length_s": graph.metadata.get("recording_length_s")}
 
 
 def sha256_bytes(data: bytes) -> str:
@@ -116,5 +130,5 @@ def artefact_sha256(path: str | os.PathLike, files: list[str] | None = None) -> 
     return hashlib.sha256("".join(lines).encode("utf-8")).hexdigest(), DIRECTORY_RULE
 
 
-__all__ = ["ArtefactIdentity", "FILE_RULE", "DIRECTORY_RULE", "artefact_sha256", "file_sha256", "sha256_bytes",
+__all__ = ["ArtefactIdentity", "model_record", "FILE_RULE", "DIRECTORY_RULE", "artefact_sha256", "file_sha256", "sha256_bytes",
            "member", "is_plain_file", "is_plain_directory"]
