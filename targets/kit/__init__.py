@@ -20,12 +20,13 @@ and an out-of-tree test target proves a third party needs nothing else. Each mod
     kit.graphs      pure Graph -> Graph passes (linear folding, current biases, reset change)
     kit.models      model records other than a graph (a buffered classifier)
 
-This module itself imports nothing heavy: the error types and the progress conventions.
+This module itself imports nothing heavy: the error types, the progress conventions and snncc's version.
 """
 
 from __future__ import annotations
 
+from snncc import __version__ as SNNCC_VERSION
 from snncc.errors import InternalError, SnnccError, one_line
 from snncc.progress import Progress, StepProgress, counting
 
-__all__ = ["SnnccError", "InternalError", "one_line", "Progress", "StepProgress", "counting"]
+__all__ = ["SnnccError", "InternalError", "one_line", "Progress", "StepProgress", "counting", "SNNCC_VERSION"]

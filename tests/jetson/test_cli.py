@@ -217,7 +217,7 @@ def test_check_through_the_cli(compiled, capsys, tmp_path):
                                  "--json"], capsys)
     assert code == 0, err
     rec = json.loads(stdout)
-    assert rec["target"] == "jetson" and rec["samples"] == 6 and rec["time_steps"] == STEPS
-    assert rec["spike_agreement"] >= 0.999 and rec["prediction_agreement"] == 1.0
-    assert rec["accuracy_reference"] == rec["accuracy_artefact"]
-    assert "spike_flips" in rec["fp16"]
+    assert rec["target"] == "jetson" and rec["samples"] == 6 and rec["steps"] == STEPS
+    assert rec["details"]["spike_agreement"] >= 0.999 and rec["argmax_agreement"] == 1.0
+    assert rec["accuracy"]["float"] == rec["accuracy"]["artefact"]
+    assert "spike_flips" in rec["details"]["fp16"]

@@ -111,7 +111,8 @@ def test_a_capability_the_target_lacks_is_refused_in_one_line(toy, toy_data, sma
                        (["bench", out], "bench")):
         code, stdout, err = run_cli([*args, "--target", "toy"], capsys)
         assert code == 2 and stdout == ""
-        assert err == f"snncc: error: snncc {args[0]}: --target: target 'toy' has no {verb} in this snncc\n"
+        assert err == (f"snncc: error: {out}: artefact: is a toy artefact; the toy target has no {verb} "
+                       "(`snncc check MODEL --artefact --data D` measures it)\n")
     assert not (tmp_path / "o.npz").exists()
     code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "toy", "-o", out, "--scale", "global"], capsys)
     assert code == 2 and err == ("snncc: error: snncc compile: --scale: does not apply to --target toy (it takes "

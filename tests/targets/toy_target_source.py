@@ -66,7 +66,7 @@ class ToyTarget:
 
     def identify(self, path):
         """A JSON file holding the toy summary's keys is a toy artefact (it records no source hash)."""
-        from snncc.artefacts import ArtefactIdentity
+        from snncc.targets.kit.artefact import ArtefactIdentity
 
         try:
             record = json.loads(Path(path).read_text())
