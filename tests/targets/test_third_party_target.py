@@ -153,7 +153,8 @@ def test_the_toy_option_is_offered_with_help_naming_its_target(toy, capsys):
     assert offers["allow_reset_change"].targets == ("loihi", "xylo")          # Loihi's and Xylo's switch
     assert "toy_precision" in {o.name for o in offered_options(["check", "agree"])}
     assert "toy_precision" not in {o.name for o in offered_options(["map"])}
-    for verb, shown in (("compile", True), ("check", True), ("map", False)):
+    assert "toy_precision" in {o.name for o in offered_options(["map", "lower"])}   # snncc map MODEL compiles
+    for verb, shown in (("compile", True), ("check", True), ("emulate", False)):
         code, stdout, _ = run_cli([verb, "--help"], capsys)
         assert code == 0 and ("--toy-precision" in stdout) == shown, verb
 
