@@ -304,7 +304,7 @@ def main(argv=None) -> dict:
         with_threads(1, lambda: simulate(graph, single[:1], dtype=torch.float32))
         ti1 = with_threads(1, lambda: timed(lambda: [simulate(graph, s[None], dtype=torch.float32)
                                                      for s in single[:16]], max(2, args.repeat // 2)))
-        pred_ir = simulate(graph, x[:IR_CHUNK], dtype=torch.float32).prediction.numpy()
+        pred_ir = np.asarray(simulate(graph, x[:IR_CHUNK], dtype=torch.float32).prediction)
 
     best_emu = max(v["samples_per_s"]["best"] for v in kernel.values())
     best_ir = max(v["samples_per_s"]["best"] for v in ir.values())

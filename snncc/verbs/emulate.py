@@ -71,7 +71,7 @@ def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path,
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
     path = Path(bundle)
     model_options = {"--params": params, "--dt": dt, "--reset": reset}
-    if target is not None or recognised(path) or not path.exists():
+    if target is not None or recognised(path) or not path.is_file():
         tgt = target_for(path, target, "emulate")
         given = next((flag for flag, value in model_options.items() if value is not None), None)
         if given is not None:

@@ -107,8 +107,8 @@ def seeded_inputs(plan: GraphPlan, batch: int, steps: int, seed: int) -> np.ndar
 def reference(plan: GraphPlan, x: np.ndarray):
     """IR reference (float64) on base-channel data: copies tiled as the authors do."""
     tiled = np.tile(x, (1, 1, plan.input_copies)) if plan.input_copies > 1 else x
-    res = simulate(plan.graph, tiled.astype(np.float64), dtype=torch.float64)
-    return res.output.numpy(), (res.readout.numpy() if res.readout is not None else None)
+    res = simulate(plan.graph, tiled.astype(np.float64))
+    return np.asarray(res.output), (np.asarray(res.readout) if res.readout is not None else None)
 
 
 def host_score(mode: str | None, seq: np.ndarray) -> np.ndarray:

@@ -61,7 +61,7 @@ def float_counts(graph: Graph, x: np.ndarray) -> np.ndarray:
     from snncc.threads import one_thread
 
     with one_thread():
-        return simulate(graph, np.asarray(x), record="spikes").spikes[_last_lif(graph)].numpy().sum(axis=1)
+        return np.asarray(simulate(graph, np.asarray(x), record="spikes").spikes[_last_lif(graph)]).sum(axis=1)
 
 
 def rounded_decays(graph: Graph) -> Graph:
@@ -112,7 +112,7 @@ def twin_counts(spec, x: np.ndarray, pad: int, lag: int, capped: bool = True) ->
     if not capped and hidden.max_spikes == HIDDEN_CAP:
         hidden.max_spikes = UNCAPPED
     with one_thread():
-        out = simulate(twin, measure.chip_window(np.asarray(x), pad, lag), record="spikes").spikes["output"].numpy()
+        out = np.asarray(simulate(twin, measure.chip_window(np.asarray(x), pad, lag), record="spikes").spikes["output"])
     return measure.read_window(out, lag, x.shape[1]).sum(axis=1)
 
 

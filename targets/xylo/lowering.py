@@ -166,14 +166,14 @@ def _calibrate(ref: Graph, sources: list[_Source], x: np.ndarray) -> None:
         res = simulate(ref, x, record="all")
     trains = {sources[0].pop.pre: np.asarray(x, np.float64)}
     for s in sources:
-        trains[s.pop.lif] = res.spikes[s.pop.lif].numpy()
+        trains[s.pop.lif] = np.asarray(res.spikes[s.pop.lif])
     ones = np.ones(np.shape(x)[:2] + (1,))
     for s in sources:
         s.trains = {s.pop.pre: delayed(trains[s.pop.pre], s.d_ff), s.pop.lif: delayed(trains[s.pop.lif], 1)}
         s.raw = {s.pop.pre: trains[s.pop.pre], s.pop.lif: trains[s.pop.lif]}
         if s.bias_lag is not None:
             s.trains[quantize.BIAS_SOURCE] = delayed(ones, s.bias_lag)
-        s.v_pre = res.voltage[s.pop.lif].numpy() + s.theta * trains[s.pop.lif]
+        s.v_pre = np.asarray(res.voltage[s.pop.lif]) + s.theta * trains[s.pop.lif]
 
 
 def _float_counts(ref: Graph, x: np.ndarray, last: str) -> np.ndarray:
@@ -181,7 +181,7 @@ def _float_counts(ref: Graph, x: np.ndarray, last: str) -> np.ndarray:
     from snncc.threads import one_thread
 
     with one_thread():
-        return simulate(ref, x, record="spikes").spikes[last].numpy().sum(axis=1)
+        return np.asarray(simulate(ref, x, record="spikes").spikes[last]).sum(axis=1)
 
 
 def twin_counts(twin: Graph, timing: XyloTiming, x: np.ndarray) -> np.ndarray:
@@ -191,7 +191,7 @@ def twin_counts(twin: Graph, timing: XyloTiming, x: np.ndarray) -> np.ndarray:
 
     chip_x = measure.chip_window(np.asarray(x), timing.input_pad, timing.output_lag)
     with one_thread():
-        out = simulate(twin, chip_x, record="spikes").spikes["output"].numpy()
+        out = np.asarray(simulate(twin, chip_x, record="spikes").spikes["output"])
     return measure.read_window(out, timing.output_lag, x.shape[1]).sum(axis=1)
 
 

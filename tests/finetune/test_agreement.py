@@ -65,7 +65,7 @@ def test_teacher_pre_reset_voltage_for_subtract_reset():
         s = t.spikes[p].astype(bool)
         # where it fired, the pre-reset voltage was above threshold (1.0); after a subtract reset V = V_pre - 1
         assert np.all(t.voltage[p][s] > 1.0)
-        np.testing.assert_allclose(t.voltage[p][s] - 1.0, res.voltage[p].numpy()[s], rtol=1e-5, atol=1e-6)
+        np.testing.assert_allclose(t.voltage[p][s] - 1.0, np.asarray(res.voltage[p])[s], rtol=1e-5, atol=1e-6)
     assert t.counts.shape == (3, 3)
 
 

@@ -39,10 +39,10 @@ def _assert_equal_to_emulator(student: DifferentiableLoihi, x: np.ndarray, activ
         fused = student.run_fused(student.drive(torch.as_tensor(x)))
     assert not active or any(ref.spikes[i].any() for i in run.spikes), "the test network is silent"
     for i in run.spikes:
-        np.testing.assert_array_equal(run.spikes[i].numpy(), ref.spikes[i])
-        np.testing.assert_array_equal(run.current[i].numpy(), ref.current[i])
-        np.testing.assert_array_equal(run.voltage[i].numpy(), ref.voltage[i])
-        np.testing.assert_array_equal(fused.spikes[i].numpy(), ref.spikes[i])
+        np.testing.assert_array_equal(np.asarray(run.spikes[i]), ref.spikes[i])
+        np.testing.assert_array_equal(np.asarray(run.current[i]), ref.current[i])
+        np.testing.assert_array_equal(np.asarray(run.voltage[i]), ref.voltage[i])
+        np.testing.assert_array_equal(np.asarray(fused.spikes[i]), ref.spikes[i])
 
 
 def _lowered(name: str, rule: str, reset: str | None):

@@ -180,7 +180,7 @@ def test_run_with_bad_input_is_one_line(compiled, capsys, tmp_path):
     code, _, err = run_cli(["run", out, "--input", tmp_path / "bad.npy"], capsys)
     assert_one_line_error(code, err, "bad.npy", "7 channels")
     code, _, err = run_cli(["run", tmp_path, "--input", tmp_path / "bad.npy"], capsys)
-    assert_one_line_error(code, err, "manifest.json")
+    assert_one_line_error(code, err, "is not an artefact any installed target recognises")
     assert not (tmp_path / "o.npz").exists()
 
 

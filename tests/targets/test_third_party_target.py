@@ -91,7 +91,7 @@ def test_compile_and_check_with_a_third_party_target(toy, toy_data, small_rsnn_c
 
     with np.load(toy_data) as z:
         x, y = z["inputs"], z["labels"]
-    expected = float(np.mean(simulate(load_model(small_rsnn_checkpoint), x.astype(np.float32)).prediction.numpy() == y))
+    expected = float(np.mean(np.asarray(simulate(load_model(small_rsnn_checkpoint), x.astype(np.float32)).prediction) == y))
     assert record == {"target": "toy", "samples": 6, "accuracy": expected, "precision": None}
     code, stdout, _ = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data], capsys)
     assert code == 0 and "\ntoy check: 6 samples, accuracy" in stdout and stdout.startswith("measured artefact: toy")

@@ -94,7 +94,7 @@ def _ir_run(graph: Graph, x: np.ndarray, names: list[str], cut=None) -> tuple[np
 
     with one_thread():
         res = simulate(graph, x, record="spikes")
-    spikes = {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
+    spikes = {n: np.asarray(res.spikes[n]).astype(np.uint8) for n in names}
     if cut is not None:
         spikes = cut(spikes)
     return spikes[names[-1]].sum(axis=1, dtype=np.int64), spikes

@@ -203,10 +203,10 @@ def measure_bundle(graph: Graph, bundle, inputs: np.ndarray | None = None, *, sa
         x = x_all[start:start + chunk]
         with one_thread():
             ref = simulate(graph, x, record="spikes")
-            ref_spikes = {k: ref.spikes[k].numpy().astype(np.uint8) for k in names}
+            ref_spikes = {k: np.asarray(ref.spikes[k]).astype(np.uint8) for k in names}
             counts["trained"].append(ref_spikes[last].sum(axis=1, dtype=np.int64))
             for key, g in (("noisy", noisy_graph), *stages.items()):
-                counts[key].append(simulate(g, x, record="spikes").spikes[last].numpy().sum(axis=1).astype(np.int64))
+                counts[key].append(np.asarray(simulate(g, x, record="spikes").spikes[last]).sum(axis=1).astype(np.int64))
         emu, res = bundle.run(x)
         counts["emulator"].append(emu[last].sum(axis=1, dtype=np.int64))
         for k, v in res.overflow.items():

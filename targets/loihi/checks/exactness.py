@@ -35,7 +35,7 @@ def ir_spikes(graph: Graph, x: np.ndarray, names: list[str]) -> dict[str, np.nda
 
     with one_thread():
         res = simulate(graph, x, record="spikes")
-    return {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
+    return {n: np.asarray(res.spikes[n]).astype(np.uint8) for n in names}
 
 
 def loihi_spikes(result: EmulationResult, network: LoihiNetwork, layers: list[ChainLayer], shifts: dict[str, int],
