@@ -37,7 +37,7 @@ def test_lstm_checkpoint_round_trip_predicts_like_the_module(tmp_path):
     with torch.no_grad():
         scores = m(x)
     r = simulate(g, x)
-    np.testing.assert_allclose(r.readout, scores.numpy(), rtol=1e-7, atol=1e-9)
+    np.testing.assert_allclose(r.readout, scores.numpy(), rtol=1.3e-6, atol=1e-5)     # torch's float32 tolerances
     assert np.array_equal(r.prediction, scores.argmax(1).numpy())
 
 
