@@ -15,6 +15,7 @@ if TYPE_CHECKING:   # what type checkers see: the functions themselves, with the
     from snncc.verbs.analyse_ttc import analyse_ttc
     from snncc.verbs.bench import bench_artefacts as bench
     from snncc.verbs.check import check_model as check
+    from snncc.verbs.compare import compare_model as compare
     from snncc.verbs.compile import compile_model as compile
     from snncc.verbs.data_analyse import data_analyse
     from snncc.verbs.data_encode import data_encode
@@ -32,10 +33,11 @@ if TYPE_CHECKING:   # what type checkers see: the functions themselves, with the
 # public name -> "module:attribute" that defines it (verb names follow the CLI: ``compile``,
 # ``check``, ``data_encode`` for ``snncc data encode``, ...)
 
-# --- target verbs: compile, check, emulate, map, report, run, bench ---
+# --- target verbs: compile, check, compare, emulate, map, report, run, bench ---
 _TARGET_HOMES: dict[str, str] = {
     "compile": "snncc.verbs.compile:compile_model",
     "check": "snncc.verbs.check:check_model",
+    "compare": "snncc.verbs.compare:compare_model",
     "emulate": "snncc.verbs.emulate:emulate_bundle",
     "map": "snncc.verbs.map:map_cores",
     "report": "snncc.verbs.report:report_energy",

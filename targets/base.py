@@ -43,6 +43,8 @@ separate keyword argument, never an option.
     run(artefact, inputs, *, source, stream, backend)        -> RunResult       snncc run
     map(source, options)                                     -> CoreMap         snncc map
     estimate(source, inputs, *, data, note, limit, progress) -> Record          snncc report --energy
+    profile(graph, artefact, inputs, *, progress)            -> Profile         snncc compare (resources, real
+                                                                                time, energy, NeuroBench)
     bench(artefacts, *, data, samples, ..., progress)        -> Record          snncc bench
     hardware()                                               -> HardwareCosts   snncc hpo (per trial)
     arithmetic(options)                                      -> Arithmetic      snncc train --qat-from
@@ -499,6 +501,14 @@ class Estimate(Protocol):
         ``snncc.inputs.RandomSpikes``)."""
 
 
+class Profile(Protocol):
+    def __call__(self, graph: Graph, artefact: Path, inputs: np.ndarray, *, progress: Progress | None = None) -> Record:
+        """What the written ``artefact`` (compiled from ``graph``) costs on its hardware
+        (``snncc.targets.kit.profile.Profile``): resources against the chip's limits, the real-time verdict and the
+        energy ESTIMATE where a published cost model exists, at the event rates of ``inputs`` (B, T, C) in the
+        graph's input layout; NeuroBench's metrics from its own emulation or run."""
+
+
 class Bench(Protocol):
     def __call__(self, artefacts: list[Path], *, data: Path | None = None, samples: int = 64, power: bool = False,
                  power_root: Path = Path("/"), rail: str = "VDD_IN", repeats: int = 3, warmup_passes: int = 6,
@@ -625,7 +635,7 @@ class TrainArithmetic(Protocol):
 CAPABILITIES: dict[str, type] = {
     "lower": Lower, "identify": Identify, "check": Check, "agree": Agree, "emulate": Emulate, "run": Run, "map": Map,
     "estimate": Estimate, "bench": Bench, "hardware": Hardware, "arithmetic": TrainArithmetic,
-    "finetune": Finetune,
+    "finetune": Finetune, "profile": Profile,
 }
 
 
@@ -669,6 +679,8 @@ def capability(target: Target, name: Literal["map"], rule: str | None = None) ->
 def capability(target: Target, name: Literal["estimate"], rule: str | None = None) -> Estimate: ...
 @overload
 def capability(target: Target, name: Literal["bench"], rule: str | None = None) -> Bench: ...
+@overload
+def capability(target: Target, name: Literal["profile"], rule: str | None = None) -> Profile: ...
 @overload
 def capability(target: Target, name: Literal["hardware"], rule: str | None = None) -> Hardware: ...
 @overload

@@ -24,7 +24,7 @@ import warnings
 # Each module registers its verb(s) on the typer app when imported; they import only typer,
 # rich and the standard library at module level, so ``snncc --help`` starts at once.
 VERB_MODULES = (
-    "compile_cmd", "inspect_cmd", "emulate_cmd", "check_cmd", "map_cmd", "report_cmd", "export_cmd",
+    "compile_cmd", "inspect_cmd", "emulate_cmd", "check_cmd", "compare_cmd", "map_cmd", "report_cmd", "export_cmd",
     "run_cmd", "data_cmd", "train_cmd", "bench_cmd", "analyse_cmd", "hpo_cmd",
 )
 INTERRUPTED = "snncc: interrupted; no partial output was left behind"

@@ -94,6 +94,14 @@ class JetsonTarget:
                                         noise=how.noise, data=data, progress=progress)
         return found
 
+    def profile(self, graph: Graph, artefact: Path, inputs: np.ndarray, *,
+                progress: Progress | None = None) -> Record:
+        """Parameters and file sizes, and NeuroBench's metrics (``profile.py``); no real-time or energy estimate."""
+        from snncc.targets.jetson.profile import profile_artefact
+
+        found: Record = profile_artefact(graph, artefact, inputs, progress)
+        return found
+
     def run(self, artefact: Path, inputs: np.ndarray, *, source: str | None = None, stream: bool = False,
             backend: str = "auto") -> RunResult:
         from snncc.targets.jetson.run_artefact import run_artefact
