@@ -173,8 +173,8 @@ def draw(result: Comparison, path: Path) -> None:
         colour = "0.6" if r.kind == "ceiling" else "C0"
         ax.errorbar([i], [r.argmax_agreement], yerr=[[r.argmax_agreement - low], [high - r.argmax_agreement]],
                     fmt="o", color=colour, capsize=4)
-    ax.set_xticks(range(len(shown)), [r.target for r in shown], rotation=0)
-    ax.set_ylabel("argmax agreement with the float graph (95 % interval)")
+    ax.set_xticks(range(len(shown)), [r.target.replace(", ", "\n") for r in shown], rotation=0)
+    ax.set_ylabel("agreement with the float graph (95 %)")
     ax.set_ylim(0, 1.02)
     ax.set_title(f"{Path(result.model).name}: {result.samples} samples x {result.steps} steps", fontsize=10)
     ax.grid(axis="y", alpha=0.3)
