@@ -21,6 +21,7 @@ from snncc.ir.timebase import sample_steps
 from snncc.targets.kit import Progress
 from snncc.targets.jetson.check import check_artefact
 from snncc.targets.jetson.options import DEFAULT_JETPACK, JetsonOptions
+from snncc.targets.kit.artefact import model_record
 from snncc.targets.kit.checks import CheckReport
 from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
 from snncc.targets.jetson.manifest import ArtefactFiles, build_manifest, manifest_bytes
@@ -127,7 +128,7 @@ def lower_graph(graph: Graph, options: JetsonOptions, progress: Progress | None 
     report(0, 1, VALIDATING)
     record = validate_export(plan, steps, sequence, step, seed=int(options.seed))
     report(1, 1, VALIDATING)
-    manifest = build_manifest(plan, steps, opset, jetpack, record.as_dict(), options.source)
+    manifest = build_manifest(plan, steps, opset, jetpack, record.as_dict(), options.source, model_record(graph))
     files = {
         "model.onnx": sequence.data,
         "step.onnx": step.data,

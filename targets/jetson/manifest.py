@@ -17,6 +17,7 @@ from typing import Any
 
 from snncc.targets.kit import SNNCC_VERSION
 from snncc.targets.kit.inputs import frame_shape
+from snncc.targets.kit.artefact import model_record
 from snncc.targets.kit.manifest import ManifestFormat, source_identity
 from snncc.ir.nodes import LIF
 from snncc.targets.jetson.plan import GraphPlan
@@ -54,7 +55,7 @@ def _downstream(g, start: str) -> set[str]:
 
 
 def build_manifest(plan: GraphPlan, steps: int, opset: int, jetpack: str, validation: dict,
-                   source: str | None) -> dict:
+                   source: str | None, loaded: dict | None = None) -> dict:
     from snncc.targets.jetson.export import input_name, sequence_output_names   # torch: only when building
     from snncc.targets.jetson.torch_graph import state_slots
 
@@ -79,6 +80,7 @@ def build_manifest(plan: GraphPlan, steps: int, opset: int, jetpack: str, valida
         "snncc_version": SNNCC_VERSION,
         "model": {"name": g.name, "kind": model_kind(plan), "update_order": meta.get("update_order")},
         "source": source_identity(meta, source),
+        "loaded_model": loaded if loaded is not None else model_record(g),
         "jetpack": str(jetpack),
         "opset": opset,
         "tensorrt": TENSORRT_FOR_JETPACK.get(opset),
@@ -138,7 +140,8 @@ def _describe(manifest: Mapping[str, Any]) -> str:
 
 
 JETSON_FORMAT = ManifestFormat(format=FORMAT, target="jetson", kind="an snncc Jetson artefact",
-                               files=listed_files, own_extra=engines, describe=_describe, executable=EXECUTABLE)
+                               files=listed_files, own_extra=engines, describe=_describe, executable=EXECUTABLE,
+                               model_key="loaded_model")
 
 
 def write_artefact(path, files: dict[str, bytes]) -> None:

@@ -11,7 +11,8 @@ says which format tag is its own and which files belong to an artefact; it then
                             (a size-bounded regular file; nothing else is read)
     open(path)              the manifest, after checking that every listed file is a regular file inside the
                             directory and, where the manifest records its SHA-256, has those bytes
-    identify(path)          ``kit.artefact.ArtefactIdentity`` (the capability ``identify``), or None
+    identify(path)          ``kit.artefact.ArtefactIdentity`` (the capability ``identify``), or None; its ``model``
+                            is the manifest's ``model_key`` entry (``kit.artefact.model_record`` of the loaded model)
 """
 
 from __future__ import annotations
@@ -67,6 +68,7 @@ class ManifestFormat:
     describe: Callable[[Mapping[str, Any]], str] = field(default=lambda manifest: "")
     executable: tuple[str, ...] = ()
     manifest_name: str = MANIFEST
+    model_key: str = "model"          # where the manifest holds ``kit.artefact.model_record`` of the loaded model
 
     # -- reading --------------------------------------------------------------------------------------
     def manifest(self, path: str | os.PathLike) -> dict[str, Any] | None:
@@ -125,9 +127,11 @@ class ManifestFormat:
             description = self.describe(manifest)
         except (KeyError, TypeError, AttributeError, ValueError):
             names, description = [self.manifest_name], self.kind
+        model = manifest.get(self.model_key)
         return ArtefactIdentity(target=self.target, path=str(path), files=names,
                                 source_sha256=source.get("sha256") or None, source_file=source.get("file") or None,
-                                description=description)
+                                description=description,
+                                model=model if isinstance(model, dict) and "graph_sha256" in model else None)
 
     # -- writing --------------------------------------------------------------------------------------
     def replace_refusal(self, directory: str | os.PathLike) -> str | None:
