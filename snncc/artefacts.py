@@ -63,7 +63,8 @@ def artefact_note(path: str | Path) -> str | None:
         return None
     tgt, identity = found[0]
     what = identity.description or f"a {tgt.name} artefact"
-    return f"is {what} (target {tgt.name}): {readers(tgt)}"
+    article = "" if what.split(" ", 1)[0].lower() in ("a", "an", "the") else "a "
+    return f"is {article}{what} (target {tgt.name}): {readers(tgt)}"
 
 
 def target_for(path: str | Path, target: str | None, capability: str, field: str = "artefact") -> Any:

@@ -22,13 +22,22 @@ def require(module: str):
         pytest.skip(f"{module} is not installed ({ex})")
 
 
-def run_cli(args: list[str], capsys) -> tuple[int, str, str]:
-    """Run ``snncc args``; return (exit status, stdout, stderr)."""
+PROGRESS = "snncc: progress: "
+
+
+def without_progress(err: str) -> str:
+    """``err`` without the progress lines a command prints outside a terminal (``snncc.cli.output``)."""
+    return "".join(line for line in err.splitlines(keepends=True) if not line.startswith(PROGRESS))
+
+
+def run_cli(args: list[str], capsys, progress: bool = False) -> tuple[int, str, str]:
+    """Run ``snncc args``; return (exit status, stdout, stderr); stderr without its progress lines unless
+    ``progress`` (they are checked on their own: tests/cli/test_progress_lines.py)."""
     from snncc.cli.main import run
 
     code = run([str(a) for a in args])
     out = capsys.readouterr()
-    return code, out.out, out.err
+    return code, out.out, out.err if progress else without_progress(out.err)
 
 
 def heaviside(v):

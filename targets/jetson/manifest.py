@@ -135,13 +135,21 @@ def engines(manifest: Mapping[str, Any]) -> set[str]:
     return {name.replace(".onnx", ".plan") for name in listed_files(manifest) if name.endswith(".onnx")}
 
 
+def _where(manifest: Mapping[str, Any], name: str) -> str:
+    """The manifest entry that names the file ``name``."""
+    for i, variant in enumerate(manifest.get("variants") or []):
+        if isinstance(variant, dict) and variant.get("file") == name:
+            return f"{MANIFEST}/variants/{i}/file"
+    return MANIFEST
+
+
 def _describe(manifest: Mapping[str, Any]) -> str:
     return f"Jetson artefact (ONNX opset {manifest.get('opset')}, JetPack {manifest.get('jetpack')})"
 
 
 JETSON_FORMAT = ManifestFormat(format=FORMAT, target="jetson", kind="an snncc Jetson artefact",
                                files=listed_files, own_extra=engines, describe=_describe, executable=EXECUTABLE,
-                               model_key="loaded_model")
+                               model_key="loaded_model", where=_where)
 
 
 def write_artefact(path, files: dict[str, bytes]) -> None:

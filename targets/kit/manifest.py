@@ -69,6 +69,8 @@ class ManifestFormat:
     executable: tuple[str, ...] = ()
     manifest_name: str = MANIFEST
     model_key: str = "model"          # where the manifest holds ``kit.artefact.model_record`` of the loaded model
+    where: Callable[[Mapping[str, Any], str], str] = field(
+        default=lambda manifest, name: f"{MANIFEST}/files/{name}")   # the manifest entry that lists ``name``
 
     # -- reading --------------------------------------------------------------------------------------
     def manifest(self, path: str | os.PathLike) -> dict[str, Any] | None:
@@ -109,7 +111,12 @@ class ManifestFormat:
             if not isinstance(name, str):
                 raise SnnccError("the manifest lists a file name that is not text", file=str(path),
                                  field=self.manifest_name)
-            file = member(path, name)
+            try:
+                file = member(path, name)
+            except SnnccError as err:       # named by the manifest entry that lists it
+                shown = name.encode("unicode_escape").decode("ascii")
+                raise SnnccError(f"lists '{shown}', which {err.rule}", file=str(path),
+                                 field=self.where(manifest, name)) from None
             if recorded is not None and file_sha256(file) != recorded:
                 raise SnnccError(f"its SHA-256 differs from the one {self.manifest_name} records (the file was changed)",
                                  file=str(file), field=name)
