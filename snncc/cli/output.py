@@ -85,7 +85,7 @@ def progress_bar(*columns, disable: bool = False, transient: bool = True):
         if not _on_terminal():
             now = time.monotonic()
             if phase != state.get("phase") or now - state.get("said", 0.0) >= LINE_EVERY_S:
-                if done < total or phase != state.get("phase"):
+                if done < total:       # a phase already complete says nothing new
                     print(f"snncc: progress: {phase or 'working'}: {done}/{total}", file=err_console.file, flush=True)
                 state["phase"], state["said"] = phase, now
             return

@@ -69,6 +69,8 @@ def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path,
 
     if record not in ("outputs", "all"):
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
+    if Path(output).suffix.lower() != ".npz":
+        raise SnnccError("the results are an .npz (several arrays): name the file .npz", file=str(output), field="--output")
     path = Path(bundle)
     model_options = {"--params": params, "--dt": dt, "--reset": reset}
     if target is not None or recognised(path) or not path.is_file():
