@@ -92,9 +92,11 @@ def _usage_line(ex, args: list[str]) -> str:
         field = (opts[0] if opts and opts[0].startswith("-") else
                  (getattr(param, "human_readable_name", None) or getattr(param, "name", None)))
     field = field or getattr(ex, "option_name", None)
-    unknown = re.match(r"No such command '(.*)'", message)
+    unknown = re.match(r"No such command '([^']*)'\.?\s*(.*)", message)
     if field is None and unknown:
         field = unknown.group(1)
+        hint = unknown.group(2).strip()
+        message = "no such command" + (f" ({hint[0].lower() + hint[1:]})" if hint else "; snncc --help lists them")
     return _refusal(message or "bad usage (see --help)", file=where, field=field, args=args)
 
 
