@@ -315,6 +315,11 @@ def target_options(target: Target, given: Given = None, capability: str | Sequen
     kind = getattr(target, "options_type", TargetOptions)
     if isinstance(given, kind):
         return given
+    steps = _values(kind, given).get("time_steps")
+    if isinstance(steps, (int, float)) and not isinstance(steps, bool):
+        from snncc.limits import check_time_steps
+
+        check_time_steps(float(steps), "this value", field="--time-steps")   # the cap every sample obeys
     declared = declared_options(kind)
     fields = {f.name for f in dataclasses.fields(kind)}
     values: dict[str, object] = {}

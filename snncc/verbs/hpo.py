@@ -67,6 +67,10 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
     rich bars); None: silent. Ctrl-C re-queues the running trial and raises
     ``snncc.hpo.study.Interrupted``.
     """
+    from snncc.targets import get_target, verb_options
+
+    given = {k: v for k, v in (target_options or {}).items() if v is not None and v is not False}
+    verb_options(get_target(target), given, "lower")   # validated first, whether or not a trial compiles with them
     import torch
 
     from snncc.errors import SnnccError
@@ -86,7 +90,7 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
                      batch_size=batch_size, n_hidden=hidden, energy_samples=energy_samples, emulate_samples=emulate,
                      pruner=pruner, n_startup=startup, enqueue_preset=preset, storage=storage, workdir=str(workdir),
                      device=device, heartbeat=heartbeat, target=target,
-                     target_options={k: v for k, v in (target_options or {}).items() if v is not None and v is not False})
+                     target_options=given)
     before = torch.get_num_threads()
     torch.set_num_threads(threads)
     try:
