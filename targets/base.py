@@ -273,8 +273,9 @@ class FinetuneOptions(OptionRecord):
                                    capabilities=("finetune",))
     device: str | None = option("With --finetune: where it trains: auto (CUDA when present), cpu (default), cuda "
                                 "or cuda:N.", capabilities=("finetune",))
-    finetune_samples: int = option("With --finetune, without --data: seeded random training samples (500 more "
-                                   "choose the kept epoch, 1,000 more are held out to measure it).", default=2048,
+    finetune_samples: int = option("With --finetune, without --data: seeded random training samples; validation (which "
+                                   "chooses the kept epoch) and held-out samples (which measure it) scale with them: "
+                                   "500 and 1,000 for 2,048, at least 128 and 256.", default=2048,
                                    minimum=1, rule="must be a whole number >= 1", capabilities=("finetune",))
     finetune_epochs: int = option("With --finetune: training epochs.", default=6, minimum=1,
                                   rule="must be a whole number >= 1", capabilities=("finetune",))

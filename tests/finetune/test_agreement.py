@@ -77,3 +77,18 @@ def test_task_like_braille_inputs():
     assert x.shape == (14, 256, 12) and x.dtype == np.uint8 and set(np.unique(x)) <= {0, 1}
     assert np.array_equal(x, x2) and np.array_equal(y, y2)
     assert set(y.tolist()) <= set(range(len(NIR_LETTERS))) and x.sum() > 0
+
+
+def test_validation_and_held_out_follow_the_training_samples():
+    """--finetune-samples 256 builds 640 samples, not 1,756: the other parts scale, with their floors."""
+    from snncc.finetune.inputs import MIN_HELD_OUT, MIN_VALIDATION, model_split, synthetic_sizes
+    from snncc.frontends.builders import snn_graph
+
+    assert synthetic_sizes(2048) == (500, 1000) and synthetic_sizes(256) == (MIN_VALIDATION, MIN_HELD_OUT)
+    assert synthetic_sizes(8192) == (2000, 4000)
+    rng = np.random.default_rng(0)
+    g = snn_graph(rng.normal(0, 0.6, (6, 10)), rng.normal(0, 0.5, (10, 3)), None, dt=0.005, tau_syn=0.006,
+                  tau_mem=0.06, metadata={"recording_length_s": 0.05})
+    split = model_split(g, samples=256)
+    assert (split.train.size, split.validation.size, split.held_out.size) == (256, 128, 256)
+    assert split.x.shape == (640, 10, 6)
