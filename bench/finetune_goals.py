@@ -18,7 +18,7 @@ the samples whose float counts have one clear winner, 95 % Wilson interval):
   practical  each Braille graph fine-tunes in under 5 minutes (CPU time and wall time recorded)
 
 Inputs: seeded random spikes (density 0.08, 256 steps; SYNTHETIC) split into training, validation and
-held-out parts, plus task-like inputs (``snncc.finetune.braille_inputs``: the NIR paper's letters
+held-out parts, plus task-like inputs (``snncc.data.nir_letters``: the NIR paper's letters
 from snncc's SYNTHETIC Braille generator). The NIR graphs were trained on the real recordings and do
 not classify the synthetic letters (float accuracy about 8-10 %), so only agreement is reported there.
 """
@@ -70,7 +70,7 @@ def nir_goal(name, args):
     import numpy as np
 
     from snncc.measure.agreement import argmax_agreement
-    from snncc.finetune.braille_inputs import nir_braille_inputs
+    from snncc.data.nir_letters import nir_braille_inputs
     from snncc.finetune.engine import TaskSet
     from snncc.finetune.inputs import split_inputs
     from snncc.finetune.teacher import run_teacher
@@ -131,7 +131,7 @@ def nir_goal(name, args):
 def xylo_goal(args):
     """Xylo Audio 2: the subtract graph lowered as compile does (rule auto), its spec fine-tuned (as
     ``snncc compile --target xylo --finetune``), measured against the float graph on held-out inputs."""
-    from snncc.finetune.braille_inputs import nir_braille_inputs
+    from snncc.data.nir_letters import nir_braille_inputs
     from snncc.finetune.engine import TaskSet
     from snncc.finetune.inputs import split_inputs
     from snncc.frontends import LoadOptions, load_model

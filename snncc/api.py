@@ -19,6 +19,7 @@ if TYPE_CHECKING:   # what type checkers see: the functions themselves, with the
     from snncc.verbs.compile import compile_model as compile
     from snncc.verbs.data_analyse import data_analyse
     from snncc.verbs.data_encode import data_encode
+    from snncc.verbs.data_nir import data_nir
     from snncc.verbs.data_frames import data_frames
     from snncc.verbs.data_synth import data_synth
     from snncc.verbs.emulate import emulate_bundle as emulate
@@ -51,6 +52,7 @@ _MODEL_DATA_HOMES: dict[str, str] = {
     "export": "snncc.verbs.export:export",
     "data_synth": "snncc.verbs.data_synth:data_synth",
     "data_encode": "snncc.verbs.data_encode:data_encode",
+    "data_nir": "snncc.verbs.data_nir:data_nir",
     "data_frames": "snncc.verbs.data_frames:data_frames",
     "data_analyse": "snncc.verbs.data_analyse:data_analyse",
     "train": "snncc.verbs.train:train",

@@ -51,6 +51,8 @@ def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = 
                                      "agreement with the float model on these inputs instead of accuracy",
                                      file=str(path), field="labels")
                 inputs, labels = z["inputs"], z["labels"]
+                if "synthetic" in z and z["synthetic"].shape == () and z["synthetic"].dtype == bool:
+                    meta["synthetic"] = bool(z["synthetic"])
         except SnnccError:
             raise
         except Exception as ex:  # not an npz / corrupt

@@ -70,7 +70,7 @@ def test_teacher_pre_reset_voltage_for_subtract_reset():
 
 
 def test_task_like_braille_inputs():
-    from snncc.finetune.braille_inputs import NIR_LETTERS, nir_braille_inputs
+    from snncc.data.nir_letters import NIR_LETTERS, nir_braille_inputs
 
     x, y = nir_braille_inputs(14, seed=3)
     x2, y2 = nir_braille_inputs(14, seed=3)

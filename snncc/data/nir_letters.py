@@ -1,4 +1,5 @@
-"""Task-like inputs for the NIR paper's Braille graphs, from snncc's SYNTHETIC Braille generator.
+"""Labelled inputs in the NIR paper's Braille layout, from snncc's SYNTHETIC Braille generator (``snncc data nir``:
+what ``check --data`` and ``compare --data`` measure the NIR Braille graphs' accuracy on; fine-tuning's task-like sets).
 
 As the NIR paper's Braille data: the letters Space, A, E, I, O, U, Y (class 0..6 in that order);
 sigma-delta events at threshold 1 of the inverted frames (``snncc.data.sigma_delta``); ON and OFF
@@ -40,3 +41,16 @@ def nir_braille_inputs(samples: int, seed: int = 0, steps: int = NIR_STEPS) -> t
     x[ev.sample, step, ev.taxel] = 1
     order = np.random.default_rng(seed).permutation(x.shape[0])[:samples]
     return x[order], new_labels[order]
+
+
+def write_nir_letters(path, samples: int, seed: int = 0, steps: int = NIR_STEPS) -> dict:
+    """``nir_braille_inputs`` written as the .npz ``snncc check --data`` reads (``inputs`` (N, steps, 12) uint8,
+    ``labels`` (N,), ``classes``, ``synthetic`` True), atomically; what was written."""
+    from snncc.atomic import write_npz_atomic
+
+    x, y = nir_braille_inputs(samples, seed, steps)
+    write_npz_atomic(path, {"inputs": x, "labels": y.astype(np.int64), "classes": np.asarray(NIR_LETTERS),
+                            "synthetic": np.asarray(True)})
+    return {"out": str(path), "samples": int(x.shape[0]), "steps": int(steps), "channels": int(x.shape[2]),
+            "classes": list(NIR_LETTERS), "seed": int(seed), "synthetic": True,
+            "events_per_sample": float(x.sum() / max(1, x.shape[0]))}
