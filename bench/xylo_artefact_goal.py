@@ -31,8 +31,8 @@ from tests.xylo.oracle import XyloSimOracle  # noqa: E402
 from snncc import api  # noqa: E402
 from snncc.ir.nodes import LIF  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
-from snncc.targets.xylo import measure  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
+from snncc.targets.xylo import feed as measure  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
 from snncc.threads import one_thread  # noqa: E402
 

@@ -35,12 +35,11 @@ sys.path.insert(0, str(ROOT))
 from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
 from snncc.ir.nodes import LIF, Dense  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
-from snncc.targets.xylo import measure  # noqa: E402
-from snncc.targets.xylo.emulator import decay, emulate, sat16  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
+from snncc.targets.xylo import feed as measure  # noqa: E402
+from snncc.targets.xylo.emulation.emulator import decay, effective_weights, emulate, sat16  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
-from snncc.targets.xylo.weights import effective_weights  # noqa: E402
-from snncc.targets.xylo.written import read_artefact  # noqa: E402
+from snncc.targets.xylo.artefact.read import read_artefact  # noqa: E402
 from snncc.threads import one_thread  # noqa: E402
 
 

@@ -33,12 +33,13 @@ sys.path.insert(0, str(ROOT))
 from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
 from snncc.ir.nodes import LIF  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
-from snncc.targets.xylo import lowering, measure  # noqa: E402
-from snncc.targets.xylo.emulator import emulate  # noqa: E402
-from snncc.targets.xylo.lowering import lower, twin_counts  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
+from snncc.targets.xylo import feed as measure  # noqa: E402
+from snncc.targets.xylo.emulation.emulator import emulate  # noqa: E402
+from snncc.targets.xylo.lowering.lower import lower, twin_counts  # noqa: E402
+from snncc.targets.xylo.options import XyloOptions, XyloStudyKnobs  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
-from snncc.targets.xylo.twin import spec_graph  # noqa: E402
+from snncc.targets.xylo.lowering.twin import spec_graph  # noqa: E402
 from snncc.threads import one_thread  # noqa: E402
 
 
@@ -76,18 +77,12 @@ def main() -> None:
     args = ap.parse_args()
 
     graph = load(args)
-    opts = {"rule": args.rule, "replicas": args.replicas}
+    opts = XyloOptions(rule=args.rule, replicas=args.replicas)
     chip_low = lower(graph, opts)
     # the unrounded lowering measures its candidates in the twin and could choose another readout: keep the
     # written one's
-    on_hidden = "readout on hidden neurons" in chip_low.rule
-    every_candidate = lowering.candidate_rules
-    lowering.candidate_rules = lambda *a, **k: [c for c in every_candidate(*a, **k)
-                                                if (c.readout == "hidden") == on_hidden]
-    try:
-        float_low = lower(graph, dict(opts, rounding="none", emulator=twin_emulator(graph.dt)))
-    finally:
-        lowering.candidate_rules = every_candidate
+    readout = "hidden" if "readout on hidden neurons" in chip_low.rule else "output"
+    float_low = lower(graph, opts, XyloStudyKnobs(rounding="none", emulator=twin_emulator(graph.dt), readout=readout))
     if chip_low.rule != float_low.rule:
         raise SystemExit(f"the unrounded lowering chose {float_low.rule!r}, the written one {chip_low.rule!r}")
     fine_twin = finer_relays(float_low, args.relay_factor)

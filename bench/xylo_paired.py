@@ -25,10 +25,10 @@ sys.path.insert(0, str(ROOT))
 from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
 from snncc.ir.nodes import LIF  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
-from snncc.targets.xylo import measure  # noqa: E402
-from snncc.targets.xylo.emulator import emulate  # noqa: E402
-from snncc.targets.xylo.written import read_artefact  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
+from snncc.targets.xylo import feed as measure  # noqa: E402
+from snncc.targets.xylo.emulation.emulator import emulate  # noqa: E402
+from snncc.targets.xylo.artefact.read import read_artefact  # noqa: E402
 from snncc.threads import one_thread  # noqa: E402
 
 

@@ -43,10 +43,12 @@ from tests.xylo.oracle import XyloSimOracle  # noqa: E402   (xylosim 0.1.3, driv
 from snncc.errors import SnnccError  # noqa: E402
 from snncc.frontends import LoadOptions, load_model  # noqa: E402
 from snncc.ir.nodes import Dense  # noqa: E402
-from snncc.targets.loihi.checks.agreement import perturbed, random_inputs  # noqa: E402   (target-neutral helpers)
-from snncc.targets.xylo import measure  # noqa: E402
-from snncc.targets.xylo.check import float_counts, rounded_decays  # noqa: E402   (what check measures)
-from snncc.targets.xylo.lowering import lower  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
+from snncc.targets.kit.reference import perturbed  # noqa: E402
+from snncc.targets.xylo import feed as measure  # noqa: E402
+from snncc.targets.xylo.checks.stages import float_counts, rounded_decays  # noqa: E402   (what check measures)
+from snncc.targets.xylo.lowering.lower import lower  # noqa: E402
+from snncc.targets.xylo.options import XyloOptions, XyloStudyKnobs  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
 
 GRAPHS = {  # file -> (load options, allow_reset_change)
@@ -149,8 +151,9 @@ def main() -> None:
         for rule in RULES + ("auto",):
             t0 = time.perf_counter()
             try:
-                lowered[rule] = lower(graph, {"rule": rule, "allow_reset_change": allow, "density": args.density,
-                                              "calibration_samples": args.calibration, "time_steps": args.steps})
+                lowered[rule] = lower(graph, XyloOptions(rule=rule, allow_reset_change=allow,
+                                                         calibration_samples=args.calibration, time_steps=args.steps),
+                                      XyloStudyKnobs(density=args.density))
             except SnnccError as err:
                 entry[f"snncc {rule}"] = {"refused": str(err)}
                 continue
