@@ -84,16 +84,16 @@ class XyloTarget:
               progress: Progress | None = None) -> Record:
         """The written artefact ``artefact`` (None: the one compile would write, in a temporary directory)
         against the float model on a labelled data set: accuracy and agreement per stage, loss by cause."""
-        from snncc.targets.kit.measured import artefact_to_measure
+        from snncc.targets.kit.measured import artefact_to_measure, described
         from snncc.targets.xylo.artefact.read import read_artefact
         from snncc.targets.xylo.checks.stages import check_written
 
         opts = self._options(options, "check")
         with artefact_to_measure(self, graph, opts, artefact) as path:
             what = f"{len(labels)} labelled samples of {data or 'the data set'}" + (" (SYNTHETIC)" if synthetic else "")
-            found: Record = check_written(graph, read_artefact(path), inputs, labels, what)
-        if progress is not None:
-            progress(len(labels))
+            found: Record = check_written(graph, read_artefact(path), inputs, labels, what,
+                                          artefact=None if artefact is not None else described(None, path),
+                                          progress=progress)
         return found
 
     def agree(self, graph: Graph, inputs: np.ndarray | None, options: Given = None,
@@ -101,8 +101,9 @@ class XyloTarget:
               progress: Progress | None = None) -> Record:
         """The written artefact's agreement with the float model without labels, per stage, with the float
         model's own ceiling under ``agreement.noise``; no inputs: seeded random spikes (SYNTHETIC)."""
-        from snncc.targets.kit.agreement import DEFAULT_SAMPLES
-        from snncc.targets.kit.measured import artefact_to_measure
+        from snncc.targets.kit.agreement import default_samples, default_samples_note
+        from snncc.targets.kit.measured import artefact_to_measure, described
+        from snncc.targets.kit.reference import spiking_neurons
         from snncc.targets.xylo.artefact.read import read_artefact
         from snncc.targets.xylo.checks.stages import check_written
 
@@ -110,19 +111,19 @@ class XyloTarget:
         opts = self._options(options, "agree")
         with artefact_to_measure(self, graph, opts, artefact) as path:
             written = read_artefact(path)
+            random = None
             if inputs is None:
-                import numpy as np
-
-                samples = how.samples or DEFAULT_SAMPLES
-                x = (np.random.default_rng(0).random((samples, RANDOM_STEPS, written.spec.n_in))
-                     < how.density).astype(np.uint8)
-                what = (f"{samples} seeded random spike trains (density {how.density:g}, seed 0), {RANDOM_STEPS} steps "
+                steps = RANDOM_STEPS
+                samples = how.samples or default_samples(spiking_neurons(graph), steps)
+                random = (samples, steps, how.density, 0)
+                shown = f"{samples} samples" if how.samples else default_samples_note(samples)
+                what = (f"{shown}: seeded random spike trains (density {how.density:g}, seed 0), {steps} steps "
                         "(SYNTHETIC)")
             else:
-                x, what = inputs, f"{len(inputs)} samples of {data or 'the given inputs'} (no labels used)"
-            found: Record = check_written(graph, written, x, None, what, noise=how.noise)
-        if progress is not None:
-            progress(int(len(x)))
+                what = f"{len(inputs)} samples of {data or 'the given inputs'} (no labels used)"
+            found: Record = check_written(graph, written, inputs, None, what, noise=how.noise, random=random,
+                                          artefact=None if artefact is not None else described(None, path),
+                                          progress=progress)
         return found
 
     def emulate(self, bundle: Path, inputs: np.ndarray, *, record: str = "outputs", stream: bool = False,

@@ -43,7 +43,8 @@ def test_layer_swaps_reproduce_the_artefact(tmp_path, capsys, model):
     names = set(got["figures"])
     assert {"chip", "float readout, chip hidden (copies' mean)", "float readout, chip hidden copy 0",
             "float readout, chip hidden copy 1", "chip readout, float hidden"} == names
-    assert all(a.counted + a.ties_or_silent == 24 for a in got["figures"].values())
+    assert all(a.argmax.samples == 24 and a.decided + a.argmax.ties + a.argmax.silent == 24
+               for a in got["figures"].values())
     assert got["outputs"]["chip"].shape == (24, 3) and got["outputs"]["chip"].sum() > 0
 
 

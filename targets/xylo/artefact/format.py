@@ -51,6 +51,14 @@ MANIFEST_FORMAT = ManifestFormat(format=FORMAT, target="xylo", kind=KIND, files=
                                  executable=(BOARD_SCRIPT,), manifest_name=MANIFEST)
 
 
+def candidate_text(agr: Mapping[str, Any]) -> str:
+    """A candidate's selection agreement (``kit.agreement``'s figures) as text; undefined over silent outputs."""
+    if agr.get("share") is None:
+        return f"undefined (no calibration sample with a single float winner of {agr.get('samples', 0)})"
+    return (f"{agr['share']:.3f} [{agr['low']:.3f}, {agr['high']:.3f}] over {agr['decided']} decided calibration "
+            "samples")
+
+
 @dataclass
 class XyloArtefact:
     """A lowered model's files (bytes, in write order), its manifest and the notes for the user."""
@@ -77,8 +85,7 @@ class XyloArtefact:
         console.print(f"{chip['name']} ({chip['part_number']}): {net['inputs']} inputs -> {net['hidden']} hidden -> "
                       f"{net['outputs']} outputs, {net['synapses']} synapses; rule {s['rule']}", markup=False)
         for name, agr in s["candidates"].items():
-            console.print(f"  candidate {name}: agreement {agr['agreement']:.3f} [{agr['low']:.3f}, {agr['high']:.3f}] "
-                          f"over {agr['counted']} clear-winner calibration samples", markup=False)
+            console.print(f"  candidate {name}: agreement {candidate_text(agr)}", markup=False)
         for line in s["changes"]:
             console.print(f"  change: {line}", markup=False)
         rt = s["real_time"]

@@ -19,7 +19,7 @@ from snncc.targets.kit.artefact import sha256_bytes as sha256
 from snncc.targets.kit.manifest import manifest_bytes
 from snncc.targets.kit.writing import npz_bytes
 from snncc.targets.xylo.artefact.format import (
-    BOARD_SCRIPT, FORMAT, FORMAT_VERSION, MANIFEST, README, SPEC, XYLOSIM_VERSION, XyloArtefact,
+    BOARD_SCRIPT, FORMAT, FORMAT_VERSION, MANIFEST, README, SPEC, XYLOSIM_VERSION, XyloArtefact, candidate_text,
 )
 from snncc.targets.xylo.chip import get_chip
 
@@ -69,9 +69,8 @@ def build_manifest(low, spec, files: dict[str, bytes], source: str | None) -> di
         "source": {"file": meta.get("source_file") or source, "sha256": meta.get("source_sha256")},
         "validation": {
             "spec_file": "checked: " + files.pop("__validation__").decode(),
-            "emulator": (f"agreement with the float graph of the chosen rule in snncc's emulator on the calibration "
-                         f"inputs' selection half: {chosen.get('agreement', float('nan')):.3f} over "
-                         f"{chosen.get('counted', 0)} clear-winner samples"),
+            "emulator": ("agreement with the float graph of the chosen rule in snncc's emulator on the calibration "
+                         f"inputs' selection half: {candidate_text(chosen)}"),
         },
         "checked_with": {"snncc": snncc.__version__, "numpy": np.__version__,
                          "emulator": f"snncc's bit-exact emulator (targets/xylo/emulation/emulator.py), equal to xylosim "

@@ -1,90 +1,80 @@
 """``snncc check`` of a Xylo artefact: what the written artefact loses against the float model, and why.
 
-The same inputs run through five stages; each differs from the one before by one cause:
+The same inputs run through six stages; each differs from the one before by one cause (``kit.checks.CAUSES``)
+and each is compared with the float graph as trained by the one agreement rule (``kit.agreement``):
 
-    trained     the float graph as given
-    deployed    the float graph as deployed: reset by subtraction where the model reset to zero
-                (Xylo's only reset; --allow-reset-change)                              -> reset change
-    decays      the deployed float graph with every decay moved to the nearest 1 - 2^-dash
-                (Xylo's decay grid, nothing else changed)                              -> decay rounding
-    uncapped    the artefact's spec.npz as a float IR graph (twin.py): its int8 weights, shifts, gains,
-                thresholds, dashes and the rule's placement (direct: several events per step where the
-                float model fires one), in float arithmetic, hidden events per step not capped
-                                                                                       -> weight quantization and
-                                                                                          the rule's placement
-    twin        the same with the chip's cap of 31 events per hidden neuron and step   -> multi-spike clipping
-    chip        the artefact in snncc's bit-exact emulator (equal to XyloSim)          -> integer arithmetic:
-                                                                                          16-bit saturation,
-                                                                                          state rounding
+    trained     the float graph as given                                                   (the reference)
+    deployed    the float graph with Xylo's reset by subtraction where the model reset to
+                zero (--allow-reset-change; the same run where nothing changed)             -> reset
+    decays      deployed, every decay moved to the nearest 1 - 2^-dash (Xylo's decay grid)   -> decays
+    uncapped    the artefact's spec.npz as a float IR graph (``lowering/twin.py``): its int8 weights,
+                shifts, gains, thresholds, dashes and the rule's placement (direct: several events
+                per step where the float model fires one), in float arithmetic, hidden events
+                per step not capped                                                         -> weights
+    twin        the same with the chip's cap of 31 events per hidden neuron and step        -> saturation
+                                                                                               (multi-spike
+                                                                                               clipping)
+    chip        the artefact in snncc's bit-exact emulator (equal to XyloSim)                 -> saturation
+                                                                                               (16-bit saturation
+                                                                                               and state rounding)
 
-Each stage's argmax agreement with ``deployed`` (``trained`` for the reset change) is measured over the
-samples whose reference output has one clear winner (the others counted beside), with its 95 % Wilson
-interval; with labels also its accuracy. A cause's loss is the drop from the stage before (stages are
-successive, so the losses are not independent and may be negative where a later stage compensates).
-A rule that fires at most once per step by design (single: thresholds above half the 16-bit range)
-keeps that cap in ``uncapped`` (lifting it in float arithmetic, where V does not saturate, would not
-be the chip), so its multi-spike clipping is 0. How often each lossy rule of the core acted is counted by the literal emulator
-(``emulator.reference_run(count=True)``) on the first samples: current and membrane saturations,
-hidden and output neuron-steps whose events were clipped at the cap (31, 1), inputs clipped at 15.
-Liveness (``snncc.ir.liveness``): every float population's activity, and the chip's hidden and output
-neurons' in the emulator; a model silent in float is said in one line.
+The chip stage's loss is integer arithmetic: 16-bit saturation of currents and membranes and the rounding of
+every decay to a whole number (x >> dash, at least 1). No stage here separates the two (an emulator without
+saturation would need a wider kernel), so the stage is attributed to saturation, and the record says so in a
+note beside how often the literal emulator saw each lossy rule act on the first ``COUNTED_SAMPLES`` samples
+(``details["rule_events"]``). A rule that fires at most once per step by design (single: thresholds above half
+the 16-bit range) keeps that cap in ``uncapped`` (lifting it in float arithmetic, where V does not saturate,
+would not be the chip), so its multi-spike clipping is 0.
+
+The samples run in chunks (``kit.agreement.chunk_size``): memory does not grow with the sample count; the
+float graph runs through ``kit.reference`` (one compute thread), the chip in snncc's emulator. Liveness: every
+float population's activity (the model as trained) and the chip's hidden and output neurons'; a population
+that never spikes is named (``flagged``), and agreement over silent float outputs is undefined (JSON null).
+The float graph's own ceiling: its agreement with itself under ``noise`` weight noise, as
+``kit.reference.noise_ceiling`` defines it (``kit.reference.perturbed`` with its seed), chunk by chunk.
 """
 
 from __future__ import annotations
 
-import tempfile
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
 
 from snncc.ir.graph import Graph
-from snncc.ir.nodes import LIF, Dense
-from snncc.targets.xylo import feed as measure
+from snncc.ir.nodes import LIF
+from snncc.targets.kit.agreement import argmax_agreement, chunk_size, count_correlation
+from snncc.targets.kit.checks import CheckReport, accuracy_pair, ceiling_record, report_from, stage
+from snncc.targets.xylo.feed import chip_window, read_window
 
 COUNTED_SAMPLES = 8          # samples the literal emulator counts rule events on
-STAGES = ("trained", "deployed", "decays", "uncapped", "twin", "chip")
-CAUSES = {"deployed": "reset change", "decays": "decay rounding",
-          "uncapped": "weight quantization and the rule's placement",
-          "twin": "multi-spike clipping (31 events per hidden neuron and step)",
-          "chip": "integer arithmetic (16-bit saturation, state rounding)"}
 UNCAPPED = 1 << 20           # hidden events per step when the chip's cap of 31 is lifted
-
-
-def _last_lif(graph: Graph) -> str:
-    return [n for n, op in graph.items() if isinstance(op, LIF)][-1]
-
-
-def float_counts(graph: Graph, x: np.ndarray) -> np.ndarray:
-    from snncc.ir.simulate import simulate
-    from snncc.targets.kit.compute import one_thread
-
-    with one_thread():
-        return simulate(graph, np.asarray(x), record="spikes").spikes[_last_lif(graph)].numpy().sum(axis=1)
+CHUNK = 64                   # samples per chunk at most
+POSSIBLE = ("reset", "weights", "decays", "saturation")
+STAGES = (
+    ("trained", "the float graph as given", None),
+    ("deployed", "the float graph as deployed (Xylo's reset by subtraction where it changed)", "reset"),
+    ("decays", "deployed, decays on Xylo's 1 - 2^-dash grid", "decays"),
+    ("uncapped", "spec.npz in float arithmetic (weights, gains, placement), hidden events per step not capped",
+     "weights"),
+    ("twin", "spec.npz in float arithmetic with the chip's event caps (multi-spike clipping)", "saturation"),
+    ("chip", "spec.npz in snncc's bit-exact emulator (16-bit saturation, state rounding)", "saturation"),
+)
+CHIP_NOTE = ("the chip stage (integer arithmetic: 16-bit saturation and state rounding, which no stage here "
+             "separates) is attributed to saturation; details.rule_events counts how often each acted")
 
 
 def rounded_decays(graph: Graph) -> Graph:
     """``graph`` with every LIF's decays moved to the nearest Xylo dash (Euler: tau = dt / 2^-dash)."""
-    from snncc.targets.xylo.lowering import decays as kernels
+    from snncc.targets.xylo.lowering.decays import grid, nearest_dash
 
     out = graph.copy()
     for _, op in out.items():
         if isinstance(op, LIF):
             a, b = op.decays(out.dt)
             op.discretisation = "euler"
-            op.tau_syn = out.dt / np.maximum(1 - kernels.grid(kernels.nearest_dash(a)), 1e-300)
-            op.tau_mem = out.dt / np.maximum(1 - kernels.grid(kernels.nearest_dash(b)), 1e-300)
-    return out
-
-
-def perturbed(graph: Graph, noise: float, seed: int) -> Graph:
-    """``graph`` with every Dense weight times (1 + noise * N(0, 1)) (the float model's own sensitivity)."""
-    rng = np.random.default_rng(seed)
-    out = graph.copy()
-    for _, op in out.items():
-        if isinstance(op, Dense):
-            op.weight = op.weight * (1 + noise * rng.standard_normal(op.weight.shape))
+            op.tau_syn = out.dt / np.maximum(1 - grid(nearest_dash(a)), 1e-300)
+            op.tau_mem = out.dt / np.maximum(1 - grid(nearest_dash(b)), 1e-300)
     return out
 
 
@@ -99,37 +89,32 @@ def deployed_graph(graph: Graph, manifest: dict[str, Any]) -> Graph:
     return out
 
 
-def twin_counts(spec, x: np.ndarray, pad: int, lag: int, capped: bool = True) -> np.ndarray:
-    """Output counts of the network spec's float twin (``twin.py``); ``capped`` False: its hidden neurons may fire any
-    number of events per step (only where the twin allows several: a rule that fires at most once by design
-    keeps its cap, which then clips nothing the chip would not)."""
-    from snncc.ir.simulate import simulate
+def float_counts(graph: Graph, x: np.ndarray) -> np.ndarray:
+    """(B, n) readout spike counts of the float graph on ``x`` (``kit.reference.float_counts``)."""
+    from snncc.targets.kit.reference import float_counts as counts
+
+    return counts(graph, np.asarray(x))
+
+
+def twin_graphs(spec) -> tuple[Graph, Graph]:
+    """The network spec's float twin (``lowering/twin.py``) with the chip's event caps, and without them (only
+    where the twin allows several events: a rule that fires at most once by design keeps its cap)."""
     from snncc.targets.xylo.lowering.twin import HIDDEN_CAP, spec_graph
-    from snncc.targets.kit.compute import one_thread
 
     twin = spec_graph(spec.kwargs(), float(spec.dt))
-    hidden = twin.node("hidden")
-    if not capped and hidden.max_spikes == HIDDEN_CAP:
+    uncapped = twin.copy()
+    hidden = uncapped.node("hidden")
+    if hidden.max_spikes == HIDDEN_CAP:
         hidden.max_spikes = UNCAPPED
-    with one_thread():
-        out = simulate(twin, measure.chip_window(np.asarray(x), pad, lag), record="spikes").spikes["output"].numpy()
-    return measure.read_window(out, lag, x.shape[1]).sum(axis=1)
+    return twin, uncapped
 
 
-def chip_run(written, x: np.ndarray):
-    """The artefact on ``x`` in snncc's emulator, states recorded (``run_artefact.XyloEmulation``)."""
-    from snncc.targets.xylo.emulation.run_artefact import emulate_written
+def twin_counts(twin: Graph, x: np.ndarray, pad: int, lag: int) -> np.ndarray:
+    """Output counts of a twin over the model's T steps of ``x`` (fed as the manifest says)."""
+    from snncc.targets.kit.reference import float_spikes
 
-    return emulate_written(written, x, record=True)
-
-
-def chip_liveness(run) -> dict[str, Any]:
-    """Activity of the chip's hidden and output neurons (``snncc.ir.liveness``; hidden counts may exceed 1 per step)."""
-    from snncc.ir.liveness import activity_from_counts
-
-    steps = run.steps
-    return {"hidden (chip)": activity_from_counts(run.states["spikes"].sum(axis=1, dtype=np.int64), steps).as_dict(),
-            "output (chip)": activity_from_counts(run.output_spikes.sum(axis=1, dtype=np.int64), steps).as_dict()}
+    out = float_spikes(twin, chip_window(np.asarray(x), pad, lag), ["output"])["output"]
+    return read_window(out, lag, x.shape[1]).sum(axis=1, dtype=np.int64)
 
 
 def rule_events(written, x: np.ndarray) -> dict[str, int]:
@@ -144,127 +129,139 @@ def rule_events(written, x: np.ndarray) -> dict[str, int]:
     return {"samples": k, **{name: int(v) for name, v in events.items()}}
 
 
-@dataclass
-class Stage:
-    name: str
-    what: str
-    agreement: dict[str, Any]          # with the reference (measure.Agreement.as_dict())
-    reference: str
-    accuracy: float | None = None      # with labels
+def random_chunks(samples: int, steps: int, width: int, density: float, seed: int, chunk: int) -> Iterator[np.ndarray]:
+    """``kit.agreement.random_inputs(samples, steps, width, density, seed)`` drawn ``chunk`` samples at a time (the
+    same spikes: the generator's stream is consumed in the same order)."""
+    from snncc.targets.kit import SnnccError
+
+    if not 0.0 < density <= 1.0:
+        raise SnnccError(f"spike density must be in (0, 1], got {density}", field="--density")
+    rng = np.random.default_rng(seed)
+    for start in range(0, samples, chunk):
+        yield (rng.random((min(chunk, samples - start), steps, width)) < density).astype(np.uint8)
 
 
-@dataclass
-class XyloCheckRecord:
-    """What the written artefact loses against the float model, stage by stage, and why (module doc)."""
-
-    artefact_path: str
-    chip: str
-    rule: str
-    inputs: str
-    samples: int
-    steps: int
-    stages: list[Stage]
-    losses: list[dict[str, Any]]
-    events: dict[str, int]
-    overall: dict[str, Any]            # the chip against the float graph as trained
-    ceiling: dict[str, Any] | None = None
-    liveness: dict[str, Any] = field(default_factory=dict)   # float populations and chip neurons: activity
-    notes: list[str] = field(default_factory=list)
-
-    def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
-
-    def render_text(self, console) -> None:
-        console.print(f"Xylo artefact {self.artefact_path} ({self.chip}, rule {self.rule}) on {self.inputs}", markup=False,
-                      soft_wrap=True)
-        for s in self.stages:
-            a = measure.Agreement(**{k: s.agreement[k] for k in measure.Agreement.__dataclass_fields__})
-            acc = "" if s.accuracy is None else f"; accuracy {100 * s.accuracy:.1f} %"
-            console.print(f"  {s.name:9s} vs {s.reference:8s}: {a.line()}{acc}", markup=False, soft_wrap=True)
-        console.print("loss by cause (agreement points; successive stages, not independent):", markup=False)
-        for row in self.losses:
-            extra = "" if row.get("accuracy_points") is None else f", accuracy {row['accuracy_points']:+.1f} points"
-            console.print(f"  {row['cause']}: {row['agreement_points']:+.1f}{extra}", markup=False, soft_wrap=True)
-        ev = ", ".join(f"{k} {v}" for k, v in self.events.items() if k != "samples")
-        console.print(f"rule events on the first {self.events.get('samples', 0)} samples: {ev}", markup=False,
-                      soft_wrap=True)
-        a = self.overall
-        console.print(f"artefact vs the float graph as trained: {a['agreement']:.3f} [{a['low']:.3f}, {a['high']:.3f}] "
-                      f"over {a['counted']} clear-winner samples", markup=False)
-        if self.ceiling:
-            console.print(f"ceiling: the float graph against itself under {self.ceiling['noise']:g} weight noise: "
-                          f"{self.ceiling['agreement']:.3f}", markup=False)
-        for where, pops in self.liveness.items():
-            for name, a in pops.items():
-                console.print(f"liveness {where} {name}: {a['status']}, {a['spikes']} spikes ({a['rate']:.4f} per "
-                              f"neuron and step), {a['silent_neurons']}/{a['neurons']} neurons silent", markup=False,
-                              soft_wrap=True)
-        for note in self.notes:
-            console.print(f"note: {note}", markup=False, soft_wrap=True)
+def given_chunks(x: np.ndarray, chunk: int) -> Iterator[np.ndarray]:
+    for start in range(0, x.shape[0], chunk):
+        yield x[start:start + chunk]
 
 
-def check_written(graph: Graph, written, x: np.ndarray, labels: np.ndarray | None, inputs: str,
-                  noise: float | None = None) -> XyloCheckRecord:
-    """The stages and losses of the artefact ``written`` (``written.read_artefact``) on inputs ``x`` (N, T, C)."""
-    from snncc.targets.xylo.emulation.run_artefact import artefact_inputs as _inputs
+def chunk_for(graph: Graph, spec, steps: int) -> int:
+    """Samples per chunk: the float graph's and the chip's neuron-steps within ``kit.agreement.chunk_size``."""
+    from snncc.targets.kit.reference import spiking_neurons
 
+    return chunk_size(max(spiking_neurons(graph), int(spec.n_hidden) + int(spec.n_out)), steps, CHUNK)
+
+
+class _Tally:
+    """Per-population spike counts over the chunks (liveness), without holding the spikes."""
+
+    def __init__(self) -> None:
+        self.counts: dict[str, list[np.ndarray]] = {}
+        self.steps = 0
+
+    def add(self, name: str, counts: np.ndarray, steps: int) -> None:
+        self.counts.setdefault(name, []).append(np.asarray(counts, np.int64))
+        self.steps = int(steps)
+
+    def activity(self, refractory: dict[str, int] | None = None) -> dict[str, Any]:
+        from snncc.ir.liveness import activity_from_counts
+
+        refractory = refractory or {}
+        return {name: activity_from_counts(np.concatenate(c), self.steps, int(refractory.get(name, 1)))
+                for name, c in self.counts.items()}
+
+
+def check_written(graph: Graph, written, x: np.ndarray | None, labels: np.ndarray | None, inputs: str, *,
+                  noise: float | None = None, random: tuple[int, int, float, int] | None = None,
+                  artefact: str | None = None, progress: Callable[[int], None] | None = None) -> CheckReport:
+    """The stages and losses of the artefact ``written`` (``artefact.read.read_artefact``) on inputs ``x`` (N, T, C)
+    or, with ``x`` None, on ``random`` = (samples, steps, density, seed) seeded random spikes drawn chunk by chunk;
+    ``labels`` (N,) for accuracy; ``noise``: the float graph's ceiling; ``artefact``: how the record names an
+    artefact compiled for the measurement (``kit.measured.described``; None: the caller names it, as the check
+    verb does: a path of the artefact is never printed here, a temporary one would no longer exist)."""
     from snncc.ir import liveness
+    from snncc.targets.kit.compute import one_thread
+    from snncc.targets.kit.reference import float_spikes, perturbed
+    from snncc.targets.xylo.emulation.run_artefact import artefact_inputs, emulate_written
 
-    x = _inputs(x, written.spec.n_in, None)
+    spec, pad, lag = written.spec, written.input_pad, written.output_lag
+    if x is not None:
+        x = artefact_inputs(x, spec.n_in, None)
+        steps = int(x.shape[1])
+    else:
+        steps = int(random[1])
+    chunk = chunk_for(graph, spec, steps)
+    chunks = given_chunks(x, chunk) if x is not None else random_chunks(random[0], steps, spec.n_in, random[2],
+                                                                         random[3], chunk)
     deployed = deployed_graph(graph, written.manifest)
-    run = chip_run(written, x)
-    counts = {"trained": float_counts(graph, x),
-              "deployed": float_counts(deployed, x) if deployed is not graph else None,
-              "decays": float_counts(rounded_decays(deployed), x),
-              "uncapped": twin_counts(written.spec, x, written.input_pad, written.output_lag, capped=False),
-              "twin": twin_counts(written.spec, x, written.input_pad, written.output_lag),
-              "chip": run.output_spikes.sum(axis=1, dtype=np.int64)}
-    if counts["deployed"] is None:
-        counts["deployed"] = counts["trained"]
-    what = {"trained": "the float graph as given", "deployed": "the float graph as deployed (reset changes applied)",
-            "decays": "deployed, decays on Xylo's 1 - 2^-dash grid",
-            "uncapped": "spec.npz in float arithmetic, hidden events per step not capped",
-            "twin": "spec.npz in float arithmetic with the chip's event caps",
-            "chip": "spec.npz in snncc's bit-exact emulator"}
-    stages, previous = [], None
-    losses = []
-    for name in STAGES:
-        ref = "trained" if name in ("trained", "deployed") else "deployed"
-        agr = measure.agreement(counts[name], counts[ref]).as_dict()
-        acc = None if labels is None else float(np.mean(np.argmax(counts[name], axis=1) == labels))
-        stages.append(Stage(name, what[name], agr, ref, acc))
-        if name in CAUSES:
-            base_agr = 1.0 if name in ("deployed", "decays") else previous.agreement["agreement"]
-            row = {"cause": CAUSES[name], "stage": name,
-                   "agreement_points": 100.0 * (base_agr - agr["agreement"]),
-                   "accuracy_points": None if acc is None or previous is None or previous.accuracy is None
-                   else 100.0 * (previous.accuracy - acc)}
-            losses.append(row)
-        previous = stages[-1]
-    events = rule_events(written, x)
-    overall = measure.agreement(counts["chip"], counts["trained"]).as_dict()
+    decays = rounded_decays(deployed)
+    twin, uncapped = twin_graphs(spec)
+    readout = [n for n, op in graph.items() if isinstance(op, LIF)][-1]
+    counts: dict[str, list[np.ndarray]] = {k: [] for k, _, _ in STAGES}
+    noisy: list[np.ndarray] = []
+    noisy_graph = perturbed(graph, noise) if noise is not None and noise > 0 else None
+    floats, chips = _Tally(), _Tally()
+    events: dict[str, int] | None = None
+    first: np.ndarray | None = None
+    for part in chunks:
+        with one_thread():
+            spikes = float_spikes(graph, part)
+        for name, s in spikes.items():
+            floats.add(name, s.sum(axis=1, dtype=np.int64), s.shape[1])
+        counts["trained"].append(spikes[readout].sum(axis=1, dtype=np.int64))
+        counts["deployed"].append(counts["trained"][-1] if deployed is graph else float_counts(deployed, part))
+        counts["decays"].append(float_counts(decays, part))
+        with one_thread():
+            counts["uncapped"].append(twin_counts(uncapped, part, pad, lag))
+            counts["twin"].append(twin_counts(twin, part, pad, lag))
+        run = emulate_written(written, part, record=True)
+        counts["chip"].append(run.output_spikes.sum(axis=1, dtype=np.int64))
+        chips.add("hidden (chip)", run.states["spikes"].sum(axis=1, dtype=np.int64), run.steps)
+        chips.add("output (chip)", counts["chip"][-1], run.steps)
+        if noisy_graph is not None:
+            noisy.append(float_counts(noisy_graph, part))
+        if events is None:
+            events = rule_events(written, part)
+            first = part
+        if progress is not None:
+            progress(int(part.shape[0]))
+    c = {k: np.concatenate(v) for k, v in counts.items()}
+    samples = int(c["trained"].shape[0])
+    lab = None if labels is None else np.asarray(labels).reshape(-1)
+    stages = [stage(key, label, cause, argmax_agreement(c["trained"], c[key]),
+                    None if lab is None else float(np.mean(np.argmax(c[key], axis=1) == lab)))
+              for key, label, cause in STAGES]
+    main = argmax_agreement(c["trained"], c["chip"])
     ceiling = None
-    if noise is not None and noise > 0:
-        draws = [measure.agreement(float_counts(perturbed(deployed, noise, 100 + k), x), counts["deployed"]).agreement
-                 for k in range(3)]
-        ceiling = {"noise": noise, "agreement": float(np.mean(draws)), "draws": draws}
-    activity = liveness.population_activity(deployed, np.asarray(x, np.float32))
-    alive = {"float (deployed)": liveness.as_dicts(activity), "chip": chip_liveness(run)}
-    silent = liveness.silence_warning(deployed, activity, inputs, int(x.shape[1]))
-    notes = ([silent] if silent else []) + ["reset change: " + "; ".join(written.manifest["quantization"]["changes"])
-             if written.manifest["quantization"].get("changes") else "no reset change: the model resets by subtraction"]
-    return XyloCheckRecord(str(written.path), written.chip, written.manifest["quantization"]["rule"], inputs,
-                           int(x.shape[0]), int(x.shape[1]), stages, losses, events, overall, ceiling, alive, notes)
-
-
-def open_or_compile(graph: Graph, artefact: Path | None, lower_artefact) -> tuple[Any, tempfile.TemporaryDirectory | None]:
-    """The written artefact at ``artefact``; None: ``lower_artefact()`` (what compile writes) written to a
-    temporary directory and read back (the caller keeps the directory until done)."""
-    from snncc.targets.xylo.artefact.read import read_artefact
-
+    if noisy:
+        ceiling = ceiling_record(argmax_agreement(c["trained"], np.concatenate(noisy)), noise)
+    f_act = floats.activity(liveness.graph_refractory(graph))
+    c_act = chips.activity()
+    warning = liveness.float_silence_warning(graph, first, f_act, f"the first {first.shape[0]} of these samples") \
+        if first is not None else None
+    quant = written.manifest["quantization"]
+    changes = list(quant.get("changes") or [])
+    notes = (["reset change: " + "; ".join(changes)] if changes
+             else ["no reset change: the model resets by subtraction"]) + [CHIP_NOTE]
+    if x is None:
+        notes.append("random spike trains: agreement with the float model, not accuracy on real data")
+    events = events or {"samples": 0}
+    details = {"chip": written.chip, "rule": quant["rule"], "rule_events": events,
+               "feed": {"input_pad": pad, "output_lag": lag}}
     if artefact is not None:
-        return read_artefact(artefact), None
-    tmp = tempfile.TemporaryDirectory(prefix="snncc-xylo-check-")
-    path = Path(tmp.name) / "model.xylo"
-    lower_artefact().write(path)
-    return read_artefact(path), tmp
+        details["artefact"] = artefact
+    lines = [f"Xylo {written.chip}, rule {quant['rule']}; fed {pad} zero step(s) before each sample, outputs read "
+             f"{lag} step(s) later",
+             f"rule events on the first {events.get('samples', 0)} samples (literal emulator): "
+             + ", ".join(f"{k} {v}" for k, v in events.items() if k != "samples")]
+    for where, act in (("float", f_act), ("chip", c_act)):     # silent or saturated ones are flagged below
+        lines += [f"liveness {where} {name}: {a.text()}" for name, a in act.items() if a.status == "active"]
+    return report_from(
+        "xylo", inputs=inputs, samples=samples, steps=steps, artefact=main,
+        count_correlation=count_correlation(c["chip"], c["trained"]), stages=stages, possible=POSSIBLE,
+        accuracy=None if lab is None else accuracy_pair(np.argmax(c["trained"], axis=1),
+                                                         np.argmax(c["chip"], axis=1), lab),
+        ceiling=ceiling, liveness={"float": liveness.as_dicts(f_act), "chip": liveness.as_dicts(c_act)},
+        flagged=liveness.flagged(f_act, "in float") + liveness.flagged(c_act, "on the chip"),
+        warnings=[warning] if warning else [], notes=notes, details=details, detail_lines=lines)

@@ -40,7 +40,8 @@ from snncc.ir.graph import Graph
 from snncc.targets.kit import SnnccError
 from snncc.targets.kit.graphs import change_reset, fold_linear
 from snncc.targets.xylo.chip import CHIPS, get_chip
-from snncc.targets.xylo.feed import Agreement, agreement, chip_window, read_window
+from snncc.targets.kit.agreement import ArgmaxAgreement, argmax_agreement, count_correlation
+from snncc.targets.xylo.feed import chip_window, read_window
 from snncc.targets.xylo.lowering import design_rules
 from snncc.targets.xylo.lowering.calibration import (Source, calibrate, calibration_inputs, describe, float_counts,
                                                      sources)
@@ -175,11 +176,14 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
     best = None
     readout_timing = {"output": timing, "hidden": solve_timing(ref, pops, readout_extra=1)}
 
-    def selection_agreement(spec: dict, at: XyloTiming) -> Agreement:
-        """``spec`` run on the selection half (the given emulator, else snncc's), against the float graph."""
+    def selection_agreement(spec: dict, at: XyloTiming) -> tuple[ArgmaxAgreement, dict[str, Any]]:
+        """``spec`` run on the selection half (the given emulator, else snncc's), against the float graph: the
+        agreement and its record (``kit.agreement``'s figures and the count correlation)."""
         chip_x = chip_window(sel_x, at.input_pad, at.output_lag)
         out = emulator(spec, chip_x) if emulator is not None else emulated_output(spec, chip_x)
-        return agreement(read_window(np.asarray(out), at.output_lag, sel_x.shape[1]).sum(axis=1), float_sel)
+        counts = read_window(np.asarray(out), at.output_lag, sel_x.shape[1]).sum(axis=1)
+        agr = argmax_agreement(float_sel, counts)
+        return agr, {**agr.as_dict(), "count_correlation": count_correlation(counts, float_sel)}
 
     for cand in candidate_rules(srcs, rule, chip, replicas, both):
         if knobs.readout is not None and cand.readout != knobs.readout:
@@ -189,9 +193,8 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
                                         cand.relayed, cand.readout, rounding=knobs.rounding,
                                         both_dashes=cand.both_dashes)
         spec["dt"] = float(ref.dt)
-        agr = selection_agreement(spec, ctiming)
-        candidates[cand.name] = agr.as_dict()
-        if best is None or agr.agreement > best[0].agreement:
+        agr, candidates[cand.name] = selection_agreement(spec, ctiming)
+        if best is None or _better(agr, best[0]):
             best = (agr, cand, spec, records)
     agr, chosen, spec, records = best
     name, timing = chosen.name, readout_timing[chosen.readout]
@@ -209,7 +212,7 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
         spec["dt"] = float(ref.dt)
         if replicas > 1:
             name = f"{name}, {replicas} replicas"
-            candidates[name] = dict(selection_agreement(spec, timing).as_dict(),
+            candidates[name] = dict(selection_agreement(spec, timing)[1],
                                     note="the selection half is among this spec's calibration inputs")
     twin = spec_graph(spec, ref.dt)
     notes = list(timing.notes) + fold.notes()
@@ -230,11 +233,17 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
                        trained=trained, reference=ref, twin=twin, candidates=candidates, changes=changes, notes=notes,
                        calibration={"inputs": describe(options, knobs, x), "fit_samples": int(fit_x.shape[0]),
                                     "selection_samples": int(sel_x.shape[0]), "metric": "argmax agreement with the "
-                                    "float graph over clear-winner samples, of the network spec run in "
+                                    "float graph over its decided samples (kit.agreement), of the network spec run in "
                                     + ("the given emulator" if emulator is not None else "snncc's bit-exact emulator"),
                                     **({"replicas": replicas, "replica_inputs": describe_replicas(options, knobs)}
                                        if replicas > 1 else {})},
                        real_time=real_time)
+
+
+def _better(agr: ArgmaxAgreement, best: ArgmaxAgreement) -> bool:
+    """A candidate beats the best so far when its agreement is higher (an undefined one never beats; ties keep the
+    first listed, the simpler)."""
+    return agr.share is not None and (best.share is None or agr.share > best.share)
 
 
 def bias_notes(srcs: list[Source], records: list[PopulationRecord], timing: XyloTiming) -> list[str]:

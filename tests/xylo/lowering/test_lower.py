@@ -8,7 +8,8 @@ import pytest
 from snncc.errors import SnnccError
 from snncc.ir import LIF, LSTM, Dense, Graph, Input, Output, Readout
 from snncc.ir.simulate import simulate
-from snncc.targets.xylo import feed as measure
+from snncc.targets.kit.agreement import argmax_agreement
+from snncc.targets.xylo import feed
 from xylo_models import lower_with
 
 from xylo_models import chain, run_xylosim, spikes
@@ -56,8 +57,8 @@ def test_single_rule_fires_once_per_step_on_the_chip_and_follows_the_float_graph
     counts, out = chip_counts(low, x)
     assert out.spikes.max() == 1                   # a 16-bit V cannot hold two thresholds
     assert out.spikes.sum() > 500                   # active
-    agr = measure.agreement(counts, float_counts(model, x))
-    assert agr.counted > 30 and agr.agreement >= 0.75, agr.line()
+    agr = argmax_agreement(float_counts(model, x), counts)
+    assert agr.decided > 30 and agr.share >= 0.75, agr.text()
 
 
 def test_direct_rule_fires_several_spikes_per_step_and_says_so(model):
@@ -71,7 +72,7 @@ def test_direct_rule_fires_several_spikes_per_step_and_says_so(model):
 
 def test_auto_keeps_the_best_measured_candidate(model):
     low = lower_with(model, dict(QUICK, rule="auto"))
-    scores = {k: v["agreement"] for k, v in low.candidates.items()}
+    scores = {k: v["share"] for k, v in low.candidates.items()}
     assert len(scores) >= 3 and "direct" in scores
     assert scores[low.rule] == max(scores.values())
 

@@ -5,7 +5,8 @@ import pytest
 
 from snncc.errors import SnnccError
 from snncc.ir.simulate import simulate
-from snncc.targets.xylo import feed as measure
+from snncc.targets.kit.agreement import argmax_agreement
+from snncc.targets.xylo import feed
 from snncc.targets.xylo.lowering import sigma_delta as relays
 from snncc.targets.xylo.lowering.integers import COPY_WEIGHT
 from xylo_models import lower_with
@@ -130,8 +131,8 @@ def test_relayed_rule_runs_unchanged_in_xylosim_and_follows_the_float_graph(mode
     r0, r1 = relay[1]["neurons"]
     assert vendor.spikes[:, :, r0:r1].max() >= 2          # relays emit several events a step
     counts = low.read_output(vendor.output_spikes, x.shape[1]).sum(axis=1)
-    agr = measure.agreement(counts, simulate(model, x, record="spikes").spikes["out"].numpy().sum(axis=1))
-    assert agr.counted > 30 and agr.agreement >= 0.75, agr.line()
+    agr = argmax_agreement(simulate(model, x, record="spikes").spikes["out"].numpy().sum(axis=1), counts)
+    assert agr.decided > 30 and agr.share >= 0.75, agr.text()
 
 
 def test_auto_measures_relayed_candidates_with_the_readout_on_both_sides(model):
@@ -159,7 +160,7 @@ def test_readout_on_hidden_neurons_reads_one_step_later_and_is_exact_in_xylosim(
     spec, records = build_candidate(sources, 6, cand.method, cand.pairs, True, get_chip(None), timing, True, "hidden")
     assert [r.role for r in records][-1] == "output" and records[-1].method == "copy"
     readout = next(r for r in records if r.role == "readout")
-    res = run_xylosim({**spec, "dt": 1e-3}, measure.chip_window(x, timing.input_pad, timing.output_lag), record=True)
+    res = run_xylosim({**spec, "dt": 1e-3}, feed.chip_window(x, timing.input_pad, timing.output_lag), record=True)
     hid = res.spikes[:, :, readout.neurons[0]:readout.neurons[1]]
     assert hid.sum() > 50 and np.array_equal(res.output_spikes[:, 1:], hid[:, :-1])
 
@@ -229,8 +230,8 @@ def test_relays_at_both_dashes_run_unchanged_in_xylosim(model):
     for p in relay:                                                        # every relay set is active
         assert vendor.spikes[:, :, p.neurons[0]:p.neurons[1]].max() >= 2, p.name
     counts = low.read_output(vendor.output_spikes, x.shape[1]).sum(axis=1)
-    agr = measure.agreement(counts, simulate(model, x, record="spikes").spikes["out"].numpy().sum(axis=1))
-    assert agr.counted > 30 and agr.agreement >= 0.75, agr.line()
+    agr = argmax_agreement(simulate(model, x, record="spikes").spikes["out"].numpy().sum(axis=1), counts)
+    assert agr.decided > 30 and agr.share >= 0.75, agr.text()
 
 
 def test_relays_at_both_dashes_default_to_more_calibration_and_bad_values_are_refused(model):

@@ -13,7 +13,7 @@ import pytest
 from snncc.errors import SnnccError
 from snncc.ir.serialize import save_graph
 from snncc.ir.simulate import simulate
-from snncc.targets.xylo import feed as measure
+from snncc.targets.xylo import feed
 from snncc.targets.xylo.emulation.emulator import emulate
 from xylo_models import lower_with
 from snncc.targets.xylo.spec import XyloSpec
@@ -168,7 +168,7 @@ def test_compile_finetunes_a_replicated_spec(tmp_path, capsys, model):
 
     written = read_artefact(out)
     x = spikes(np.random.default_rng(8), 8, 40, 6, 0.2)
-    chip_x = measure.chip_window(x, written.input_pad, written.output_lag)
+    chip_x = feed.chip_window(x, written.input_pad, written.output_lag)
     vendor = XyloSimOracle(written.spec).run(chip_x)
     assert np.array_equal(vendor.output_spikes, emulate(written.spec, chip_x).output_spikes)
     # check measures the written replicated spec like any artefact
@@ -176,7 +176,7 @@ def test_compile_finetunes_a_replicated_spec(tmp_path, capsys, model):
     assert code == 0, err
     d = json.loads(out_text)
     assert d["artefact"]["target"] == "xylo" and not d["artefact"]["compiled_by_check"]
-    assert d["stages"][-1]["name"] == "chip"
+    assert d["stages"][-1]["key"] == "chip"
 
 
 def _two_layers(rng):

@@ -6,7 +6,7 @@ import pytest
 
 from snncc.errors import SnnccError
 from snncc.ir.simulate import simulate
-from snncc.targets.xylo import feed as measure
+from snncc.targets.xylo import feed
 from snncc.targets.xylo.lowering.structure import populations
 from snncc.targets.xylo.lowering.timing import solve_timing
 from snncc.targets.xylo.lowering.twin import spec_graph
@@ -90,14 +90,14 @@ def test_shifts_make_the_chip_order_exact(delays):
     g.node("hidden").max_spikes, g.node("hidden").fire_test, g.node("out").fire_test = 31, ">=", ">="
     x = spikes(rng, 6, 100, 6, 0.2)
     ref = simulate(g, x, record="spikes")
-    out = simulate(twin, measure.chip_window(x, timing.input_pad, timing.output_lag), record="spikes")
+    out = simulate(twin, feed.chip_window(x, timing.input_pad, timing.output_lag), record="spikes")
     assert ref.spikes["hidden"].numpy().max() > 1                            # several spikes per step happen
-    got = measure.read_window(out.spikes["output"].numpy(), timing.output_lag, 100)
+    got = feed.read_window(out.spikes["output"].numpy(), timing.output_lag, 100)
     want = ref.spikes["out"].numpy()
     assert want.sum() > 20
     np.testing.assert_array_equal(got, want)
     if timing.output_lag:                     # reading one step early is not exact
-        early = measure.read_window(out.spikes["output"].numpy(), timing.output_lag - 1, 100)
+        early = feed.read_window(out.spikes["output"].numpy(), timing.output_lag - 1, 100)
         assert not np.array_equal(early, want)
 
 
