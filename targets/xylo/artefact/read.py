@@ -55,6 +55,12 @@ def read_artefact(path: str | os.PathLike) -> WrittenXylo:
 
 
 def identify_artefact(path: str | os.PathLike) -> ArtefactIdentity | None:
-    """``ArtefactIdentity`` of the Xylo artefact at ``path`` (its four files, the source model's hash it records),
-    or None when ``path`` is no directory with an snncc Xylo manifest. Reads the manifest only."""
-    return MANIFEST_FORMAT.identify(path)
+    """``ArtefactIdentity`` of the Xylo artefact at ``path`` (its four files, the source model's hash it records, the
+    model record ``kit.artefact.model_record`` as ``model``: None for an artefact of an older snncc), or None when
+    ``path`` is no directory with an snncc Xylo manifest. Reads the manifest only."""
+    identity = MANIFEST_FORMAT.identify(path)
+    if identity is not None:
+        manifest = MANIFEST_FORMAT.manifest(path) or {}
+        model = manifest.get("model")
+        identity.model = model if isinstance(model, dict) else None
+    return identity

@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 
 from snncc.targets.kit import SnnccError
-from snncc.targets.kit.artefact import sha256_bytes as sha256
-from snncc.targets.kit.manifest import manifest_bytes
+from snncc.targets.kit.artefact import model_record, sha256_bytes as sha256
+from snncc.targets.kit.manifest import manifest_bytes, source_identity
 from snncc.targets.kit.writing import npz_bytes
 from snncc.targets.xylo.artefact.format import (
     BOARD_SCRIPT, FORMAT, FORMAT_VERSION, MANIFEST, README, SPEC, XYLOSIM_VERSION, XyloArtefact, candidate_text,
@@ -66,7 +66,8 @@ def build_manifest(low, spec, files: dict[str, bytes], source: str | None) -> di
                           "steps in all); the model's output step t is the chip's output step t + output_lag")},
         "quantization": record,
         "real_time": dict(low.real_time),
-        "source": {"file": meta.get("source_file") or source, "sha256": meta.get("source_sha256")},
+        "source": source_identity(meta, source),
+        "model": model_record(low.trained),
         "validation": {
             "spec_file": "checked: " + files.pop("__validation__").decode(),
             "emulator": ("agreement with the float graph of the chosen rule in snncc's emulator on the calibration "
