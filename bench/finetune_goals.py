@@ -135,8 +135,9 @@ def xylo_goal(args):
     from snncc.finetune.engine import TaskSet
     from snncc.finetune.inputs import split_inputs
     from snncc.frontends import LoadOptions, load_model
-    from snncc.targets.xylo.finetune import XYLO_LR, finetune_lowered
-    from snncc.targets.xylo.lowering import lower
+    from snncc.targets.xylo.finetune.tuning import XYLO_LR, finetune_lowered
+    from snncc.targets.xylo.lowering.lower import lower
+    from snncc.targets.xylo.options import XyloOptions
 
     path = NIR / "braille_noDelay_noBias_subtract.nir"
     command = ("snncc compile braille_noDelay_noBias_subtract.nir --dt 1e-4 --reset subtract --time-steps 256 "
@@ -155,7 +156,7 @@ def xylo_goal(args):
     if args.relays != "fast":
         options["relays"] = args.relays
         command += f" --relays {args.relays}"
-    low = lower(graph, options)
+    low = lower(graph, XyloOptions(**options))
     result = finetune_lowered(low, split, config=_config(args, XYLO_LR), task_sets=[task], progress=_progress("xylo"))
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
     rec = result.record.as_dict()
