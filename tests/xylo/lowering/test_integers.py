@@ -23,7 +23,7 @@ def test_lif_kernel_is_the_ir_response():
     g.node("w_rec").weight[:] = 0.0
     x = np.zeros((1, 30, 1))
     x[0, 0, 0] = 1
-    v = simulate(g, x, record="all").voltage["hidden"][0, :, 0].numpy()
+    v = simulate(g, x, record="all").voltage["hidden"][0, :, 0]
     np.testing.assert_allclose(v, kernels.lif_kernel(0.75, 0.85, np.arange(30)), rtol=1e-12)
 
 
@@ -41,7 +41,7 @@ def test_memoryless_readout_with_exact_kernels_reproduces_the_ir_neuron():
     rng = np.random.default_rng(4)
     g = chain(rng, n_in=5, n_hidden=8, n_out=2, alpha=0.75, beta=0.875)
     x = (rng.random((4, 120, 5)) < 0.2).astype(float)
-    ref = simulate(g, x, record="spikes").spikes["hidden"].numpy()
+    ref = np.asarray(simulate(g, x, record="spikes").spikes["hidden"])
     fit = kernels.two_exponential(0.75, 0.875, (2, 3))
     w_in, w_rec = g.node("w_in").weight, g.node("w_rec").weight
     i = np.zeros((2, 4, 8))
@@ -84,8 +84,8 @@ def test_identification_recovers_weights_that_explain_the_voltages():
     g = chain(rng, n_in=4, n_hidden=3, n_out=2, alpha=0.75, beta=0.875)
     x = (rng.random((40, 100, 4)) < 0.2).astype(float)
     r = simulate(g, x, record="all")
-    s = r.spikes["hidden"].numpy()
-    v_pre = r.voltage["hidden"].numpy() + s
+    s = np.asarray(r.spikes["hidden"])
+    v_pre = np.asarray(r.voltage["hidden"]) + s
     d = identify.design([x, identify.delayed(s, 1)], (0.75, 0.875), v_pre, np.ones(3), 1e9, False)
     fit = kernels.two_exponential(0.75, 0.875, (2, 3))
     exact = np.concatenate([fit.u[0] * g.node("w_in").weight[0], fit.u[0] * g.node("w_rec").weight[0]

@@ -131,7 +131,7 @@ def test_relayed_rule_runs_unchanged_in_xylosim_and_follows_the_float_graph(mode
     r0, r1 = relay[1]["neurons"]
     assert vendor.spikes[:, :, r0:r1].max() >= 2          # relays emit several events a step
     counts = low.read_output(vendor.output_spikes, x.shape[1]).sum(axis=1)
-    agr = argmax_agreement(simulate(model, x, record="spikes").spikes["out"].numpy().sum(axis=1), counts)
+    agr = argmax_agreement(np.asarray(simulate(model, x, record="spikes").spikes["out"]).sum(axis=1), counts)
     assert agr.decided > 30 and agr.share >= 0.75, agr.text()
 
 
@@ -181,7 +181,7 @@ def test_an_unrounded_lowering_changes_only_the_weights(model):
     from snncc.targets.xylo.lowering.twin import spec_graph
 
     def twin(spec, chip_x):
-        return simulate(spec_graph(spec, model.dt), chip_x, record="spikes").spikes["output"].numpy()
+        return np.asarray(simulate(spec_graph(spec, model.dt), chip_x, record="spikes").spikes["output"])
 
     opts = dict(QUICK, rule="relayed", replicas=2)       # replicas: one candidate, so both choose the same
     written = lower_with(model, opts)
@@ -230,7 +230,7 @@ def test_relays_at_both_dashes_run_unchanged_in_xylosim(model):
     for p in relay:                                                        # every relay set is active
         assert vendor.spikes[:, :, p.neurons[0]:p.neurons[1]].max() >= 2, p.name
     counts = low.read_output(vendor.output_spikes, x.shape[1]).sum(axis=1)
-    agr = argmax_agreement(simulate(model, x, record="spikes").spikes["out"].numpy().sum(axis=1), counts)
+    agr = argmax_agreement(np.asarray(simulate(model, x, record="spikes").spikes["out"]).sum(axis=1), counts)
     assert agr.decided > 30 and agr.share >= 0.75, agr.text()
 
 

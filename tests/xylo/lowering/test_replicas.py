@@ -89,7 +89,7 @@ def test_replicas_average_out_rounding_error(model):
     """Held-out output counts follow the float graph more closely with 4 copies than with one (same rule and
     calibration seed; deterministic)."""
     x = spikes(np.random.default_rng(3), 200, 80, 6, 0.15)
-    ref = simulate(model, x, record="spikes").spikes["out"].numpy().sum(axis=1)
+    ref = np.asarray(simulate(model, x, record="spikes").spikes["out"]).sum(axis=1)
     err = {}
     for k in (1, 4):
         low = lower_with(model, dict(QUICK, rule="relayed", replicas=k))
