@@ -11,14 +11,15 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from snncc.artefacts import ArtefactIdentity
+from snncc.targets.kit.artefact import ArtefactIdentity
 
 
 def identify_bundle(path: str | Path) -> ArtefactIdentity | None:
     """The bundle's identity, or None when ``path`` is no HDF5 file with /layer and /simulation."""
     import h5py
 
-    from snncc.targets.loihi.bundle.hdf5 import SNNCC_GROUP, _text
+    from snncc.targets.loihi.bundle.layout import SNNCC_GROUP
+    from snncc.targets.loihi.bundle.read import _text
 
     path = Path(path)
     if not path.is_file() or not h5py.is_hdf5(str(path)):
