@@ -10,7 +10,9 @@
     /snncc/{version, quantization, timing, validation, metadata (JSON strings), source_sha256,
             core_map (JSON, when mapped), netx_compat (what netx would run differently),
             portability (JSON: netx_runnable, line, reasons, best_netx_rule; bundle/portability.py),
-            liveness (JSON: every population's activity on the calibration inputs, float and Loihi)}
+            liveness (JSON: every population's activity on the calibration inputs, float and Loihi),
+            model (JSON: kit.artefact.model_record of the graph compiled: fingerprint, dt, resets; what
+            ``identify`` returns as ``identity.model``), finetune (JSON, a fine-tuned bundle's record)}
     metadata holds compile_options (timing, scale, allow_reset_change, time_steps: what check re-lowers
     with), input_copies / base_inputs (the data's channels, tiled by snncc) and input_shape (C, H, W)
 
@@ -28,5 +30,6 @@ from __future__ import annotations
 SNNCC_GROUP = "snncc"
 MAX_TEXT_BYTES = 64 * 2**20    # a text field (type, JSON record) of a bundle: one string of at most 64 MiB
 FORMAT_VERSION = 1
-RECORDS = ("metadata", "quantization", "timing", "validation", "netx_compat", "core_map", "portability", "liveness")
+RECORDS = ("metadata", "quantization", "timing", "validation", "netx_compat", "core_map", "portability", "liveness",
+           "model")
 KIND = "a Loihi bundle (.net, an HDF5 file)"

@@ -13,6 +13,7 @@ from __future__ import annotations
 from snncc.ir.graph import Graph
 from snncc.targets.base import FinetuneOptions
 from snncc.targets.kit import InternalError, SnnccError
+from snncc.targets.kit.artefact import model_record
 from snncc.targets.kit.finetuned import FinetunedArtefact, finetune_entry
 from snncc.targets.loihi.options import LoihiOptions
 
@@ -48,5 +49,5 @@ def finetune_artefact(graph: Graph, inputs, options: LoihiOptions, finetuning: F
                  "trained; the checks above compare the bundle with the adapted float graph (--finetune-out)")
     bundle = LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
                            timing=lowered.timing_record.as_dict(), validation=checks, notes=notes,
-                           finetune=finetune_entry(result.record))
+                           finetune=finetune_entry(result.record), model=model_record(graph))
     return FinetunedArtefact(bundle, result.record, adapted=result.adapted)

@@ -25,6 +25,7 @@ class LoihiArtefact:
     liveness: dict[str, Any] = field(default_factory=dict)      # populations' activity on the calibration inputs
     portability: dict[str, Any] = field(default_factory=dict)   # netx runs it as written? (bundle/portability.py)
     finetune: dict[str, Any] | None = None   # a fine-tuned bundle's record (kit.finetuned.finetune_entry)
+    model: dict[str, Any] | None = None      # kit.artefact.model_record of the graph as given (/snncc/model)
 
     def write(self, path: str | Path) -> None:
         extra = {"quantization": self.quantization, "timing": self.timing, "validation": self.validation}
@@ -34,6 +35,8 @@ class LoihiArtefact:
             extra["portability"] = self.portability
         if self.finetune is not None:
             extra["finetune"] = self.finetune
+        if self.model is not None:
+            extra["model"] = self.model
         write_bundle(self.network, path, extra=extra)
 
     def summary(self) -> dict[str, Any]:

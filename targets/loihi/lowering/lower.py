@@ -235,9 +235,11 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
     if network.metadata.get("output_shift"):
         notes.append(f"outputs appear {network.metadata['output_shift']} step(s) later than in the IR; tSample "
                      "includes them")
+    from snncc.targets.kit.artefact import model_record
+
     return LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
                          timing=lowered.timing_record.as_dict(), validation=validation, notes=notes,
-                         liveness=liveness, portability=portability)
+                         liveness=liveness, portability=portability, model=model_record(graph))
 
 
 def calibration_liveness(graph: Graph, lowered: LoweredModel) -> dict[str, Any]:

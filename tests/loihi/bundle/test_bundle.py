@@ -53,6 +53,23 @@ def test_bundle_round_trip_and_byte_identity(tmp_path):
         assert sorted(f["layer"].keys()) == ["0", "1", "2"] and "snncc" in f
 
 
+def test_the_bundle_records_the_graph_and_identify_returns_it(tmp_path):
+    """``/snncc/model`` holds ``kit.artefact.model_record`` of the graph compiled; ``identify`` returns it as
+    ``identity.model`` (None for a bundle that records none: another writer's, or an older snncc's)."""
+    from snncc.targets.kit.artefact import model_record
+
+    graph = small_graph(seed=1)
+    path = tmp_path / "m.net"
+    target.lower(graph, {"scale": "global"}).write(path)
+    identity = target.identify(path)
+    assert identity.model == model_record(graph) and identity.model["resets"] == {"hidden": "zero", "out": "zero"}
+    other = small_graph(seed=1)
+    other.node("hidden").reset = "subtract"
+    assert model_record(other)["graph_sha256"] != identity.model["graph_sha256"]
+    write_bundle(random_network(0), tmp_path / "plain.net")
+    assert target.identify(tmp_path / "plain.net").model is None
+
+
 def test_random_networks_with_per_synapse_delays_and_bias_round_trip(tmp_path):
     for seed in range(4):
         net = random_network(seed, split_exponents=seed >= 2)
