@@ -72,7 +72,7 @@ def main(argv=None) -> int:
     from snncc.frontends import LoadOptions, load_model
     from snncc.ir.nodes import LIF
     from snncc.ir.simulate import simulate
-    from snncc.targets.loihi.bundle.hdf5 import read_bundle
+    from snncc.targets.loihi.bundle.read import read_bundle
     from snncc.targets.loihi.emulation.emulator import PreparedNetwork
     from snncc.targets.loihi.checks.exactness import pad
 

@@ -75,8 +75,9 @@ def nir_goal(name, args):
     from snncc.finetune.inputs import split_inputs
     from snncc.finetune.teacher import run_teacher
     from snncc.frontends import LoadOptions, load_model
-    from snncc.targets.loihi.finetune import finetune_loihi, network_counts
+    from snncc.targets.loihi.finetune.run import finetune_loihi, network_counts
     from snncc.targets.loihi.lowering.lower import lower_model
+    from snncc.targets.loihi.options import LoihiOptions, LoihiStudyKnobs
 
     if name == "subtract":
         path, reset, options = NIR / "braille_noDelay_noBias_subtract.nir", "subtract", {
@@ -96,8 +97,8 @@ def nir_goal(name, args):
     task = TaskSet("task-like Braille (SYNTHETIC)", tx, None,
                    f"{args.task_samples} samples of the letters Space, A, E, I, O, U, Y, events th 1 merged per taxel")
     wall0, cpu0 = time.time(), time.process_time()
-    result = finetune_loihi(graph, options, split, config=_config(args), task_sets=[task],
-                            progress=_progress(name), search=not args.no_search)
+    result = finetune_loihi(graph, LoihiOptions(**options), split, config=_config(args), task_sets=[task],
+                            progress=_progress(name), knobs=LoihiStudyKnobs(search=not args.no_search))
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
     out = {"graph": path.name, "command": command, "options": options, "record": result.record.as_dict(),
            "validation_checks": {k: result.validation[k] for k in ("timing_exact", "quantized_params_exact",
@@ -108,7 +109,7 @@ def nir_goal(name, args):
                           voltage=False).counts
     rules = {}
     for rule in ("per-layer", "fine", "auto"):   # untuned, as the goals state them: without replicas
-        low = lower_model(graph, dict(options, scale=rule, t_sample=args.steps, replicas=None))
+        low = lower_model(graph, LoihiOptions(**dict(options, scale=rule, replicas=None)), t_sample=args.steps)
         counts = network_counts(low, args.steps, low.network, held)
         rules[rule] = {"rule": low.quant_record.rule, "reason": low.quant_record.reason,
                        **argmax_agreement(teacher, counts).as_dict()}
@@ -183,7 +184,8 @@ def rsnn_goal(args):
     from snncc.finetune.engine import TaskSet
     from snncc.finetune.inputs import split_inputs
     from snncc.frontends import load_model
-    from snncc.targets.loihi.finetune import finetune_loihi
+    from snncc.targets.loihi.finetune.run import finetune_loihi
+    from snncc.targets.loihi.options import LoihiOptions, LoihiStudyKnobs
     from snncc.training.pipeline import assigned
 
     if not args.rsnn or not args.rsnn_data:
@@ -208,8 +210,8 @@ def rsnn_goal(args):
     task = TaskSet("test split (labelled, SYNTHETIC)", x[test_idx], y[test_idx], f"{test_idx.size} test samples")
     options = {"scale": args.rsnn_scale} if args.rsnn_scale else {}
     wall0, cpu0 = time.time(), time.process_time()
-    result = finetune_loihi(graph, options, split, config=_config(args), task_sets=[task],
-                            progress=_progress("rsnn"), search=not args.no_search)
+    result = finetune_loihi(graph, LoihiOptions(**options), split, config=_config(args), task_sets=[task],
+                            progress=_progress("rsnn"), knobs=LoihiStudyKnobs(search=not args.no_search))
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
     acc = result.record.task[task.name]["accuracy"]
     out = {"checkpoint": str(args.rsnn), "data": str(args.rsnn_data), "options": options,

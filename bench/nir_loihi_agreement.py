@@ -54,7 +54,7 @@ from snncc.errors import SnnccError  # noqa: E402
 from snncc.frontends import load_model  # noqa: E402
 from snncc.ir.nodes import Input  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.bundle.hdf5 import read_bundle  # noqa: E402
+from snncc.targets.loihi.bundle.read import read_bundle  # noqa: E402
 from snncc.targets.loihi.emulation.emulator import emulate  # noqa: E402
 from snncc.targets.loihi.checks.exactness import pad  # noqa: E402
 
@@ -143,7 +143,8 @@ def measure(seed: int, case: str, model: BrailleRSNN, x: np.ndarray, labels, wor
 def real_graphs(samples: int, steps: int, density: float, workdir: Path, seed: int = 0) -> dict:
     """Per real graph and rule: argmax agreement and count correlation of the emulated bundle with the float graph."""
     from snncc.frontends import LoadOptions
-    from snncc.targets.loihi.checks.agreement import count_correlation, perturbed, random_inputs
+    from snncc.targets.kit.agreement import count_correlation, random_inputs
+    from snncc.targets.kit.reference import perturbed
 
     out = {}
     for name, extra in REAL.items():

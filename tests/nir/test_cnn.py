@@ -19,9 +19,10 @@ from snncc.frontends import LoadOptions, load_model
 from snncc.ir.nodes import LIF, Conv
 from snncc.ir.simulate import simulate
 from snncc.targets.loihi import lower_model
-from snncc.targets.loihi.bundle.hdf5 import read_bundle
+from snncc.targets.loihi.bundle.read import read_bundle
 from snncc.targets.loihi.emulation.emulator import emulate
 from snncc.targets.loihi.checks.exactness import lead_steps, loihi_spikes, pad
+from snncc.targets.loihi.options import LoihiOptions
 
 CNN = Path(__file__).resolve().parents[1] / "data" / "nir" / "cnn_sinabs.nir"
 
@@ -124,7 +125,7 @@ def test_small_cnn_loihi_bundle_emulates_the_quantized_ir_exactly(small_cnn, tmp
     assert code == 0, err
     assert "expanded to connection matrices" in stdout
     graph = load_model(small_cnn, LoadOptions())
-    lowered = lower_model(graph, {"t_sample": 40})
+    lowered = lower_model(graph, LoihiOptions(), t_sample=40)
     net = read_bundle(out)
     x = _frames(6, 40, 200, 0.15, seed=5)
     rec = lowered.timing_record

@@ -46,14 +46,6 @@ def test_the_check_can_fail():
     assert proc.stdout.strip() == "True", proc.stderr
 
 
-def test_loihi_declares_the_lowering_rules_choices():
-    from snncc.targets.loihi.capabilities import SCALE_RULES, TIMINGS
-    from snncc.targets.loihi.lowering.quantize import SCALE_RULES as LOWERING_RULES
-    from snncc.targets.loihi.lowering.timing import TIMINGS as LOWERING_TIMINGS
-
-    assert set(SCALE_RULES) == set(LOWERING_RULES) and TIMINGS == LOWERING_TIMINGS
-
-
 # -- declarations ------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Demo(TargetOptions):
