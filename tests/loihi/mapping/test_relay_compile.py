@@ -74,7 +74,7 @@ def test_copy_relays_are_exact_and_rate_relays_are_measured(compiled):
 def test_check_reports_what_relays_cost(compiled):
     g = _wide_graph()
     x = (np.random.default_rng(5).random((8, STEPS, N_IN)) < 0.05).astype(np.uint8)
-    labels = simulate(g, x).prediction.numpy()
+    labels = np.asarray(simulate(g, x).prediction)
     rec = target.check(g, x, labels, {})
     # the measured bundle is the written, relayed one; the same network without relays is beside it
     by_stage = rec.details["accuracy_by_stage"]
