@@ -121,7 +121,7 @@ def test_small_cnn_jetson_artefact_equals_the_ir(small_cnn, tmp_path, capsys):
 
 def test_small_cnn_loihi_bundle_emulates_the_quantized_ir_exactly(small_cnn, tmp_path, capsys):
     out = tmp_path / "cnn.net"
-    code, stdout, err = run_cli(["compile", small_cnn, "--target", "loihi", "-o", out], capsys)
+    code, stdout, err = run_cli(["compile", small_cnn, "--target", "loihi", "-o", out, "--time-steps", "40"], capsys)
     assert code == 0, err
     assert "expanded to connection matrices" in stdout
     graph = load_model(small_cnn, LoadOptions())

@@ -1,7 +1,7 @@
 """Is a path a Loihi bundle, and from which model? (the Loihi target's ``identify``)
 
-A bundle is one HDF5 file with ``/layer`` and ``/simulation`` groups (snncc's, lava-dl netx's or
-SLAYER v1's layout). snncc's bundles record the model file they were compiled from in
+A bundle is one HDF5 file with a ``/layer`` group (snncc's, lava-dl netx's or SLAYER v1's layout; a
+bundle missing its ``/simulation`` group is still recognised, so the reader can say what is missing). snncc's bundles record the model file they were compiled from in
 ``/snncc/source_sha256`` and ``/snncc/metadata`` (``source_file``), and the graph compiled in ``/snncc/model``
 (``kit.artefact.model_record``: returned as ``identity.model``; None in a bundle of an older snncc); other
 writers' do not. Nothing else is read here: the full reader (``read.read_bundle``) validates the bundle when it
@@ -17,7 +17,7 @@ from snncc.targets.kit.artefact import ArtefactIdentity
 
 
 def identify_bundle(path: str | Path) -> ArtefactIdentity | None:
-    """The bundle's identity, or None when ``path`` is no HDF5 file with /layer and /simulation."""
+    """The bundle's identity, or None when ``path`` is no HDF5 file with a /layer group."""
     import h5py
 
     from snncc.targets.loihi.bundle.layout import SNNCC_GROUP
@@ -28,7 +28,7 @@ def identify_bundle(path: str | Path) -> ArtefactIdentity | None:
         return None
     try:
         with h5py.File(str(path), "r") as f:
-            if not isinstance(f.get("layer"), h5py.Group) or not isinstance(f.get("simulation"), h5py.Group):
+            if not isinstance(f.get("layer"), h5py.Group):
                 return None
             sha, source, model = None, None, None
             group = f.get(SNNCC_GROUP)

@@ -9,6 +9,8 @@ import json
 from pathlib import Path
 
 import numpy as np
+
+from snncc.ir.timebase import DEFAULT_TIME_STEPS
 import pytest
 
 from snncc.frontends import LoadOptions, load_model
@@ -66,7 +68,7 @@ def test_check_without_labels_prints_agreement_and_the_noise_ceiling(tmp_path, c
                               "--density", "0.1", "--noise", "0.01", "--json"], capsys)
     assert code == 0, err
     rec = json.loads(out)
-    assert rec["samples"] == 6 and rec["steps"] == 100 and rec["ceiling"]["noise"] == 0.01   # the bundle's own length
+    assert rec["samples"] == 6 and rec["steps"] == DEFAULT_TIME_STEPS and rec["ceiling"]["noise"] == 0.01   # the time base
     assert 0 <= rec["argmax_agreement"] <= 1 and set(rec["details"]["layer_spike_agreement"]) == {"lif1.lif", "lif2"}
     a = rec["argmax"]
     assert a["decided"] + a["ties"] + a["silent"] == 6 and a["low"] <= rec["argmax_agreement"] <= a["high"]

@@ -44,10 +44,10 @@ def test_the_artefact_records_its_finetuning(tuned):
     json.dumps(summary, default=float)
     ft = summary["finetune"]
     assert ft["finetuned"] and ft["seed"] == 0 and ft["steps"] == 1      # 48 samples in batches of 64, 1 epoch
-    assert ft["inputs"]["held_out"] == 1000 and ft["inputs"]["source"] == "synthetic"
+    assert ft["inputs"]["held_out"] == 256 and ft["inputs"]["source"] == "synthetic"    # the floor for 48 samples
     for key in ("agreement_before", "agreement_after"):
         a = ft[key]
-        assert a["samples"] == 1000 and a["low"] <= a["share"] <= a["high"]
+        assert a["samples"] == 256 and a["low"] <= a["share"] <= a["high"]
     assert {"teacher", "training", "evaluating"} <= set(phases)
     # the bundle holds the same record, and the emulator runs it (bit-exact reader and checks)
     import h5py

@@ -33,7 +33,8 @@ def _braille(tmp_path, outliers=False, bias=False, name="g.nir"):
 
 
 def _compile(src, out, capsys, *extra):
-    code, stdout, err = run_cli(["compile", src, "--target", "loihi", "-o", out, *extra], capsys)
+    steps = [] if "--time-steps" in extra else ["--time-steps", str(STEPS)]    # the samples' length, not the default
+    code, stdout, err = run_cli(["compile", src, "--target", "loihi", "-o", out, *steps, *extra], capsys)
     return code, stdout, err
 
 
@@ -137,13 +138,13 @@ def test_check_reports_what_the_reset_change_costs(tmp_path, capsys):
     'reset' loss is exactly how many decisions change when Loihi resets to zero instead."""
     _, src, x = _braille(tmp_path)
     x = x[:60]
-    labels = simulate(load_model(src, LoadOptions(reset="subtract")), x).prediction.numpy().astype(np.int64)
+    labels = simulate(load_model(src, LoadOptions(reset="subtract")), x).prediction.astype(np.int64)
     np.savez(tmp_path / "d.npz", inputs=x, labels=labels)
     code, out, err = run_cli(["check", src, "--target", "loihi", "--data", tmp_path / "d.npz", "--reset", "subtract",
                               "--allow-reset-change", "--json"], capsys)
     assert code == 0, err
     rec = json.loads(out)
-    zero = simulate(load_model(src, LoadOptions(reset="zero")), x).prediction.numpy()
+    zero = simulate(load_model(src, LoadOptions(reset="zero")), x).prediction
     by_stage = rec["details"]["accuracy_by_stage"]
     assert rec["accuracy"]["float"] == by_stage["float_trained"] == 1.0
     assert by_stage["ir_reset_changed"] == pytest.approx(np.mean(zero == labels)) and by_stage["ir_reset_changed"] < 1.0

@@ -98,8 +98,10 @@ def test_report_energy_from_npy_with_limit(rsnn_bundle, tmp_path, capsys):
 
 
 def test_report_bad_inputs(rsnn_bundle, tmp_path, capsys):
-    code, _, err = run_cli(["report", rsnn_bundle], capsys)
-    assert code == 2 and "--energy" in err
+    code, out, err = run_cli(["report", rsnn_bundle], capsys)          # without --energy: the resource report
+    assert code == 0 and "core" in out.lower(), err
+    code, _, err = run_cli(["report", rsnn_bundle, "--samples", "3"], capsys)
+    assert code == 2 and "--samples" in err and "--energy" in err
     bad = tmp_path / "bad.npy"
     bad.write_bytes(b"not numpy")
     code, _, err = run_cli(["report", rsnn_bundle, "--energy", "--input", bad], capsys)
