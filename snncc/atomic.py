@@ -90,10 +90,11 @@ def check_destination(dest: str | os.PathLike, *, directory: bool = False) -> Pa
     if resolved == cwd or resolved in cwd.parents:
         raise SnnccError("is the current directory or one of its parents; give a new output name", file=shown,
                          field="output")
-    for protected in _inputs():
-        if resolved == protected:
-            raise SnnccError("is an input of this command; writing the output there would destroy it",
-                             file=shown, field="output")
+    inputs = _inputs()
+    if resolved in inputs:
+        raise SnnccError("is an input of this command; writing the output there would destroy it",
+                         file=shown, field="output")
+    for protected in inputs:
         if protected in resolved.parents and protected.is_dir():
             raise SnnccError(f"lies inside an input of this command ({protected}, a directory it reads); an output "
                              "there would change that input: write it elsewhere", file=shown, field="output")

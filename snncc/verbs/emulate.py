@@ -69,6 +69,9 @@ def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path,
 
     if record not in ("outputs", "all"):
         raise SnnccError("must be 'outputs' or 'all'", field="--record")
+    from snncc.atomic import check_destination
+
+    check_destination(output)            # an input named as the output is refused first, as for every writer
     if Path(output).suffix.lower() != ".npz":
         raise SnnccError("the results are an .npz (several arrays): name the file .npz", file=str(output), field="--output")
     path = Path(bundle)

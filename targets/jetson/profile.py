@@ -36,9 +36,8 @@ def profile_artefact(graph, artefact: Path, inputs: np.ndarray, progress=None):
     from snncc.targets.jetson.manifest import JETSON_FORMAT
     from snncc.targets.kit.agreement import chunk_size
     from snncc.targets.kit.compute import one_thread
-    from snncc.targets.kit.neurobench import Tally, from_tally
+    from snncc.targets.kit.neurobench import Tally, from_tally, graph_projections
     from snncc.targets.kit.profile import Profile, Resource
-    from snncc.measure.neurobench import graph_projections
 
     manifest = JETSON_FORMAT.open(artefact)
     step = next((v for v in manifest["variants"] if v.get("name") == "step"), None)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from snncc.measure.neurobench import (
     NeuroBenchFigures, Projection, Tally, activation_sparsity, connection_sparsity, figures, from_tally,
-    synaptic_operations,
+    graph_projections, is_pooling, synaptic_operations,
 )
 
 __all__ = ["NeuroBenchFigures", "Projection", "Tally", "activation_sparsity", "connection_sparsity", "figures",
-           "from_tally", "synaptic_operations"]
+           "from_tally", "graph_projections", "is_pooling", "synaptic_operations"]

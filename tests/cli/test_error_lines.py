@@ -29,7 +29,7 @@ def one_error_line(code: int, err: str, status: int = 2) -> str:
     (["compile"], "Missing argument"),
     (["compile", "m.pt"], "Missing option"),
     (["compile", "m.pt", "-o", "x", "--no-such-option"], "No such option"),
-    (["frobnicate"], "No such command"),
+    (["frobnicate"], "no such command"),
     (["train", "rsnn", "--data", "d", "-o", "x.pt", "--epochs", "many"], "--epochs"),
     (["emulate", "b.net", "-i", "x.npy", "-o", "o.npz", "--gap", "1.5"], "--gap"),
 ])

@@ -104,7 +104,7 @@ def cases(tmp_path_factory):
          "--storage"),
         (["hpo", "report", "s", "--storage", f"sqlite:///{d / 'none' / 'x.db'}"], None, "--storage"),
         (["bench", s(d / "jet"), "--samples", "0"], "snncc bench", "--samples"),
-        (["emulate", s(d / "m.net"), "-i", s(d / "x.npy"), "-o", o, "--gap", "5"], "snncc emulate", "--gap"),
+        (["emulate", s(d / "m.net"), "-i", s(d / "x.npy"), "-o", s(d / "o.npz"), "--gap", "5"], "snncc emulate", "--gap"),
         (["report", s(d / "m.net"), "--limit", "3"], "snncc report", "--limit"),
         (["data", "synth", "-o", o, "--release", "3"], "snncc data synth", "--release"),
         (["compile", s(d / "tau0.nir"), "-o", o, "--dt", "0.001"], s(d / "tau0.nir"), "node 'lif'.tau_mem"),

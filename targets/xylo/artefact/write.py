@@ -46,14 +46,14 @@ def _file_runs_the_same(spec, data: bytes, n_in: int, steps: int) -> str:
 
 
 def build_manifest(low, spec, files: dict[str, bytes], source: str | None) -> dict[str, Any]:
-    import snncc   # snncc's version: the kit does not state it (told the lead)
+    from snncc.targets.kit import SNNCC_VERSION
 
     chip = get_chip(low.chip)
     meta = low.trained.metadata
     record = low.record()
     chosen = low.candidates.get(low.rule, {})
     return {
-        "format": FORMAT, "format_version": FORMAT_VERSION, "snncc_version": snncc.__version__,
+        "format": FORMAT, "format_version": FORMAT_VERSION, "snncc_version": SNNCC_VERSION,
         "chip": {"key": chip.key, "name": chip.name, "part_number": chip.part_number},
         "dt": float(spec.dt),
         "network": {"inputs": spec.n_in, "hidden": spec.n_hidden, "outputs": spec.n_out,
@@ -73,7 +73,7 @@ def build_manifest(low, spec, files: dict[str, bytes], source: str | None) -> di
             "emulator": ("agreement with the float graph of the chosen rule in snncc's emulator on the calibration "
                          f"inputs' selection half: {candidate_text(chosen)}"),
         },
-        "checked_with": {"snncc": snncc.__version__, "numpy": np.__version__,
+        "checked_with": {"snncc": SNNCC_VERSION, "numpy": np.__version__,
                          "emulator": f"snncc's bit-exact emulator (targets/xylo/emulation/emulator.py), equal to xylosim "
                                      f"{XYLOSIM_VERSION} spike for spike in snncc's test suite",
                          "board": "not exercised (no board, no samna here)"},
