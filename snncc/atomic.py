@@ -7,7 +7,7 @@ Rules every snncc writer follows (files through :func:`atomic_path`, directories
   only once complete, so a crash, an error, a full disk or Ctrl-C never leaves a half-written
   output at the destination;
 * a destination that resolves (after symlinks) to an input of the running command, a directory
-  that contains one, or a path inside an input directory (an artefact directory the command reads)
+  that contains one, or a path inside an artefact directory the command reads (:func:`seal_directory`)
   is refused (:func:`protecting` declares the inputs; a file the command reads from inside an input
   directory, such as a data set's pickles, becomes one as it is read: :func:`record_input`);
 * ``.``/``..``, the current directory or one of its parents, and an existing directory named as a
@@ -41,6 +41,8 @@ from snncc.errors import SnnccError
 _PROTECTED: contextvars.ContextVar[tuple[Path, ...]] = contextvars.ContextVar("snncc_protected", default=())
 # files read so far by the command inside its outermost ``protecting`` block (None: outside any)
 _READ: contextvars.ContextVar[list[Path] | None] = contextvars.ContextVar("snncc_read", default=None)
+# artefact directories the running command reads (sealed: no output may be written inside them)
+_SEALED: contextvars.ContextVar[list[Path] | None] = contextvars.ContextVar("snncc_sealed", default=None)
 _LEFTOVER = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.[^.]*\.(?P<kind>part|old)$")
 
 
@@ -58,9 +60,12 @@ def protecting(paths: Iterable[str | os.PathLike]) -> Iterator[None]:
     resolved = tuple(Path(p).resolve() for p in paths)
     token = _PROTECTED.set(_PROTECTED.get() + resolved)
     read_token = _READ.set([]) if _READ.get() is None else None
+    sealed_token = _SEALED.set([]) if _SEALED.get() is None else None
     try:
         yield
     finally:
+        if sealed_token is not None:
+            _SEALED.reset(sealed_token)
         if read_token is not None:
             _READ.reset(read_token)
         _PROTECTED.reset(token)
@@ -73,6 +78,15 @@ def record_input(path: str | os.PathLike) -> None:
     read = _READ.get()
     if read is not None:
         read.append(Path(path).resolve())
+
+
+def seal_directory(path: str | os.PathLike) -> None:
+    """``path`` is an artefact directory the running command reads: until its outermost ``protecting`` block
+    ends, no output may be written inside it -- not over one of its files, nor beside them (a data set's
+    directory, which commands may write into, is not sealed). Outside any such block nothing is recorded."""
+    sealed = _SEALED.get()
+    if sealed is not None:
+        sealed.append(Path(path).resolve())
 
 
 def _inputs() -> tuple[Path, ...]:
@@ -94,10 +108,11 @@ def check_destination(dest: str | os.PathLike, *, directory: bool = False) -> Pa
     if resolved in inputs:
         raise SnnccError("is an input of this command; writing the output there would destroy it",
                          file=shown, field="output")
+    for sealed in _SEALED.get() or ():
+        if sealed in resolved.parents:
+            raise SnnccError(f"lies inside an artefact this command reads ({sealed}); an output there would change "
+                             "that artefact: write it elsewhere", file=shown, field="output")
     for protected in inputs:
-        if protected in resolved.parents and protected.is_dir():
-            raise SnnccError(f"lies inside an input of this command ({protected}, a directory it reads); an output "
-                             "there would change that input: write it elsewhere", file=shown, field="output")
         if directory and resolved in protected.parents:
             raise SnnccError(f"contains an input of this command ({protected}); replacing it would delete that input",
                              file=shown, field="output")

@@ -261,7 +261,7 @@ def test_every_verb_taking_progress_reports_through_a_plain_callable(synth_dir, 
 
     taking = {name for name in api.__all__ if "progress" in inspect.signature(getattr(api, name)).parameters}
     assert taking == {"data_synth", "data_encode", "data_analyse", "train", "check", "emulate", "report", "bench",
-                      "compile"}
+                      "compile", "compare"}
     seen: dict[str, list] = {}
 
     p = Calls()
@@ -309,6 +309,10 @@ def test_every_verb_taking_progress_reports_through_a_plain_callable(synth_dir, 
     p = Calls()
     api.bench(tmp_path / "j", samples=2, repeats=1, warmup_passes=1, timed_passes=1, progress=p)
     seen["bench"] = p.check()
+    p = Calls()
+    api.compare(small_rsnn_checkpoint, targets="jetson", samples=3, time_steps=20, progress=p)
+    seen["compare"] = p.check()
+    assert {c[2] for c in seen["compare"]} >= {"the float graph", "jetson: compiling", "jetson: measuring agreement"}
     assert set(seen) == taking
     for name in ("check", "emulate", "report"):
         assert seen[name][-1][0] == seen[name][-1][1], (name, seen[name])

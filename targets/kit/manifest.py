@@ -26,7 +26,7 @@ from typing import Any
 
 from snncc.errors import SnnccError
 from snncc.targets.kit.artefact import ArtefactIdentity, file_sha256, is_plain_directory, is_plain_file, member
-from snncc.targets.kit.writing import atomic_dir, foreign_entries
+from snncc.targets.kit.writing import atomic_dir, foreign_entries, seal_directory
 
 MANIFEST = "manifest.json"
 MAX_MANIFEST_BYTES = 1 << 22
@@ -102,6 +102,7 @@ class ManifestFormat:
             raise SnnccError("does not exist", file=str(path), field="artefact")
         if not is_plain_directory(path):
             raise SnnccError(f"is not {self.kind}", file=str(path), field="artefact")
+        seal_directory(path)          # read by this command: no output of it may land inside
         member(path, self.manifest_name)
         manifest = self.manifest(path)
         if manifest is None:
@@ -128,6 +129,7 @@ class ManifestFormat:
         manifest = self.manifest(path)
         if manifest is None:
             return None
+        seal_directory(path)
         source = manifest.get("source") if isinstance(manifest.get("source"), dict) else {}
         try:
             names = sorted(self.own_files(manifest))

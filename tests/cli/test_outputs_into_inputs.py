@@ -29,7 +29,7 @@ def _refused(args, capsys, field: str, rule: str) -> None:
 def test_outputs_inside_an_input_artefact_are_refused(jetson_artefact, capsys):
     d = jetson_artefact
     before = {p.name: p.read_bytes() for p in (d / "j").iterdir()}
-    for out, rule in (("model.onnx", "is an input of this command"), ("new.npz", "lies inside an input of this command")):
+    for out, rule in (("model.onnx", "is an input of this command"), ("new.npz", "lies inside an artefact this command reads")):
         _refused(["run", d / "j", "-i", d / "in12.npy", "-o", d / "j" / out], capsys, "output", rule)
     assert {p.name: p.read_bytes() for p in (d / "j").iterdir()} == before
 

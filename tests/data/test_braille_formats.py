@@ -7,6 +7,8 @@ import pickle
 import numpy as np
 import pandas as pd
 import pytest
+
+from snncc_test_helpers import without_progress
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -151,7 +153,7 @@ def test_bad_raw_files_through_the_cli(tmp_path, capsys, obj, field, rule):
     out = tmp_path / "o.npz"
     code, _, err = cli(["data", "encode", p, "-t", "1", "-o", out], capsys)
     assert code == 2
-    line = err.strip()
+    line = without_progress(err).strip()
     assert line.count("\n") == 0 and line.startswith(f"snncc: error: {p}")
     assert "Traceback" not in err
     if field:

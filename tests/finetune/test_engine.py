@@ -164,7 +164,7 @@ def test_model_split_of_data_and_of_random_inputs():
     s = model_split(g, x, None, seed=1, data="d.npz")
     assert (s.held_out.size, s.validation.size, s.train.size) == (20, 10, 50) and s.source == "data"
     r = model_split(g, time_steps=STEPS, density=0.3, samples=7, seed=2)
-    assert r.x.shape == (7 + 500 + 1000, STEPS, 6) and r.train.size == 7 and abs(r.density - 0.3) < 1e-12
+    assert r.x.shape == (7 + 128 + 256, STEPS, 6) and r.train.size == 7 and abs(r.density - 0.3) < 1e-12   # floors
     with pytest.raises(SnnccError) as e:
         model_split(g, x, None, time_steps=STEPS + 1, data="d.npz")
     assert e.value.field == "--time-steps" and e.value.file == "d.npz"

@@ -67,15 +67,18 @@ def test_graph_the_target_cannot_express_is_one_line(tmp_path, capsys, graphs):
 
 
 def test_snn_without_length_runs_the_default_steps_on_both_targets(tmp_path, capsys, graphs):
-    """A model that states no recording length: 100 steps on Jetson and on Loihi, said in one line."""
+    """A model that states no recording length: the one default (256 steps) on Jetson and on Loihi, said in one line."""
+    from snncc.ir.timebase import DEFAULT_TIME_STEPS
+
     g = graphs["ffsnn"].copy()
     del g.metadata["recording_length_s"]
     save_graph(g, tmp_path / "m.snnir")
-    rule = "100 steps, snncc's default for a model that states no recording length (pass --time-steps to set it)"
+    rule = (f"{DEFAULT_TIME_STEPS} steps, snncc's default for a model that states no recording length (pass "
+            "--time-steps to set it)")
     code, out, err = run_cli(["compile", tmp_path / "m.snnir", "--target", "jetson", "-o", tmp_path / "out",
                               "--json"], capsys)
     assert code == 0, err
-    assert any(f"model.onnx is unrolled for T = 100 ({rule})" in n for n in json.loads(out)["notes"]), out
+    assert any(f"model.onnx is unrolled for T = {DEFAULT_TIME_STEPS} ({rule})" in n for n in json.loads(out)["notes"]), out
     code, out, err = run_cli(["compile", tmp_path / "m.snnir", "-o", tmp_path / "out.net", "--json"], capsys)
     assert code == 0, err
     rec = json.loads(out)

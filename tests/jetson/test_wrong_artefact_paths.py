@@ -36,7 +36,7 @@ def test_emulate_map_report_inspect_of_a_jetson_artefact_say_what_it_is(artefact
                         "(`snncc run` runs it, `snncc bench` times it, `snncc check MODEL --artefact` measures it)"), line
     for args in (["inspect", jetson_dir], ["compile", jetson_dir, "-o", tmp_path / "c.net"]):
         line = _line(args, capsys)
-        assert line.startswith(f"snncc: error: {jetson_dir}: model: is Jetson artefact (ONNX opset"), line
+        assert line.startswith(f"snncc: error: {jetson_dir}: model: is a Jetson artefact (ONNX opset"), line
         assert "(target jetson): `snncc run` runs it" in line and line.endswith("; it is not a model file"), line
     assert not (tmp_path / "o.npz").exists() and not (tmp_path / "c.net").exists()
 
