@@ -317,7 +317,7 @@ def target_options(target: Target, given: Given = None, capability: str | Sequen
     if isinstance(given, kind):
         return given
     steps = _values(kind, given).get("time_steps")
-    if isinstance(steps, (int, float)) and not isinstance(steps, bool):
+    if isinstance(steps, (int, float)) and not isinstance(steps, bool) and steps > 1:
         from snncc.limits import check_time_steps
 
         check_time_steps(float(steps), "this value", field="--time-steps")   # the cap every sample obeys
