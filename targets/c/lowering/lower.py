@@ -60,56 +60,63 @@ def _validate(art, net, rule_text: str) -> str:   # noqa: ANN001
             f"(every population's spikes, current, voltage)")
 
 
-def lower_artefact(graph, options: COptions, *, progress=None):   # noqa: ANN001
-    """The ``CArtefact`` of ``graph`` (module doc)."""
-    from snncc.targets.c.artefact.package import CArtefact, artefact_files, base_manifest
-    from snncc.targets.c.artefact.readme import readme
-    from snncc.targets.c.estimate.memory import fit, memory_record
-    from snncc.targets.c.estimate.parts import PARTS
+def lower_network(graph, options: COptions):   # noqa: ANN001
+    """(the integer network, the rule's ``Selection``, steps, the time-base rule) of ``graph``; refusals name the
+    model file."""
     from snncc.targets.c.lowering.choose import lowered_network
     from snncc.targets.c.lowering.structure import structure
-    from snncc.targets.kit.inputs import graph_layout
     from snncc.targets.kit.timebase import sample_steps
 
-    report = progress or (lambda done, total, phase: None)
     steps, steps_rule = sample_steps(graph, options.time_steps)
-    report(0, 3, "structure and weight rules")
     try:
         st = structure(graph)
         net, selection = lowered_network(st, graph, options.rule or "auto", steps, options.seed)
     except SnnccError as err:
         raise (err.with_file(options.source) if options.source else err) from None
-    report(1, 3, "writing the C")
+    return net, selection, steps, steps_rule
+
+
+def package_network(graph, net, options: COptions, selection, steps_rule: str, *,  # noqa: ANN001
+                    extra: dict[str, Any] | None = None, notes: list[str] | None = None):
+    """The checked ``CArtefact`` of ``net`` (module doc); ``extra``: further manifest entries (fine-tuning)."""
+    from snncc.targets.c.artefact import csource
+    from snncc.targets.c.artefact.package import CArtefact, artefact_files, base_manifest
+    from snncc.targets.c.artefact.readme import readme
+    from snncc.targets.c.estimate.memory import fit, memory_record
+    from snncc.targets.c.estimate.parts import PARTS
+    from snncc.targets.kit.inputs import graph_layout
+
     layout = graph_layout(graph)
     part_key = options.mcu or DEFAULT_PART
-    notes: list[str] = []
-    if "recording" not in steps_rule and steps_rule != "--time-steps":
-        notes.append(f"a sample lasts {steps_rule}")
-    # the files are generated twice: the memory figures need snn.c's text, the README the figures
-    from snncc.targets.c.artefact import csource
-
     memory = memory_record(net, csource.source(net, {}))
     part = {"key": part_key, **fit(memory, PARTS[part_key])}
     manifest = base_manifest(
         net, graph, options.source, {"rule": net.rule, **ARITHMETIC}, selection.as_dict(),
-        {"steps": steps, "rule": steps_rule, "dt": float(graph.dt)}, memory, part, {}, {
+        {"steps": net.steps, "rule": steps_rule, "dt": float(graph.dt)}, memory, part, {}, {
             "width": layout.width, "input_copies": layout.copies, "base_inputs": layout.base,
             "input_shape": list(layout.frame) if layout.frame else None})
+    from snncc.targets.kit.inputs import to_jsonable
+
+    manifest.update(to_jsonable(extra or {}))
     manifest["validation"] = {"emulator": "pending", "c": (
         "the C equals the emulator bit for bit: proved by snncc's test suite (host gcc; Cortex-M4 in QEMU) and "
         "repeated by `snncc run DIR --target c --backend host|qemu`; compiling needed no C compiler")}
     files, full = artefact_files(net, manifest, readme(net, manifest))
-    art = CArtefact(files, full, net, notes)
-    report(2, 3, "checking the written network")
     text = full["source"].get("file") or full["model"]["graph_sha256"]
-    manifest["validation"]["emulator"] = _validate(art, net, text)
+    manifest["validation"]["emulator"] = _validate(CArtefact(files, full, net), net, text)
     files, full = artefact_files(net, manifest, readme(net, manifest))
-    report(3, 3, "done")
-    return CArtefact(files, full, net, notes)
+    return CArtefact(files, full, net, list(notes or []))
 
 
-def artefact_settings(options: COptions) -> dict[str, Any]:
-    return {k: v for k, v in options.as_dict().items() if v is not None}
+def lower_artefact(graph, options: COptions, *, progress=None):   # noqa: ANN001
+    """The ``CArtefact`` of ``graph`` (module doc)."""
+    report = progress or (lambda done, total, phase: None)
+    report(0, 2, "structure and weight rules")
+    net, selection, _, steps_rule = lower_network(graph, options)
+    report(1, 2, "writing and checking the C")
+    art = package_network(graph, net, options, selection, steps_rule)
+    report(2, 2, "done")
+    return art
 
 
-__all__ = ["lower_artefact", "ARITHMETIC"]
+__all__ = ["lower_artefact", "lower_network", "package_network", "ARITHMETIC"]

@@ -90,9 +90,15 @@ def quantize(st: Structure, rule: str, steps: int) -> CNetwork:
     projs: list[CProjection] = []
     for fq in st.projections:
         target = pops[fq.target]
-        w_units = np.asarray(fq.matrix.toarray(), np.float64).T * 2.0 ** target.frac_bits   # (n_src, n_tgt)
-        e = _exponents(w_units, limit, per_neuron)
-        w = np.clip(np.rint(w_units / np.exp2(e)[None, :]), -limit, limit).astype(np.int16)
+        m = fq.matrix.T.tocsr()                                   # (n_src, n_tgt) fan-out rows, float
+        unit = 2.0 ** target.frac_bits
+        peak = np.zeros(m.shape[1])
+        if m.nnz:
+            np.maximum.at(peak, m.indices, np.abs(m.data) * unit)
+        e = _exponents(peak[None, :], limit, per_neuron)
+        w = np.zeros(m.shape, np.int16)
+        rows = np.repeat(np.arange(m.shape[0]), np.diff(m.indptr))
+        w[rows, m.indices] = np.clip(np.rint(m.data * unit / np.exp2(e[m.indices])), -limit, limit).astype(np.int16)
         index_bytes = 2 if target.n <= 65535 else 4
         projs.append(CProjection(source=fq.source, target=fq.target, delay=int(fq.delay), bits=bits, weights=w,
                                  exponent=e, layout=dense_or_sparse(w, index_bytes, bits), origin=fq.origin))
