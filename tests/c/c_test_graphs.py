@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from snncc.ir.graph import Graph
-from snncc.ir.nodes import LIF, Dense, Input, Output, Readout
+from snncc.ir.nodes import LIF, Conv, Dense, Input, Output, Readout
 from snncc.ir.validate import validate
 
 NIR_DIR = Path(__file__).resolve().parents[1] / "data" / "nir"
@@ -70,6 +70,45 @@ def random_graph(seed: int, *, n_in: int = 5, n_hidden: int = 6, n_out: int = 3,
     g.connect("w_out", "out", delay=int(rng.choice(delays)))
     g.connect("out", "readout")
     g.connect("readout", "output")
+    return validate(g)
+
+
+EXACT_DT = 1e-3
+
+
+def dyadic(rng, shape, step=0.25, most=6):
+    return rng.integers(-most, most + 1, shape) * step
+
+
+def exact_graph() -> Graph:
+    """A graph of every structure feature whose parameters the integer grid holds exactly (dyadic weights, thresholds
+    and biases; Euler decays 0.5 and 0.75): over 8 steps the emulator equals the IR reference times 2**F."""
+    rng = np.random.default_rng(0)
+    g = Graph(dt=EXACT_DT, name="exact")
+    g.add("input", Input(width=16))
+    # input (1 x 4 x 4) -> conv 2 channels 3x3 pad 1 -> sum pool 2x2 -> lif_a (2 x 2 x 2 = 8)
+    g.add("conv", Conv(weight=dyadic(rng, (2, 1, 3, 3)), in_shape=(1, 4, 4), stride=1, padding=1))
+    g.add("pool", Conv(weight=np.ones((2, 1, 2, 2)), in_shape=(2, 4, 4), stride=2, groups=2))
+    g.add("lif_a", LIF(n=8, tau_syn=2 * EXACT_DT, tau_mem=4 * EXACT_DT, threshold=1.0, reset="subtract", refractory=2,
+                       discretisation="euler"))
+    # input -> dense1 (bias, delay 2 after it) -> dense2 (bias) -> lif_b ; lif_a -> lif_b directly is not the same
+    # width, so lif_a -> dense3 (delay 1) -> lif_b, and lif_b <- lif_b recurrent through dense4 (delay 1)
+    g.add("dense1", Dense(weight=dyadic(rng, (6, 16)), bias=dyadic(rng, 6, 0.125, 2)))
+    g.add("dense2", Dense(weight=dyadic(rng, (8, 6)), bias=dyadic(rng, 8, 0.125, 2)))
+    g.add("dense3", Dense(weight=dyadic(rng, (8, 8))))
+    g.add("dense4", Dense(weight=dyadic(rng, (8, 8), 0.125)))
+    g.add("lif_b", LIF(n=8, tau_syn=2 * EXACT_DT, tau_mem=4 * EXACT_DT, threshold=np.where(np.arange(8) % 2, 1.0, 0.5),
+                       reset="zero", refractory=1, discretisation="euler", bias=dyadic(rng, 8, 0.125, 2),
+                       bias_placement="voltage"))
+    g.add("lif_c", LIF(n=8, tau_syn=2 * EXACT_DT, tau_mem=4 * EXACT_DT, threshold=1.0, reset="subtract", discretisation="euler",
+                       bias=np.full(8, 0.25), bias_placement="current", max_spikes=3, fire_test=">="))
+    g.add("readout", Readout(width=8))
+    g.add("output", Output(width=8))
+    for u, v, d in (("input", "conv", 0), ("conv", "pool", 1), ("pool", "lif_a", 0), ("input", "dense1", 0),
+                    ("dense1", "dense2", 2), ("dense2", "lif_b", 1), ("lif_a", "dense3", 1), ("dense3", "lif_b", 0),
+                    ("lif_b", "dense4", 1), ("dense4", "lif_b", 0), ("lif_b", "lif_c", 0), ("lif_a", "lif_c", 2),
+                    ("lif_c", "readout", 0), ("readout", "output", 0)):
+        g.connect(u, v, delay=d)
     return validate(g)
 
 

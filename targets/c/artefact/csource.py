@@ -19,6 +19,7 @@ from snncc.targets.c.lowering.network import CNetwork, CPopulation, CProjection
 from snncc.targets.c.options import COUNT_LIMIT, DECAY_BITS
 
 PER_LINE = 20
+UNROLL = 4                  # dense fan-out rows are added 4 weights per loop iteration
 
 
 def _comment(text: str) -> str:
@@ -168,8 +169,12 @@ def _deliver(net: CNetwork, k: int, q: CProjection) -> list[str]:
         lines.append(f"            const int32_t c = state->cnt_{s}[slot][k];")
     if q.layout == "dense":
         ctype = "int8_t" if q.bits == 8 else "int16_t"
-        lines += [f"            const {ctype} *row = &w{k}[i * {n_t}u];", "            uint32_t j;",
-                  f"            for (j = 0; j < {n_t}u; j++) state->acc{k}[j] += {mult}row[j];"]
+        lines += [f"            const {ctype} *row = &w{k}[i * {n_t}u];", f"            int32_t *acc = state->acc{k};"]
+        whole = n_t - n_t % UNROLL
+        if whole:
+            body = " ".join(f"acc[j + {u}u] += {mult}row[j + {u}u];" for u in range(UNROLL))
+            lines += ["            uint32_t j;", f"            for (j = 0; j < {whole}u; j += {UNROLL}u) {{ {body} }}"]
+        lines += [f"            acc[{j}] += {mult}row[{j}];" for j in range(whole, n_t)]
     else:
         lines += ["            uint32_t e;",
                   f"            for (e = w{k}_ptr[i]; e < w{k}_ptr[i + 1u]; e++) state->acc{k}[w{k}_idx[e]] += "

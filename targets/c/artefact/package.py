@@ -54,8 +54,9 @@ class CArtefact:
                f"  rule {m['arithmetic']['rule']}: {m['selection']['reason']}"]
         for name, c in m["selection"].get("candidates", {}).items():
             share = "undefined" if c["agreement"] is None else f"{c['agreement']:.3f}"
-            out.append(f"    {name:<14} agreement {share} ({c['agreeing']}/{c['decided']}), weights "
-                       f"{c['weight_bytes']:,} bytes")
+            fits = "" if c.get("fits", True) else f", does not fit {m['part']['part']}"
+            out.append(f"    {name:<14} agreement {share} ({c['agreeing']}/{c['decided']}), constant data "
+                       f"{c.get('flash_data_bytes', c['weight_bytes']):,} bytes{fits}")
         out.append(f"  flash data {mem['flash_data_bytes']:,} bytes (weights {mem['flash_weights_bytes']:,}), RAM "
                    f"(state) {mem['ram_state_bytes']:,} bytes; {part['part']}: flash {100 * part['flash_share']:.1f} %, "
                    f"RAM {100 * part['ram_share']:.1f} % ({'fits' if part['fits'] else 'DOES NOT FIT'}; code not "

@@ -63,14 +63,17 @@ def _validate(art, net, rule_text: str) -> str:   # noqa: ANN001
 def lower_network(graph, options: COptions):   # noqa: ANN001
     """(the integer network, the rule's ``Selection``, steps, the time-base rule) of ``graph``; refusals name the
     model file."""
+    from snncc.targets.c.estimate.parts import PARTS
     from snncc.targets.c.lowering.choose import lowered_network
     from snncc.targets.c.lowering.structure import structure
     from snncc.targets.kit.timebase import sample_steps
 
     steps, steps_rule = sample_steps(graph, options.time_steps)
+    part = PARTS[options.mcu or DEFAULT_PART]
     try:
         st = structure(graph)
-        net, selection = lowered_network(st, graph, options.rule or "auto", steps, options.seed)
+        net, selection = lowered_network(st, graph, options.rule or "auto", steps, options.seed,
+                                         part["flash_bytes"], part["name"])
     except SnnccError as err:
         raise (err.with_file(options.source) if options.source else err) from None
     return net, selection, steps, steps_rule

@@ -12,7 +12,7 @@ from c_test_graphs import spikes
 def test_an_exactly_representable_graph_loses_nothing(tmp_path):
     from snncc.targets import get_target
 
-    from lowering.test_structure import exact_graph   # the dyadic graph of the structure tests
+    from c_test_graphs import exact_graph
 
     graph = exact_graph()
     target = get_target("c")

@@ -64,3 +64,14 @@ def test_auto_measures_and_chooses_16_bit_only_where_it_agrees_better():
             op.weight = np.round(op.weight * 4) / 4
     kept = choose(structure(exact), exact, "auto", 30, 7)
     assert kept.rule == "per-neuron" and "no rule agreed better" in kept.reason
+
+
+def test_auto_never_chooses_a_rule_that_does_not_fit_the_parts_flash():
+    from snncc.frontends import LoadOptions, load_model
+    from snncc.targets.c.lowering.choose import choose
+    from snncc.targets.c.lowering.structure import structure
+
+    graph = load_model(NIR_DIR / "braille_zero_2023.nir", LoadOptions(dt=1e-4))
+    picked = choose(structure(graph), graph, "auto", 40, 7, flash_limit=3000, part="a 3 kB part")
+    assert picked.rule == "per-neuron" and "would not fit a 3 kB part's flash" in picked.reason
+    assert not picked.candidates["per-neuron-16"]["fits"] and picked.candidates["per-neuron"]["fits"]
