@@ -100,7 +100,8 @@ def exact_graph() -> Graph:
     g.add("lif_b", LIF(n=8, tau_syn=2 * EXACT_DT, tau_mem=4 * EXACT_DT, threshold=np.where(np.arange(8) % 2, 1.0, 0.5),
                        reset="zero", refractory=1, discretisation="euler", bias=dyadic(rng, 8, 0.125, 2),
                        bias_placement="voltage"))
-    g.add("lif_c", LIF(n=8, tau_syn=2 * EXACT_DT, tau_mem=4 * EXACT_DT, threshold=1.0, reset="subtract", discretisation="euler",
+    g.add("lif_c", LIF(n=8, tau_syn=2 * EXACT_DT, tau_mem=4 * EXACT_DT, threshold=1.0, reset="subtract",
+                       discretisation="euler",
                        bias=np.full(8, 0.25), bias_placement="current", max_spikes=3, fire_test=">="))
     g.add("readout", Readout(width=8))
     g.add("output", Output(width=8))

@@ -58,10 +58,11 @@ class CArtefact:
             out.append(f"    {name:<14} agreement {share} ({c['agreeing']}/{c['decided']}), constant data "
                        f"{c.get('flash_data_bytes', c['weight_bytes']):,} bytes{fits}")
         out.append(f"  flash data {mem['flash_data_bytes']:,} bytes (weights {mem['flash_weights_bytes']:,}), RAM "
-                   f"(state) {mem['ram_state_bytes']:,} bytes; {part['part']}: flash {100 * part['flash_share']:.1f} %, "
-                   f"RAM {100 * part['ram_share']:.1f} % ({'fits' if part['fits'] else 'DOES NOT FIT'}; code not "
-                   "counted here: snncc map measures it)")
-        out.append(f"  {m['time_base']['steps']} steps per sample ({m['time_base']['rule']}), dt {m['time_base']['dt']} s")
+                   f"(state) {mem['ram_state_bytes']:,} bytes; {part['part']}: flash "
+                   f"{100 * part['flash_share']:.1f} %, RAM {100 * part['ram_share']:.1f} % "
+                   f"({'fits' if part['fits'] else 'DOES NOT FIT'}; code not counted here: snncc map measures it)")
+        tb = m["time_base"]
+        out.append(f"  {tb['steps']} steps per sample ({tb['rule']}), dt {tb['dt']} s")
         out.append(f"  checked: {m['validation']['emulator']}")
         out.append(f"  SHA-256 {m['sha256']}")
         out += [f"  note: {n}" for n in self.notes]
@@ -88,7 +89,8 @@ def network_record(net) -> dict[str, Any]:   # noqa: ANN001
             "populations": pops, "projections": projs}
 
 
-def artefact_files(net, manifest: dict[str, Any], readme: str) -> tuple[dict[str, bytes], dict[str, Any]]:  # noqa: ANN001
+def artefact_files(net, manifest: dict[str, Any],  # noqa: ANN001
+                   readme: str) -> tuple[dict[str, bytes], dict[str, Any]]:
     """(files with manifest.json last, the manifest with ``files`` and ``sha256`` filled in)."""
     from snncc.targets.c.artefact import csource, support
     from snncc.targets.c.lowering.network import network_bytes

@@ -187,8 +187,8 @@ void _init(void) {}
 void _fini(void) {}
 """
 
-LINKER_SCRIPT = """/* mps2_an386.ld: QEMU's MPS2 AN386 (Cortex-M4): code in SSRAM1 at 0x00000000, data in SSRAM2/3 at 0x20000000
- * (Arm application note AN386's memory map). */
+LINKER_SCRIPT = """/* mps2_an386.ld: QEMU's MPS2 AN386 (Cortex-M4): code in SSRAM1 at 0x00000000, data in SSRAM2/3
+ * at 0x20000000 (Arm application note AN386's memory map). */
 MEMORY
 {
     CODE (rx) : ORIGIN = 0x00000000, LENGTH = 4M
@@ -216,7 +216,8 @@ def _line(words: list[str]) -> str:
 def makefile() -> str:
     host = cmd.host_command()
     return f"""# Makefile of the snncc C artefact (docs/c.md). Targets:
-#   make host       {cmd.HOST_PROGRAM}: main.c + snn.c for this machine ({cmd.HOST_CC}); ./{cmd.HOST_PROGRAM} input.bin output.bin
+#   make host       {cmd.HOST_PROGRAM}: main.c + snn.c for this machine ({cmd.HOST_CC});
+#                   ./{cmd.HOST_PROGRAM} input.bin output.bin
 #   make strict     snn.c alone as strict C99 (-Wall -Wextra -Werror -pedantic)
 #   make m4         {cmd.M4_PROGRAM}: the Cortex-M4 build for QEMU's MPS2 AN386 (semihosting I/O, SysTick timing)
 #   make run-qemu   run {cmd.M4_PROGRAM} in QEMU on input.bin (writes output.bin, prints counts and SysTick ticks)

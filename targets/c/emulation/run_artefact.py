@@ -117,8 +117,8 @@ class CEmulation:
                 "artefact_sha256": self.sha256, "timing": self.timing}
 
 
-def emulate_artefact(path, inputs, *, record: str = "outputs", stream: bool = False, gap: int | None = None,  # noqa: ANN001
-                     source: str | None = None, progress=None) -> CEmulation:
+def emulate_artefact(path, inputs, *, record: str = "outputs", stream: bool = False,  # noqa: ANN001
+                     gap: int | None = None, source: str | None = None, progress=None) -> CEmulation:
     """``snncc emulate`` of the artefact at ``path`` (module doc)."""
     from snncc.targets.c.artefact.written import open_artefact
     from snncc.targets.c.emulation.emulator import emulate_network

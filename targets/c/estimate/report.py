@@ -64,8 +64,8 @@ class CUsage:
         out = [f"C artefact {self.artefact} (SHA-256 {self.sha256[:16]}...) on {f['part']}",
                f"  flash {f['flash_bytes']:,} / {f['flash_limit']:,} bytes ({100 * f['flash_share']:.1f} %; "
                f"{f['flash_counted']}); weights {self.memory['flash_weights_bytes']:,} bytes",
-               f"  RAM   {f['ram_bytes']:,} / {f['ram_limit']:,} bytes ({100 * f['ram_share']:.1f} %; sizeof(snn_state_t))"
-               f" -> {'fits' if f['fits'] else 'DOES NOT FIT'}",
+               f"  RAM   {f['ram_bytes']:,} / {f['ram_limit']:,} bytes ({100 * f['ram_share']:.1f} %; "
+               f"sizeof(snn_state_t)) -> {'fits' if f['fits'] else 'DOES NOT FIT'}",
                f"  part figures: {f['source']}"]
         if self.rates:
             out.append("  event rates (spikes per neuron and step, emulator): "

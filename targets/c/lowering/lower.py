@@ -47,7 +47,8 @@ def _validate(art, net, rule_text: str) -> str:   # noqa: ANN001
     if mine.keys() != theirs.keys() or any(not np.array_equal(mine[k], theirs[k]) for k in mine):
         raise InternalError("network.npz read back differs from the lowered network")
     meta = {"model": rule_text}
-    if csource.source(back, meta).encode() != art.files["snn.c"] or csource.header(back, meta).encode() != art.files["snn.h"]:
+    if csource.source(back, meta).encode() != art.files["snn.c"] or \
+            csource.header(back, meta).encode() != art.files["snn.h"]:
         raise InternalError("snn.c regenerated from network.npz differs from the snn.c written")
     x = random_inputs(VALIDATION_SAMPLES, min(net.steps, 256), net.inputs, 0.1, 11)
     a, b = emulate_network(net, x, record=True), emulate_network(back, x, record=True)

@@ -194,8 +194,8 @@ def check_network(net: CNetwork, source: str | None = None) -> None:
         for key in ("alpha", "beta"):
             if np.any(np.abs(getattr(p, key)) > (1 << 16)):
                 refuse(f"{key} must be a Q16 multiplier in [-1, 1]", where)
-        if p.reset not in ("zero", "subtract") or p.fire_test not in (">", ">=") or not 1 <= p.max_spikes <= MAX_SPIKES \
-                or not 1 <= p.refractory <= 65535:
+        if p.reset not in ("zero", "subtract") or p.fire_test not in (">", ">=") \
+                or not 1 <= p.max_spikes <= MAX_SPIKES or not 1 <= p.refractory <= 65535:
             refuse("reset, spike rule or refractory period out of range", where)
         for vec in ([p.bias_v] if p.bias_v is not None else []) + [t.values for t in p.bias_i]:
             if np.shape(vec) != (p.n,) or np.any(vec < int32[0]) or np.any(vec > int32[1]):

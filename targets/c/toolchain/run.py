@@ -18,8 +18,8 @@ from snncc.targets.kit import SnnccError
 from snncc.targets.c.options import BACKENDS
 
 
-def run_artefact(path, inputs, *, source: str | None = None, stream: bool = False, backend: str = "auto",  # noqa: ANN001
-                 gap: int | None = None, cache: Path | None = None):
+def run_artefact(path, inputs, *, source: str | None = None, stream: bool = False,  # noqa: ANN001
+                 backend: str = "auto", gap: int | None = None, cache: Path | None = None):
     """A ``CEmulation`` whose arrays come from the compiled C (module doc)."""
     from snncc.targets.c.artefact.written import open_artefact
     from snncc.targets.c.emulation.run_artefact import (CEmulation, artefact_inputs, check_gap, streamed,

@@ -60,8 +60,9 @@ def literal(net, x):   # noqa: ANN001
     return out
 
 
-@pytest.mark.parametrize("seed,big,spikes_per_step,rule", [(0, False, 1, "per-neuron"), (1, True, 3, "per-layer"),
-                                                           (2, False, 3, "per-neuron-16"), (3, True, 1, "per-layer-16")])
+@pytest.mark.parametrize("seed,big,spikes_per_step,rule", [
+    (0, False, 1, "per-neuron"), (1, True, 3, "per-layer"), (2, False, 3, "per-neuron-16"),
+    (3, True, 1, "per-layer-16")])
 def test_emulator_equals_the_literal_arithmetic(seed, big, spikes_per_step, rule):
     from snncc.targets.c.emulation.emulator import emulate_network
 

@@ -28,7 +28,8 @@ def test_state_bytes_equal_sizeof(tmp_path, seed, spikes_per_step):
     from snncc.targets.c.artefact.csource import state_bytes
 
     net = network(random_graph(seed, n_hidden=7, spikes=spikes_per_step), "per-neuron")
-    assert _sizeof(["arm-none-eabi-gcc", "-mcpu=cortex-m4", "-mthumb", "-fno-common"], tmp_path, net) == state_bytes(net)
+    arm = ["arm-none-eabi-gcc", "-mcpu=cortex-m4", "-mthumb", "-fno-common"]
+    assert _sizeof(arm, tmp_path, net) == state_bytes(net)
     assert _sizeof(["gcc", "-fno-common"], tmp_path, net) == state_bytes(net)
 
 
