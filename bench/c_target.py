@@ -1,4 +1,4 @@
-"""The C target's goals (issue 40), measured: agreement, bit-exactness, instructions per step, flash and RAM.
+"""The C target's goals, measured: agreement, bit-exactness, instructions per step, flash and RAM.
 
     python bench/c_target.py [--samples 1000] [--density 0.08] [--th1 DIR] [--out bench/results/c_target.json]
 
