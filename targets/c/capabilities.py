@@ -11,6 +11,7 @@ record (``options.py``) and capabilities, each importing its work on use: this m
     run       -> CEmulation  (toolchain/run.py: the artefact's C built and run: host gcc, or Cortex-M4 in QEMU)
     map       -> CUsage      (estimate/report.py: flash and RAM against a part)
     estimate  -> CUsage      (the same plus instructions per step counted in QEMU; time, real time, energy ESTIMATE)
+    hardware  -> CHardware   (estimate/search_figures.py: a search trial's flash, RAM, synaptic operations per step)
     finetune  -> FinetunedArtefact (finetune/: the integer network trained through its own arithmetic)
 """
 
@@ -20,8 +21,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from snncc.targets.base import (
-    AgreementOptions, Artefact, CoreMap, Emulation, FinetunedArtefact, FinetuneOptions, Given, Progress, Record,
-    RunResult, capability_options, target_options,
+    AgreementOptions, Artefact, CoreMap, Emulation, FinetunedArtefact, FinetuneOptions, Given, HardwareCosts,
+    Progress, Record, RunResult, capability_options, target_options,
 )
 from snncc.targets.c.options import COptions
 from snncc.targets.kit import SnnccError
@@ -39,7 +40,7 @@ AGREEMENT_SEED = 0
 
 
 class CTarget:
-    """Capabilities: lower, identify, check, agree, emulate, run, map, estimate, finetune."""
+    """Capabilities: lower, identify, check, agree, emulate, run, map, estimate, hardware, finetune."""
 
     name = "c"
     description = "C99 for microcontrollers (snn.c/snn.h, integer arithmetic), bit-exact with its emulator"
@@ -154,6 +155,11 @@ class CTarget:
         if progress is not None:
             progress(int(x.shape[0]))
         return found
+
+    def hardware(self) -> HardwareCosts:
+        from snncc.targets.c.estimate.search_figures import CHardware
+
+        return CHardware(self)
 
     def finetune(self, model: Model, inputs: np.ndarray | None, options: Given = None,
                  finetuning: FinetuneOptions | None = None, *, labels: np.ndarray | None = None,

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import subprocess
 
+import numpy as np
+
 import pytest
 
 from c_test_graphs import need, network, random_graph, sources
@@ -63,3 +65,17 @@ def test_realtime_record_arithmetic():
     assert r["energy_per_sample_j"] == pytest.approx(100 * r["energy_per_step_j"])
     for spec in PARTS.values():
         assert "Rev" in spec["source"] and spec["flash_bytes"] > 0 and spec["ram_bytes"] > 0
+
+
+def test_hardware_figures_of_a_search_trial():
+    from snncc.targets import get_target
+
+    from c_test_graphs import random_graph, spikes
+
+    graph = random_graph(6, n_out=3)
+    costs = get_target("c").hardware()
+    figures = costs.figures(graph, spikes(8, 20, 5, 0.3, 0), np.arange(8) % 3, {"rule": "per-neuron", "time_steps": 20},
+                            estimate_samples=4, emulate_samples=8).as_dict()
+    assert figures["fits"] == 1 and figures["flash_bytes"] > 0 and figures["ram_bytes"] > 0
+    assert figures["synops_per_step"] > 0 and figures["emulated_on"] == 8
+    assert set(costs.front) <= set(costs.objectives)
