@@ -172,9 +172,10 @@ def _deliver(net: CNetwork, k: int, q: CProjection) -> list[str]:
         lines += [f"            const {ctype} *row = &w{k}[i * {n_t}u];", f"            int32_t *acc = state->acc{k};"]
         whole = n_t - n_t % UNROLL
         if whole:
-            body = " ".join(f"acc[j + {u}u] += {mult}row[j + {u}u];" for u in range(UNROLL))
-            lines += ["            uint32_t j;", f"            for (j = 0; j < {whole}u; j += {UNROLL}u) {{ {body} }}"]
-        lines += [f"            acc[{j}] += {mult}row[{j}];" for j in range(whole, n_t)]
+            lines += ["            uint32_t u;", f"            for (u = 0; u < {whole}u; u += {UNROLL}u) {{"]
+            lines += [f"                acc[u + {r}u] += {mult}row[u + {r}u];" for r in range(UNROLL)]
+            lines += ["            }"]
+        lines += [f"            acc[{r}] += {mult}row[{r}];" for r in range(whole, n_t)]
     else:
         lines += ["            uint32_t e;",
                   f"            for (e = w{k}_ptr[i]; e < w{k}_ptr[i + 1u]; e++) state->acc{k}[w{k}_idx[e]] += "
