@@ -19,6 +19,7 @@ from snncc.targets.c.lowering.network import CNetwork, CPopulation, CProjection
 from snncc.targets.c.options import COUNT_LIMIT, DECAY_BITS
 
 PER_LINE = 20
+GENERATOR = 2               # the text this module emits for a network; bumped whenever it changes
 UNROLL = 4                  # dense fan-out rows are added 4 weights per loop iteration
 
 
@@ -305,4 +306,4 @@ def source(net: CNetwork, meta: dict) -> str:
     return "\n".join(head + consts + [""] + updates + reset + step + trace)
 
 
-__all__ = ["header", "source", "state_members", "state_bytes", "index_type"]
+__all__ = ["header", "source", "state_members", "state_bytes", "index_type", "GENERATOR"]

@@ -111,10 +111,11 @@ def artefact_files(net, manifest: dict[str, Any],  # noqa: ANN001
 
 def base_manifest(net, graph, source: str | None, arithmetic: dict, selection: dict, time_base: dict,  # noqa: ANN001
                   memory: dict, part: dict, validation: dict, layout: dict) -> dict[str, Any]:
+    from snncc.targets.c.artefact.csource import GENERATOR
     from snncc.targets.kit.artefact import model_record
     from snncc.targets.kit.manifest import source_identity
 
-    return {"format": FORMAT, "version": VERSION, "target": "c",
+    return {"format": FORMAT, "version": VERSION, "generator": GENERATOR, "target": "c",
             "source": source_identity(graph.metadata, source), "model": model_record(graph),
             "arithmetic": arithmetic, "selection": selection, "time_base": time_base, "input_layout": layout,
             "memory": memory, "part": part, "network": network_record(net), "validation": validation,
