@@ -113,3 +113,21 @@ def test_the_artefacts_makefile_builds(braille_artefact, tmp_path):
     done = subprocess.run(["make", "-s", "host", "strict", "m0"], cwd=work, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert (work / "snn").is_file() and (work / "snn_m0.o").is_file()
+
+
+def test_the_cmake_snippet_builds_a_program(braille_artefact, tmp_path):
+    """``include(snn.cmake)`` + ``target_link_libraries(app PRIVATE snn)``, as its header says (skipped without
+    cmake, which CI does not install: the snippet is a convenience, the Makefile the tested build)."""
+    if shutil.which("cmake") is None or shutil.which("gcc") is None:
+        import pytest
+
+        pytest.skip("cmake or gcc not installed")
+    (tmp_path / "CMakeLists.txt").write_text(
+        "cmake_minimum_required(VERSION 3.13)\nproject(app C)\n"
+        f"include({braille_artefact.as_posix()}/snn.cmake)\n"
+        f"add_executable(app {braille_artefact.as_posix()}/main.c)\ntarget_link_libraries(app PRIVATE snn)\n")
+    build = tmp_path / "build"
+    for command in (["cmake", "-S", str(tmp_path), "-B", str(build)], ["cmake", "--build", str(build)]):
+        done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stdout + done.stderr
+    assert (build / "app").is_file()
