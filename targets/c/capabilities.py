@@ -35,7 +35,6 @@ if TYPE_CHECKING:
     from snncc.targets.base import Model
     from snncc.targets.kit.artefact import ArtefactIdentity
 
-DEFAULT_AGREEMENT_SAMPLES = 1000
 AGREEMENT_SEED = 0
 
 
@@ -87,7 +86,7 @@ class CTarget:
         artefact's own length, and the float graph's own ceiling under ``agreement.noise``."""
         from snncc.targets.c.checks.agreement import check_artefact
         from snncc.targets.c.artefact.written import open_artefact
-        from snncc.targets.kit.agreement import random_inputs
+        from snncc.targets.kit.agreement import default_samples, default_samples_note, random_inputs
         from snncc.targets.kit.measured import artefact_to_measure
 
         how = agreement or capability_options(AgreementOptions)
@@ -95,9 +94,10 @@ class CTarget:
         with artefact_to_measure(self, graph, opts, artefact) as path:
             if inputs is None:
                 net = open_artefact(path).network
-                samples = how.samples or DEFAULT_AGREEMENT_SAMPLES
+                samples = how.samples or default_samples(sum(p.n for p in net.populations), net.steps)
                 x = random_inputs(samples, net.steps, net.inputs, how.density, AGREEMENT_SEED)
-                what = (f"{samples} seeded random spike trains (density {how.density:g}, seed {AGREEMENT_SEED}), "
+                shown = f"{samples}" if how.samples else default_samples_note(samples)
+                what = (f"{shown} seeded random spike trains (density {how.density:g}, seed {AGREEMENT_SEED}), "
                         f"{net.steps} steps (SYNTHETIC)")
             else:
                 x, what = inputs, f"{len(inputs)} samples of {data or 'the given inputs'} (no labels used)"
