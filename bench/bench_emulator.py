@@ -104,23 +104,37 @@ def ms_per(t: dict, samples: int) -> dict:
     return {"best": 1e3 * t["best_s"] / samples, "median": 1e3 * t["median_s"] / samples}
 
 
-def load_kernel_at(rev: str):
-    """The kernel module ``targets/loihi/emulation/kernel.py`` as it was at git revision ``rev``."""
-    src = subprocess.run(["git", "show", f"{rev}:targets/loihi/emulation/kernel.py"], cwd=REPO, capture_output=True,
-                         text=True, check=True).stdout
-    sha = subprocess.run(["git", "rev-parse", "--short", rev], cwd=REPO, capture_output=True, text=True,
-                         check=True).stdout.strip()
-    folder = Path(tempfile.gettempdir()) / f"snncc_bench_kernel_{sha}"   # reused: its numba cache survives
-    folder.mkdir(exist_ok=True)
-    path = folder / "_kernel_baseline.py"
+def _load_source(folder: Path, name: str, src: str):
+    path = folder / f"{name.rsplit('_', 1)[0]}.py"
     if not path.exists() or path.read_text() != src:
         path.write_text(src)
-    name = f"_kernel_baseline_{sha}"
     spec = importlib.util.spec_from_file_location(name, path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[name] = mod          # numba's cache finds the module again by name
     spec.loader.exec_module(mod)
-    return mod, sha
+    return mod
+
+
+def load_kernel_at(rev: str):
+    """The kernel as it was at git revision ``rev``: a module with ``Flat`` and ``run_flat`` (before the program
+    moved to ``emulation/flat.py``: ``kernel.py`` itself; after: that revision's ``flat.py`` over its ``kernel.py``)."""
+    def show(path: str) -> str | None:
+        found = subprocess.run(["git", "show", f"{rev}:{path}"], cwd=REPO, capture_output=True, text=True)
+        return found.stdout if found.returncode == 0 else None
+
+    src = show("targets/loihi/emulation/kernel.py")
+    if src is None:
+        raise SystemExit(f"revision {rev} has no targets/loihi/emulation/kernel.py")
+    sha = subprocess.run(["git", "rev-parse", "--short", rev], cwd=REPO, capture_output=True, text=True,
+                         check=True).stdout.strip()
+    folder = Path(tempfile.gettempdir()) / f"snncc_bench_kernel_{sha}"   # reused: its numba cache survives
+    folder.mkdir(exist_ok=True)
+    kernel = _load_source(folder, f"_kernel_baseline_{sha}", src)
+    flat = show("targets/loihi/emulation/flat.py")
+    if flat is None:
+        return kernel, sha
+    flat = flat.replace("from snncc.targets.loihi.emulation.kernel import", f"from _kernel_baseline_{sha} import")
+    return _load_source(folder, f"_flat_baseline_{sha}", flat), sha
 
 
 def with_threads(n: int, fn):
@@ -142,7 +156,7 @@ def cli_calls(net, x: np.ndarray, repeat: int, python: str | None = None) -> dic
 
     ``python``: the interpreter whose ``snncc`` to call (another venv, e.g. one installed from an
     earlier revision: the before figure); default this one."""
-    from snncc.targets.loihi.bundle.hdf5 import write_bundle
+    from snncc.targets.loihi.bundle.write import write_bundle
 
     python = python or sys.executable
     snncc = Path(python).parent / "snncc"
@@ -181,11 +195,11 @@ def cli_calls(net, x: np.ndarray, repeat: int, python: str | None = None) -> dic
 ASM_PROBE = """
 import json, re, sys, numpy as np, llvmlite.binding as ll
 from snncc.targets.loihi.emulation import kernel as _kernel
-from snncc.targets.loihi.bundle.hdf5 import read_bundle
+from snncc.targets.loihi.bundle.read import read_bundle
 from snncc.targets.loihi.emulation.emulator import PreparedNetwork
 net = read_bundle(sys.argv[1])
 PreparedNetwork(net).run(np.zeros((1, 3, net.input_width), np.uint8), threads=1)
-asm = _kernel._chunk.inspect_asm(_kernel._chunk.signatures[0])
+asm = _kernel.run_chunk.inspect_asm(_kernel.run_chunk.signatures[0])
 count = {r: len(re.findall("%" + r + "[0-9]", asm)) for r in ("zmm", "ymm", "xmm")}
 count.update(vpmulld=asm.count("vpmulld"), vpmullq=asm.count("vpmullq"), vcvt=asm.count("vcvt"),
              host_cpu=ll.get_host_cpu_name(), avx512f="+avx512f" in ll.get_host_cpu_features().flatten())
@@ -195,7 +209,7 @@ print(json.dumps(count))
 
 def asm_vector_width(net) -> dict:
     """Vector registers named in the kernel's machine code, compiled afresh (an empty NUMBA_CACHE_DIR)."""
-    from snncc.targets.loihi.bundle.hdf5 import write_bundle
+    from snncc.targets.loihi.bundle.write import write_bundle
 
     with tempfile.TemporaryDirectory() as tmp:
         bundle = Path(tmp) / "net.net"
@@ -238,7 +252,7 @@ def main(argv=None) -> dict:
     from snncc.atomic import write_text_atomic
     from snncc.ir.simulate import simulate
     from snncc.targets.loihi import target
-    from snncc.targets.loihi.emulation.emulator import PreparedNetwork, _program
+    from snncc.targets.loihi.emulation.emulator import PreparedNetwork, program
 
     load_before = os.getloadavg()[0]
     uptime_before = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
@@ -271,7 +285,7 @@ def main(argv=None) -> dict:
     baseline = None
     if args.baseline_rev:
         mod, sha = load_kernel_at(args.baseline_rev)
-        flat = mod.Flat(_program(net))
+        flat = mod.Flat(program(net))
         drive = net.drive(x)
         old = mod.run_flat(flat, drive, "outputs")                   # compile / load, and the check
         same = bool(np.array_equal(old.output_spikes, reference.output_spikes)
@@ -304,7 +318,7 @@ def main(argv=None) -> dict:
         with_threads(1, lambda: simulate(graph, single[:1], dtype=torch.float32))
         ti1 = with_threads(1, lambda: timed(lambda: [simulate(graph, s[None], dtype=torch.float32)
                                                      for s in single[:16]], max(2, args.repeat // 2)))
-        pred_ir = simulate(graph, x[:IR_CHUNK], dtype=torch.float32).prediction.numpy()
+        pred_ir = np.asarray(simulate(graph, x[:IR_CHUNK], dtype=torch.float32).prediction)
 
     best_emu = max(v["samples_per_s"]["best"] for v in kernel.values())
     best_ir = max(v["samples_per_s"]["best"] for v in ir.values())

@@ -7,7 +7,7 @@ delivered as ``SparseBlock`` synapses. Inputs: seeded Bernoulli spike frames (p 
 per pixel and step), SYNTHETIC, ``--samples`` x ``--steps``.
 
 Figures, for this tree's kernel and (``--baseline-rev REV``) the kernel of that git revision:
-  * ``prepare_s``: ``Flat(_program(network))`` (what ``PreparedNetwork`` does), in a fresh process
+  * ``prepare_s``: ``Flat(program(network))`` (what ``PreparedNetwork`` does), in a fresh process
     per kernel: ``rss_peak_MiB``, the process's peak RSS after it, and ``rss_added_MiB``, how far
     it rose above the peak already reached while reading the bundle (0: preparing needs less);
   * ``flat_MiB``: the bytes of the flattened arrays the kernel reads;
@@ -38,15 +38,15 @@ GRAPH = REPO / "tests" / "data" / "nir" / "cnn_sinabs.nir"
 
 def _kernel(rev: str | None):
     if rev is None:
-        from snncc.targets.loihi.emulation import kernel as _kernel
+        from snncc.targets.loihi.emulation import flat
 
-        return _kernel
+        return flat
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("bench_emulator", Path(__file__).parent / "bench_emulator.py")
     bench_emulator = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench_emulator)
-    return bench_emulator.load_kernel_at(rev)[0]       # that revision's targets/loihi/emulation/kernel.py
+    return bench_emulator.load_kernel_at(rev)[0]       # that revision's kernel (Flat, run_flat)
 
 
 def _rss_mib() -> float:
@@ -55,14 +55,14 @@ def _rss_mib() -> float:
 
 def prepare_worker(bundle: str, rev: str | None) -> dict:
     """In a fresh process: read the bundle, then time and measure preparing it for the kernel."""
-    from snncc.targets.loihi.bundle.hdf5 import read_bundle
-    from snncc.targets.loihi.emulation.emulator import _program
+    from snncc.targets.loihi.bundle.read import read_bundle
+    from snncc.targets.loihi.emulation.emulator import program
 
     mod = _kernel(rev)
     net = read_bundle(bundle)
     before = _rss_mib()
     t = time.perf_counter()
-    flat = mod.Flat(_program(net))
+    flat = mod.Flat(program(net))
     prepare = time.perf_counter() - t
     arrays = sum(a.nbytes for a in vars(flat).values() if isinstance(a, np.ndarray))
     return {"prepare_s": round(prepare, 3), "rss_peak_MiB": round(_rss_mib(), 1),
@@ -86,8 +86,8 @@ def main(argv=None) -> dict:
         return {}
 
     from snncc.atomic import write_text_atomic
-    from snncc.targets.loihi.bundle.hdf5 import read_bundle
-    from snncc.targets.loihi.emulation.emulator import _program
+    from snncc.targets.loihi.bundle.read import read_bundle
+    from snncc.targets.loihi.emulation.emulator import program
 
     with tempfile.TemporaryDirectory() as tmp:
         bundle = args.bundle or str(Path(tmp) / "cnn.net")
@@ -105,7 +105,7 @@ def main(argv=None) -> dict:
         net = read_bundle(bundle)
     rng = np.random.default_rng(0)
     x = net.drive((rng.random((args.samples, args.steps, net.input_width)) < args.density).astype(np.uint8))
-    prog = _program(net)
+    prog = program(net)
     mods = {name: _kernel(rev) for name, rev in kernels.items()}
     flats = {name: mods[name].Flat(prog) for name in mods}
     times = {name: [] for name in mods}

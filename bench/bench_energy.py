@@ -50,7 +50,7 @@ def main(argv=None) -> int:
 
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(args.bundle) if args.bundle else Path(tmp) / "rsnn_random.h5"
-        from snncc.targets.loihi.bundle.hdf5 import write_bundle
+        from snncc.targets.loihi.bundle.write import write_bundle
 
         write_bundle(paper_sized_rsnn(args.seed), path)
         try:

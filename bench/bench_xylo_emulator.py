@@ -19,7 +19,7 @@ Figures (wall time, best of ``--repeat``, and CPU time where one thread runs):
     sample ``reset_all()`` and ``evolve(raster)`` -- recording off in Rockpool's sense (only the
     output is taken; the C++ records internally regardless); per-sample time over
     ``--xylosim-samples`` samples;
-  * snncc: the network prepared once (``_kernel.prepare``, time reported apart), then
+  * snncc: the network prepared once (``emulation.kernel.prepare``, time reported apart), then
     ``run_prepared`` at batch 1 and at batch ``--batch`` (1,024) on 1 thread and on all cores;
     per-sample time; also ``emulate()`` end to end (input checks and preparation included);
   * ``identical``: snncc's output spikes equal XyloSim's on the samples XyloSim ran;
@@ -48,8 +48,8 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))          # tests.xylo.oracle: the xylosim driver the tests use
 
-from snncc.targets.xylo._kernel import prepare, run_prepared   # noqa: E402
-from snncc.targets.xylo.emulator import emulate                # noqa: E402
+from snncc.targets.xylo.emulation.kernel import prepare, run_prepared   # noqa: E402
+from snncc.targets.xylo.emulation.emulator import emulate      # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec                  # noqa: E402
 from tests.xylo.oracle import XyloSimOracle                   # noqa: E402
 

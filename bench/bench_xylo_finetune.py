@@ -53,8 +53,8 @@ def best_of(fn, repeat: int) -> float:
 def training_step(args, low) -> dict:
     import torch
 
-    from snncc.targets.xylo.differentiable import DifferentiableXylo
-    from snncc.targets.xylo.finetune import lowered_student, surrogate_units
+    from snncc.targets.xylo.finetune.arithmetic import DifferentiableXylo
+    from snncc.targets.xylo.finetune.tuning import lowered_student, surrogate_units
 
     student = lowered_student(low, 256)
     core = student.core
@@ -87,7 +87,7 @@ def training_step(args, low) -> dict:
 
 def per_neuron_normal_equations(d, neurons):
     """The former normal equations (baseline): each neuron's weighted rows copied out of the whole feature matrix."""
-    from snncc.targets.xylo.identify import ROW_FLOOR
+    from snncc.targets.xylo.lowering.regression import ROW_FLOOR
 
     out = []
     for j in neurons:
@@ -125,22 +125,23 @@ def former_rounding(h, c, step, low=-128, high=127, last=None):
 @contextmanager
 def former_arithmetic():
     """The Xylo lowering with the former normal equations and rounding patched in."""
-    from snncc.targets.xylo import assemble, identify, quantize
+    from snncc.targets.xylo.lowering import integers, regression
 
-    saved = identify.normal_equations, assemble.round_with_feedback, quantize.round_with_feedback
-    identify.normal_equations = per_neuron_normal_equations
-    assemble.round_with_feedback = quantize.round_with_feedback = former_rounding
+    saved = regression.normal_equations, integers.round_with_feedback
+    regression.normal_equations = per_neuron_normal_equations
+    integers.round_with_feedback = former_rounding
     try:
         yield
     finally:
-        identify.normal_equations, assemble.round_with_feedback, quantize.round_with_feedback = saved
+        regression.normal_equations, integers.round_with_feedback = saved
 
 
 def lowering(args, graph) -> tuple[dict, object]:
-    from snncc.targets.xylo.lowering import lower
+    from snncc.targets.xylo.lowering.lower import lower
+    from snncc.targets.xylo.options import XyloOptions
 
-    options = {"replicas": args.replicas, "relays": args.relays, "time_steps": 256}
-    lower(graph, {**options, "calibration_samples": 8, "time_steps": 16})      # compiles the emulator's kernels
+    options = XyloOptions(replicas=args.replicas, relays=args.relays, time_steps=256)
+    lower(graph, XyloOptions(replicas=args.replicas, relays=args.relays, calibration_samples=8, time_steps=16))
     t0 = time.perf_counter()
     with former_arithmetic():
         before = lower(graph, options)
@@ -149,12 +150,12 @@ def lowering(args, graph) -> tuple[dict, object]:
     t2 = time.perf_counter()
     same = before.spec.keys() == now.spec.keys() and all(np.array_equal(np.asarray(before.spec[k]),
                                                                          np.asarray(now.spec[k])) for k in now.spec)
-    return ({"options": options, "rule": now.rule, "seconds": {"former arithmetic": t1 - t0, "current": t2 - t1},
+    return ({"options": {k: v for k, v in options.as_dict().items() if v is not None}, "rule": now.rule, "seconds": {"former arithmetic": t1 - t0, "current": t2 - t1},
              "identical_spec": same, "speedup": (t1 - t0) / (t2 - t1)}, now)
 
 
 def rounding(args) -> dict:
-    from snncc.rounding import round_with_feedback
+    from snncc.targets.kit.compute import round_with_feedback
 
     rng = np.random.default_rng(2)
     cases = []

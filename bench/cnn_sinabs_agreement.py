@@ -72,7 +72,7 @@ def main(argv=None) -> int:
     from snncc.frontends import LoadOptions, load_model
     from snncc.ir.nodes import LIF
     from snncc.ir.simulate import simulate
-    from snncc.targets.loihi.bundle.hdf5 import read_bundle
+    from snncc.targets.loihi.bundle.read import read_bundle
     from snncc.targets.loihi.emulation.emulator import PreparedNetwork
     from snncc.targets.loihi.checks.exactness import pad
 
@@ -100,7 +100,7 @@ def main(argv=None) -> int:
         for k, p in enumerate(args.density):
             x = _frames(args.samples, args.steps, p, args.seed + k)
             ref = simulate(graph, x, record="spikes")
-            want = {n: ref.spikes[n].numpy().astype(np.uint8) for n in names}
+            want = {n: np.asarray(ref.spikes[n]).astype(np.uint8) for n in names}
             t0 = time.perf_counter()
             res = prepared.run(pad(x, lead), record="all")
             emu_s = time.perf_counter() - t0
@@ -112,7 +112,7 @@ def main(argv=None) -> int:
             for level in (0.001, 0.01):
                 noisy = simulate(_noisy(graph, level, 7), x, record="spikes")
                 row[f"float_noise_{level:g}"] = _agreement(
-                    {n: noisy.spikes[n].numpy().astype(np.uint8) for n in names}, want, names)
+                    {n: np.asarray(noisy.spikes[n]).astype(np.uint8) for n in names}, want, names)
             counts, spikes = session.run(["counts", "output_spikes"], {"events": x.astype(np.float32)})
             last = want[names[-1]]
             row["jetson"] = {"output_spikes_equal": float(np.mean(spikes == last)),

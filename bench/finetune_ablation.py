@@ -20,7 +20,8 @@ import numpy as np, torch
 torch.set_num_threads(1)
 from snncc.frontends import LoadOptions, load_model
 from snncc.targets.loihi.lowering.lower import lower_model
-from snncc.targets.loihi.lowering.differentiable import DifferentiableLoihi
+from snncc.targets.loihi.finetune.differentiable import DifferentiableLoihi
+from snncc.targets.loihi.options import LoihiOptions
 from snncc.targets.loihi.emulation.emulator import emulate
 from snncc.targets.loihi.checks.exactness import lead_steps, pad, loihi_spikes
 from snncc.finetune.teacher import run_teacher
@@ -60,7 +61,7 @@ a = ap.parse_args()
 t0 = time.time(); c0 = time.process_time()
 g = load_model(a.graph, LoadOptions(dt=1e-4, reset=None if a.reset == "none" else a.reset))
 T = a.steps
-low = lower_model(g, {"scale": a.rule, "allow_reset_change": True, "t_sample": T})
+low = lower_model(g, LoihiOptions(scale=a.rule, allow_reset_change=True), t_sample=T)
 names = [c.lif for c in low.layers]
 trec = low.timing_record
 rng = np.random.default_rng(a.seed)

@@ -18,7 +18,7 @@ the samples whose float counts have one clear winner, 95 % Wilson interval):
   practical  each Braille graph fine-tunes in under 5 minutes (CPU time and wall time recorded)
 
 Inputs: seeded random spikes (density 0.08, 256 steps; SYNTHETIC) split into training, validation and
-held-out parts, plus task-like inputs (``snncc.finetune.braille_inputs``: the NIR paper's letters
+held-out parts, plus task-like inputs (``snncc.data.nir_letters``: the NIR paper's letters
 from snncc's SYNTHETIC Braille generator). The NIR graphs were trained on the real recordings and do
 not classify the synthetic letters (float accuracy about 8-10 %), so only agreement is reported there.
 """
@@ -70,13 +70,14 @@ def nir_goal(name, args):
     import numpy as np
 
     from snncc.measure.agreement import argmax_agreement
-    from snncc.finetune.braille_inputs import nir_braille_inputs
+    from snncc.data.nir_letters import nir_braille_inputs
     from snncc.finetune.engine import TaskSet
     from snncc.finetune.inputs import split_inputs
     from snncc.finetune.teacher import run_teacher
     from snncc.frontends import LoadOptions, load_model
-    from snncc.targets.loihi.finetune import finetune_loihi, network_counts
+    from snncc.targets.loihi.finetune.run import finetune_loihi, network_counts
     from snncc.targets.loihi.lowering.lower import lower_model
+    from snncc.targets.loihi.options import LoihiOptions, LoihiStudyKnobs
 
     if name == "subtract":
         path, reset, options = NIR / "braille_noDelay_noBias_subtract.nir", "subtract", {
@@ -96,8 +97,8 @@ def nir_goal(name, args):
     task = TaskSet("task-like Braille (SYNTHETIC)", tx, None,
                    f"{args.task_samples} samples of the letters Space, A, E, I, O, U, Y, events th 1 merged per taxel")
     wall0, cpu0 = time.time(), time.process_time()
-    result = finetune_loihi(graph, options, split, config=_config(args), task_sets=[task],
-                            progress=_progress(name), search=not args.no_search)
+    result = finetune_loihi(graph, LoihiOptions(**options), split, config=_config(args), task_sets=[task],
+                            progress=_progress(name), knobs=LoihiStudyKnobs(search=not args.no_search))
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
     out = {"graph": path.name, "command": command, "options": options, "record": result.record.as_dict(),
            "validation_checks": {k: result.validation[k] for k in ("timing_exact", "quantized_params_exact",
@@ -108,7 +109,7 @@ def nir_goal(name, args):
                           voltage=False).counts
     rules = {}
     for rule in ("per-layer", "fine", "auto"):   # untuned, as the goals state them: without replicas
-        low = lower_model(graph, dict(options, scale=rule, t_sample=args.steps, replicas=None))
+        low = lower_model(graph, LoihiOptions(**dict(options, scale=rule, replicas=None)), t_sample=args.steps)
         counts = network_counts(low, args.steps, low.network, held)
         rules[rule] = {"rule": low.quant_record.rule, "reason": low.quant_record.reason,
                        **argmax_agreement(teacher, counts).as_dict()}
@@ -131,12 +132,13 @@ def nir_goal(name, args):
 def xylo_goal(args):
     """Xylo Audio 2: the subtract graph lowered as compile does (rule auto), its spec fine-tuned (as
     ``snncc compile --target xylo --finetune``), measured against the float graph on held-out inputs."""
-    from snncc.finetune.braille_inputs import nir_braille_inputs
+    from snncc.data.nir_letters import nir_braille_inputs
     from snncc.finetune.engine import TaskSet
     from snncc.finetune.inputs import split_inputs
     from snncc.frontends import LoadOptions, load_model
-    from snncc.targets.xylo.finetune import XYLO_LR, finetune_lowered
-    from snncc.targets.xylo.lowering import lower
+    from snncc.targets.xylo.finetune.tuning import XYLO_LR, finetune_lowered
+    from snncc.targets.xylo.lowering.lower import lower
+    from snncc.targets.xylo.options import XyloOptions
 
     path = NIR / "braille_noDelay_noBias_subtract.nir"
     command = ("snncc compile braille_noDelay_noBias_subtract.nir --dt 1e-4 --reset subtract --time-steps 256 "
@@ -155,7 +157,7 @@ def xylo_goal(args):
     if args.relays != "fast":
         options["relays"] = args.relays
         command += f" --relays {args.relays}"
-    low = lower(graph, options)
+    low = lower(graph, XyloOptions(**options))
     result = finetune_lowered(low, split, config=_config(args, XYLO_LR), task_sets=[task], progress=_progress("xylo"))
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
     rec = result.record.as_dict()
@@ -182,7 +184,8 @@ def rsnn_goal(args):
     from snncc.finetune.engine import TaskSet
     from snncc.finetune.inputs import split_inputs
     from snncc.frontends import load_model
-    from snncc.targets.loihi.finetune import finetune_loihi
+    from snncc.targets.loihi.finetune.run import finetune_loihi
+    from snncc.targets.loihi.options import LoihiOptions, LoihiStudyKnobs
     from snncc.training.pipeline import assigned
 
     if not args.rsnn or not args.rsnn_data:
@@ -207,8 +210,8 @@ def rsnn_goal(args):
     task = TaskSet("test split (labelled, SYNTHETIC)", x[test_idx], y[test_idx], f"{test_idx.size} test samples")
     options = {"scale": args.rsnn_scale} if args.rsnn_scale else {}
     wall0, cpu0 = time.time(), time.process_time()
-    result = finetune_loihi(graph, options, split, config=_config(args), task_sets=[task],
-                            progress=_progress("rsnn"), search=not args.no_search)
+    result = finetune_loihi(graph, LoihiOptions(**options), split, config=_config(args), task_sets=[task],
+                            progress=_progress("rsnn"), knobs=LoihiStudyKnobs(search=not args.no_search))
     wall, cpu = time.time() - wall0, time.process_time() - cpu0
     acc = result.record.task[task.name]["accuracy"]
     out = {"checkpoint": str(args.rsnn), "data": str(args.rsnn_data), "options": options,

@@ -78,7 +78,7 @@ def main(argv=None):
     from snncc.finetune.inputs import split_inputs
     from snncc.finetune.loss import LossWeights
     from snncc.frontends import LoadOptions, load_model
-    from snncc.targets.xylo.finetune import finetune_xylo
+    from snncc.targets.xylo.finetune.tuning import finetune_xylo
 
     g = load_model(GRAPH, LoadOptions(dt=1e-4, reset="subtract"))
     spec = hand_mapped(g, args.threshold)

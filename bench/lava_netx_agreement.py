@@ -203,7 +203,7 @@ def features(bundle: Path) -> tuple[dict[str, Any], list[str], str]:
     """What the bundle states, layer by layer (the fields netx might read), its netx_compat notes and rule."""
     import h5py
 
-    from snncc.targets.loihi.bundle.hdf5 import read_bundle
+    from snncc.targets.loihi.bundle.read import read_bundle
 
     net = read_bundle(bundle)
     layers = []
@@ -371,7 +371,7 @@ def emulate_snncc(bundle: Path, x: np.ndarray, work: Path, tag: str) -> dict[str
 
 
 def drive(bundle: Path, x: np.ndarray) -> np.ndarray:
-    from snncc.targets.loihi.bundle.hdf5 import read_bundle
+    from snncc.targets.loihi.bundle.read import read_bundle
 
     return read_bundle(bundle).drive(x)
 
@@ -687,7 +687,7 @@ def row_dict(row: Row) -> dict[str, Any]:
 
 
 def run_probes(py: Path, work: Path, seed: int, timeout: float) -> list[dict[str, Any]]:
-    from snncc.targets.loihi.bundle.hdf5 import write_bundle
+    from snncc.targets.loihi.bundle.write import write_bundle
 
     out, jobs, pending = [], [], []
     pdir = work / "probes"

@@ -93,7 +93,7 @@ def measure(samples: int) -> dict:
         ref = simulate(trained, x, record="spikes")
         row = {"inputs": label, "braille_zero_2023 rates": {k: float(v.mean()) for k, v in ref.spikes.items()}}
         if x is letters:   # how the trained network does on the synthetic letters (not the paper's recordings)
-            row["braille_zero_2023 accuracy on the SYNTHETIC letters"] = float((ref.prediction.numpy() == labels).mean())
+            row["braille_zero_2023 accuracy on the SYNTHETIC letters"] = float((np.asarray(ref.prediction) == labels).mean())
         for name, (swap, gains, dt) in readings.items():
             g = reading(swap, gains, dt)
             res = simulate(g, x, record="spikes")

@@ -8,7 +8,7 @@ bundle (one weight exponent per projection) to agree with the float graph as wel
   ladder       Loihi bundles run by the bit-exact emulator: per-layer as lowered; its weights rounded with error
                feedback at the rule's scales; per-neuron scales with nearest rounding; per-neuron scales with
                error-feedback rounding, with a scale per neuron and with at most 8 per layer (what fine-tuning's
-               starting points use, targets/loihi/rescale.py); fine untuned
+               starting points use, targets/loihi/finetune/rescale.py); fine untuned
   sensitivity  the float graph (no chip) with only some weights rounded at per-neuron 8-bit scales with error
                feedback (input weights, recurrent weights, biases, all), and with Gaussian weight noise of
                0.3 % and 1 % (three seeds)
@@ -45,9 +45,10 @@ from snncc.finetune.teacher import run_teacher  # noqa: E402
 from snncc.frontends import LoadOptions, load_model  # noqa: E402
 from snncc.passes.current_bias import BiasTerm, current_biases, restore_biases  # noqa: E402
 from snncc.rounding import damped, round_with_feedback  # noqa: E402
-from snncc.targets.loihi import rescale  # noqa: E402
-from snncc.targets.loihi.finetune import network_counts  # noqa: E402
+from snncc.targets.loihi.finetune import rescale  # noqa: E402
+from snncc.targets.loihi.finetune.run import network_counts  # noqa: E402
 from snncc.targets.loihi.lowering.lower import lower_model  # noqa: E402
+from snncc.targets.loihi.options import LoihiOptions  # noqa: E402
 
 GRAPH = ROOT / "tests" / "data" / "nir" / "braille_zero_2023.nir"
 SUBTRACT = ROOT / "tests" / "data" / "nir" / "braille_noDelay_noBias_subtract.nir"
@@ -62,7 +63,7 @@ def main() -> None:
     graph = load_model(GRAPH, LoadOptions(dt=1e-4))
     split = split_inputs(width=12, steps=256, density=0.08, train=2048, validation=500, held_out=1000, seed=args.seed)
     held = split.x[split.held_out]
-    low = lower_model(graph, {"scale": "per-layer", "t_sample": 256})
+    low = lower_model(graph, LoihiOptions(scale="per-layer"), t_sample=256)
     names = tuple(c.lif for c in low.layers)
     teacher = run_teacher(low.trained, held, names, voltage=False).counts
 
@@ -93,7 +94,7 @@ def main() -> None:
         finally:
             rescale.round_with_feedback = saved
 
-    fine = lower_model(graph, {"scale": "fine", "t_sample": 256})
+    fine = lower_model(graph, LoihiOptions(scale="fine"), t_sample=256)
     ladder = {
         "per-layer as lowered": chip(low.network),
         "error-feedback rounding at the rule's scales": chip(start(False)),
@@ -116,7 +117,7 @@ def main() -> None:
         return float_h[k]
 
     def set_rows(g, c, m, n_in: int, n_terms: int) -> None:
-        """Layer ``c``'s float rows ``m`` (``rescale._float_rows``' column order) written back into ``g``."""
+        """Layer ``c``'s float rows ``m`` (``rescale.float_rows``' column order) written back into ``g``."""
         g.node(c.ff).weight = m[:, :n_in]
         terms = current_biases(g, c.lif)
         if terms:
@@ -128,7 +129,7 @@ def main() -> None:
         g = low.trained.copy()
         rng = np.random.default_rng(seed)
         for k, c in enumerate(low.layers):
-            w, n_in, n_terms = rescale._float_rows(low, k)
+            w, n_in, n_terms = rescale.float_rows(low, k)
             if noise is not None:
                 q = w * (1.0 + noise * rng.standard_normal(w.shape))
                 chosen = np.ones(w.shape[1], bool)
@@ -169,7 +170,7 @@ def main() -> None:
         keep 8 bits): what --replicas lets a chip hold, before any chip arithmetic."""
         g = low.trained.copy()
         for k, c in enumerate(low.layers):
-            w, n_in, n_terms = rescale._float_rows(low, k)
+            w, n_in, n_terms = rescale.float_rows(low, k)
             k_in = inputs if k == 0 else copies
             parts = [np.abs(w[:, :n_in]).max(axis=1) / k_in, np.abs(w[:, n_in:n_in + n_terms]).max(axis=1, initial=0)]
             if w.shape[1] > n_in + n_terms:
@@ -183,7 +184,7 @@ def main() -> None:
 
     def replicated_start(copies: int) -> float:
         """The chip: --replicas ``copies``, per-layer, fine-tuning's per-neuron start (no training)."""
-        rl = lower_model(graph, {"scale": "per-layer", "t_sample": 256, "replicas": copies})
+        rl = lower_model(graph, LoihiOptions(scale="per-layer", replicas=copies), t_sample=256)
         rn = tuple(c.lif for c in rl.layers)
         net = rescale.rescaled(rl, rl.network, x512, run_teacher(rl.trained, x512, rn, voltage=False).spikes)
         return argmax_agreement(teacher, network_counts(rl, 256, net, held)).share

@@ -54,7 +54,7 @@ from snncc.errors import SnnccError  # noqa: E402
 from snncc.frontends import load_model  # noqa: E402
 from snncc.ir.nodes import Input  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.bundle.hdf5 import read_bundle  # noqa: E402
+from snncc.targets.loihi.bundle.read import read_bundle  # noqa: E402
 from snncc.targets.loihi.emulation.emulator import emulate  # noqa: E402
 from snncc.targets.loihi.checks.exactness import pad  # noqa: E402
 
@@ -76,7 +76,7 @@ def float_ceiling(src: Path, x: np.ndarray, reference: np.ndarray) -> float:
     for name in ("fc1", "fc2", REC_NAME):
         w = noisy.node(name).weight
         noisy.node(name).weight = w * (1 + 0.01 * noise.standard_normal(w.shape))
-    return float(np.mean(simulate(noisy, x).prediction.numpy() == reference))
+    return float(np.mean(np.asarray(simulate(noisy, x).prediction) == reference))
 
 
 def random_case(seed: int, case: str, regime: dict, samples: int, steps: int):
@@ -110,8 +110,8 @@ def measure(seed: int, case: str, model: BrailleRSNN, x: np.ndarray, labels, wor
     src = workdir / f"g{seed}_{case.replace('+', '_')}.nir"
     nir.write(str(src), model.to_nir())
     ref = simulate(load_model(src), x, record="spikes")
-    counts = ref.readout.numpy()
-    pred = ref.prediction.numpy()
+    counts = np.asarray(ref.readout)
+    pred = np.asarray(ref.prediction)
     top2 = np.sort(counts, axis=1)[:, -2:]
     firm = (top2[:, 1] - top2[:, 0]) >= 2
     rec = model.w_rec
@@ -143,7 +143,8 @@ def measure(seed: int, case: str, model: BrailleRSNN, x: np.ndarray, labels, wor
 def real_graphs(samples: int, steps: int, density: float, workdir: Path, seed: int = 0) -> dict:
     """Per real graph and rule: argmax agreement and count correlation of the emulated bundle with the float graph."""
     from snncc.frontends import LoadOptions
-    from snncc.targets.loihi.checks.agreement import count_correlation, perturbed, random_inputs
+    from snncc.targets.kit.agreement import count_correlation, random_inputs
+    from snncc.targets.kit.reference import perturbed
 
     out = {}
     for name, extra in REAL.items():
@@ -152,13 +153,13 @@ def real_graphs(samples: int, steps: int, density: float, workdir: Path, seed: i
         graph = load_model(src, LoadOptions(dt=1e-4, reset=reset))
         x = random_inputs(samples, steps, graph.node(graph.of_kind(Input)[0]).width, density, seed)
         ref = simulate(graph, x, record="spikes")
-        c_ref, p_ref = ref.readout.numpy(), ref.prediction.numpy()
+        c_ref, p_ref = np.asarray(ref.readout), np.asarray(ref.prediction)
         entry = {"ceiling": {}, "rules": {}}
         for noise in NOISE_LEVELS:
             runs = [simulate(perturbed(graph, noise, seed), x) for seed in (9, 10, 11)]
             entry["ceiling"][f"noise {100 * noise:g} %"] = {
-                "argmax_agreement": float(np.mean([np.mean(r.prediction.numpy() == p_ref) for r in runs])),
-                "count_correlation": float(np.mean([count_correlation(r.readout.numpy(), c_ref) for r in runs]))}
+                "argmax_agreement": float(np.mean([np.mean(np.asarray(r.prediction) == p_ref) for r in runs])),
+                "count_correlation": float(np.mean([count_correlation(np.asarray(r.readout), c_ref) for r in runs]))}
         for rule in RULES:
             net_path = workdir / f"{src.stem}_{rule}.net"
             code = compile_exit(src, net_path, dt=1e-4, scale=rule, **extra)

@@ -26,13 +26,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
+from bench.xylo_bench_io import agreement, load, model_arguments, write_result  # noqa: E402
 from tests.xylo.oracle import XyloSimOracle  # noqa: E402
 from snncc import api  # noqa: E402
 from snncc.ir.nodes import LIF  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
-from snncc.targets.xylo import measure  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
 from snncc.threads import one_thread  # noqa: E402
 
@@ -65,8 +64,8 @@ def main() -> None:
     graph = load(args)
     last = [n for n, op in graph.items() if isinstance(op, LIF)][-1]
     with one_thread():
-        float_counts = simulate(graph, x, record="spikes").spikes[last].numpy().sum(axis=1)
-    agr = measure.agreement(ours.sum(axis=1), float_counts)
+        float_counts = np.asarray(simulate(graph, x, record="spikes").spikes[last]).sum(axis=1)
+    agr = agreement(ours.sum(axis=1), float_counts)
     result = {"artefact": args.artefact, "model": args.model, "rule": manifest["quantization"]["rule"],
               "inputs": f"{args.samples} seeded random spike trains (density {args.density}, seed {args.seed}), "
                         f"{args.steps} steps (SYNTHETIC)",

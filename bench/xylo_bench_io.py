@@ -5,12 +5,15 @@
     load(args)            the model; a NIR graph stores no dt and no reset, so they default to 1e-4 and subtract
                           there, while snncc's IR states both (--dt, --reset then stay unset)
     write_result(p, r)    ``r`` as indented JSON at ``p`` (its folder made), and the line that says so
+    agreement(c, ref)     the one agreement rule (``snncc.targets.kit.agreement``) of counts ``c`` with the float
+                          graph's ``ref``, with the count correlation beside it
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -41,3 +44,33 @@ def write_result(path: str | Path, result: dict[str, Any]) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(result, indent=1))
     print(f"wrote {out}")
+
+
+@dataclass
+class Agreement:
+    """``kit.agreement.argmax_agreement`` of a run with the float graph (``argmax``) and the count correlation."""
+
+    argmax: Any                       # snncc.targets.kit.agreement.ArgmaxAgreement
+    count_correlation: float | None
+
+    @property
+    def share(self) -> float | None:
+        return self.argmax.share
+
+    @property
+    def decided(self) -> int:
+        return self.argmax.decided
+
+    def as_dict(self) -> dict[str, Any]:
+        return {**self.argmax.as_dict(), "count_correlation": self.count_correlation}
+
+    def line(self) -> str:
+        corr = "undefined" if self.count_correlation is None else f"{self.count_correlation:.3f}"
+        return f"{self.argmax.text()}, count correlation {corr}"
+
+
+def agreement(counts, reference) -> Agreement:
+    """``counts`` (B, classes) against the float graph's ``reference`` counts by the one agreement rule."""
+    from snncc.targets.kit.agreement import argmax_agreement, count_correlation
+
+    return Agreement(argmax_agreement(reference, counts), count_correlation(counts, reference))

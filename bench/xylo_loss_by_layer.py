@@ -32,15 +32,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
+from bench.xylo_bench_io import agreement, load, model_arguments, write_result  # noqa: E402
 from snncc.ir.nodes import LIF, Dense  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
-from snncc.targets.xylo import measure  # noqa: E402
-from snncc.targets.xylo.emulator import decay, emulate, sat16  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
+from snncc.targets.xylo.emulation.emulator import decay, effective_weights, emulate, sat16  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
-from snncc.targets.xylo.weights import effective_weights  # noqa: E402
-from snncc.targets.xylo.written import read_artefact  # noqa: E402
+from snncc.targets.xylo.artefact.read import read_artefact  # noqa: E402
 from snncc.threads import one_thread  # noqa: E402
 
 
@@ -112,8 +110,8 @@ def one_seed(graph, spec: XyloSpec, manifest: dict, samples: int, seed: int, den
     x = random_inputs(samples, steps, width, density, seed)
     with one_thread():
         ref = simulate(graph, x, record="spikes")
-    h_float = ref.spikes[hidden].numpy()
-    o_float = ref.spikes[last].numpy()
+    h_float = np.asarray(ref.spikes[hidden])
+    o_float = np.asarray(ref.spikes[last])
     counts = o_float.sum(axis=1)
     if not np.array_equal(float_readout(h_float, dense, lif, graph.dt), o_float):
         raise SystemExit("internal check failed: the float readout does not reproduce the float graph")
@@ -124,17 +122,17 @@ def one_seed(graph, spec: XyloSpec, manifest: dict, samples: int, seed: int, den
         raise SystemExit("internal check failed: the chip readout does not reproduce the emulator")
     chip = run.output_spikes[:, lag:lag + steps].sum(axis=1)
     h_chip = run.spikes[:, at:at + steps][:, :, cells].astype(np.float64)        # (B, T, copies, n)
-    figures = {"chip": measure.agreement(chip, counts),
+    figures = {"chip": agreement(chip, counts),
                "float readout, chip hidden (copies' mean)":
-                   measure.agreement(float_readout(h_chip.mean(axis=2), dense, lif, graph.dt).sum(axis=1), counts)}
+                   agreement(float_readout(h_chip.mean(axis=2), dense, lif, graph.dt).sum(axis=1), counts)}
     if copies > 1:
         for k in range(copies):
-            figures[f"float readout, chip hidden copy {k}"] = measure.agreement(
+            figures[f"float readout, chip hidden copy {k}"] = agreement(
                 float_readout(h_chip[:, :, k], dense, lif, graph.dt).sum(axis=1), counts)
     events = np.zeros(run.spikes.shape, np.uint8)
     for row in cells:
         events[:, at:at + steps, row] = h_float
-    figures["chip readout, float hidden"] = measure.agreement(
+    figures["chip readout, float hidden"] = agreement(
         chip_readout(spec, events)[:, lag:lag + steps].sum(axis=1), counts)
     return {"figures": figures, "counts": counts, "outputs": {"chip": chip}}
 
@@ -166,7 +164,7 @@ def main() -> None:
         for name, agr in got["figures"].items():
             print(f"  {name}: {agr.line()}")
     if len(seeds) > 1:
-        pooled = measure.agreement(np.concatenate(pooled_chip), np.concatenate(pooled_counts))
+        pooled = agreement(np.concatenate(pooled_chip), np.concatenate(pooled_counts))
         result["pooled_chip"] = pooled.as_dict()
         print(f"chip, pooled over seeds {args.seeds}: {pooled.line()}")
     write_result(args.out, result)

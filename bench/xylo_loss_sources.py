@@ -30,15 +30,15 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
+from bench.xylo_bench_io import agreement, load, model_arguments, write_result  # noqa: E402
 from snncc.ir.nodes import LIF  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
-from snncc.targets.xylo import lowering, measure  # noqa: E402
-from snncc.targets.xylo.emulator import emulate  # noqa: E402
-from snncc.targets.xylo.lowering import lower, twin_counts  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
+from snncc.targets.xylo.emulation.emulator import emulate  # noqa: E402
+from snncc.targets.xylo.lowering.lower import lower, twin_counts  # noqa: E402
+from snncc.targets.xylo.options import XyloOptions, XyloStudyKnobs  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
-from snncc.targets.xylo.twin import spec_graph  # noqa: E402
+from snncc.targets.xylo.lowering.twin import spec_graph  # noqa: E402
 from snncc.threads import one_thread  # noqa: E402
 
 
@@ -46,7 +46,7 @@ def twin_emulator(dt: float):
     """(spec dict, chip inputs) -> output spikes of that spec dict's float twin: runs unrounded specs."""
     def run(spec: dict, chip_x: np.ndarray) -> np.ndarray:
         with one_thread():
-            return simulate(spec_graph(spec, dt), chip_x, record="spikes").spikes["output"].numpy()
+            return np.asarray(simulate(spec_graph(spec, dt), chip_x, record="spikes").spikes["output"])
     return run
 
 
@@ -76,18 +76,12 @@ def main() -> None:
     args = ap.parse_args()
 
     graph = load(args)
-    opts = {"rule": args.rule, "replicas": args.replicas}
+    opts = XyloOptions(rule=args.rule, replicas=args.replicas)
     chip_low = lower(graph, opts)
     # the unrounded lowering measures its candidates in the twin and could choose another readout: keep the
     # written one's
-    on_hidden = "readout on hidden neurons" in chip_low.rule
-    every_candidate = lowering.candidate_rules
-    lowering.candidate_rules = lambda *a, **k: [c for c in every_candidate(*a, **k)
-                                                if (c.readout == "hidden") == on_hidden]
-    try:
-        float_low = lower(graph, dict(opts, rounding="none", emulator=twin_emulator(graph.dt)))
-    finally:
-        lowering.candidate_rules = every_candidate
+    readout = "hidden" if "readout on hidden neurons" in chip_low.rule else "output"
+    float_low = lower(graph, opts, XyloStudyKnobs(rounding="none", emulator=twin_emulator(graph.dt), readout=readout))
     if chip_low.rule != float_low.rule:
         raise SystemExit(f"the unrounded lowering chose {float_low.rule!r}, the written one {chip_low.rule!r}")
     fine_twin = finer_relays(float_low, args.relay_factor)
@@ -98,7 +92,7 @@ def main() -> None:
     for seed in (int(s) for s in args.seeds.split(",")):
         x = random_inputs(args.samples, args.steps, graph.node("input").width, args.density, seed)
         with one_thread():
-            reference.append(simulate(graph, x, record="spikes").spikes[last].numpy().sum(axis=1))
+            reference.append(np.asarray(simulate(graph, x, record="spikes").spikes[last]).sum(axis=1))
         counts["chip"].append(chip_low.read_output(emulate(spec, chip_low.chip_input(x)).output_spikes,
                                                    args.steps).sum(axis=1))
         counts["twin"].append(twin_counts(chip_low.twin, chip_low.timing, x))
@@ -110,7 +104,7 @@ def main() -> None:
               "inputs": f"{args.samples} seeded random spike trains per seed {args.seeds} (density {args.density}), "
                         f"{args.steps} steps (SYNTHETIC)", "stages": {}}
     for name, parts in counts.items():
-        agr = measure.agreement(np.concatenate(parts), ref)
+        agr = agreement(np.concatenate(parts), ref)
         result["stages"][name] = agr.as_dict()
         print(f"{name:12s} {agr.line()}")
     write_result(args.out, result)

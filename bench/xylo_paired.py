@@ -22,13 +22,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.xylo_bench_io import load, model_arguments, write_result  # noqa: E402
+from bench.xylo_bench_io import agreement, load, model_arguments, write_result  # noqa: E402
 from snncc.ir.nodes import LIF  # noqa: E402
 from snncc.ir.simulate import simulate  # noqa: E402
-from snncc.targets.loihi.checks.agreement import random_inputs  # noqa: E402
-from snncc.targets.xylo import measure  # noqa: E402
-from snncc.targets.xylo.emulator import emulate  # noqa: E402
-from snncc.targets.xylo.written import read_artefact  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
+from snncc.targets.kit.agreement import decided, wilson_interval  # noqa: E402
+from snncc.targets.xylo.emulation.emulator import emulate  # noqa: E402
+from snncc.targets.xylo.artefact.read import read_artefact  # noqa: E402
 from snncc.threads import one_thread  # noqa: E402
 
 
@@ -69,22 +69,22 @@ def main() -> None:
         x = random_inputs(args.samples, args.steps, width, args.density, seed)
         with one_thread():
             ref = simulate(graph, x, record="spikes")
-        counts = ref.spikes[last].numpy().sum(axis=1)
-        mask = measure.clear_winner(counts)
+        counts = np.asarray(ref.spikes[last]).sum(axis=1)
+        mask = decided(counts)
         for i, w in enumerate(written):
             got = chip_counts(w, x)
-            per_seed[i][str(seed)] = measure.agreement(got, counts).as_dict()
+            per_seed[i][str(seed)] = agreement(got, counts).as_dict()
             hits[i].append((np.argmax(got, axis=1) == np.argmax(counts, axis=1))[mask])
     first = np.concatenate(hits[0])
     for i, (path, w) in enumerate(zip(args.artefacts, written)):
         h = np.concatenate(hits[i])
-        lo, hi = measure.wilson(int(h.sum()), h.size)
+        lo, hi = wilson_interval(int(h.sum()), h.size)
         better, worse = int((h & ~first).sum()), int((~h & first).sum())
         row = {"artefact": path, "rule": w.manifest["quantization"]["rule"], "pooled": float(h.mean()),
                "low": lo, "high": hi, "counted": int(h.size), "per_seed": per_seed[i],
                "vs_first": {"only_this": better, "only_first": worse, "mcnemar_p": mcnemar(better, worse)}}
         result["artefacts"].append(row)
-        seeds_line = ", ".join(f"{s}: {v['agreement']:.3f}" for s, v in per_seed[i].items())
+        seeds_line = ", ".join(f"{s}: {v['share']:.3f}" for s, v in per_seed[i].items())
         print(f"{path} ({row['rule']}): pooled {h.mean():.4f} [{lo:.3f}, {hi:.3f}] over {h.size}; per seed {seeds_line}"
               + ("" if i == 0 else f"; vs {args.artefacts[0]}: +{better} -{worse}, McNemar p = {mcnemar(better, worse):.3g}"))
     write_result(args.out, result)

@@ -40,13 +40,15 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from tests.xylo.oracle import XyloSimOracle  # noqa: E402   (xylosim 0.1.3, driven directly)
+from bench.xylo_bench_io import agreement  # noqa: E402
 from snncc.errors import SnnccError  # noqa: E402
 from snncc.frontends import LoadOptions, load_model  # noqa: E402
 from snncc.ir.nodes import Dense  # noqa: E402
-from snncc.targets.loihi.checks.agreement import perturbed, random_inputs  # noqa: E402   (target-neutral helpers)
-from snncc.targets.xylo import measure  # noqa: E402
-from snncc.targets.xylo.check import float_counts, rounded_decays  # noqa: E402   (what check measures)
-from snncc.targets.xylo.lowering import lower  # noqa: E402
+from snncc.targets.kit.agreement import random_inputs  # noqa: E402
+from snncc.targets.kit.reference import perturbed  # noqa: E402
+from snncc.targets.xylo.checks.stages import float_counts, rounded_decays  # noqa: E402   (what check measures)
+from snncc.targets.xylo.lowering.lower import lower  # noqa: E402
+from snncc.targets.xylo.options import XyloOptions, XyloStudyKnobs  # noqa: E402
 from snncc.targets.xylo.spec import XyloSpec  # noqa: E402
 
 GRAPHS = {  # file -> (load options, allow_reset_change)
@@ -102,8 +104,8 @@ def rockpool_counts(python: str, graph: Path, dt: float, x: np.ndarray) -> tuple
 
 
 def ceiling(ref, x, base, noise: float, draws: int = 3) -> dict:
-    rows = [measure.agreement(float_counts(perturbed(ref, noise, 100 + k), x), base) for k in range(draws)]
-    return {"agreement": float(np.mean([r.agreement for r in rows])),
+    rows = [agreement(float_counts(perturbed(ref, noise, 100 + k), x), base) for k in range(draws)]
+    return {"mean_share": float(np.mean([r.share for r in rows])),
             "count_correlation": float(np.mean([r.count_correlation for r in rows])),
             "draws": [r.as_dict() for r in rows]}
 
@@ -149,8 +151,9 @@ def main() -> None:
         for rule in RULES + ("auto",):
             t0 = time.perf_counter()
             try:
-                lowered[rule] = lower(graph, {"rule": rule, "allow_reset_change": allow, "density": args.density,
-                                              "calibration_samples": args.calibration, "time_steps": args.steps})
+                lowered[rule] = lower(graph, XyloOptions(rule=rule, allow_reset_change=allow,
+                                                         calibration_samples=args.calibration, time_steps=args.steps),
+                                      XyloStudyKnobs(density=args.density))
             except SnnccError as err:
                 entry[f"snncc {rule}"] = {"refused": str(err)}
                 continue
@@ -169,24 +172,25 @@ def main() -> None:
             entry[kind] = rows
             base = float_counts(ref, x)
             if allow:
-                rows["float as trained (reset to zero)"] = measure.agreement(float_counts(graph, x), base).as_dict()
+                rows["float as trained (reset to zero)"] = agreement(float_counts(graph, x), base).as_dict()
             for rule, low in lowered.items():
                 counts, seconds = xylosim_counts(low, x)
-                rows[f"snncc {rule}"] = dict(measure.agreement(counts, base).as_dict(), rule=low.rule,
+                rows[f"snncc {rule}"] = dict(agreement(counts, base).as_dict(), rule=low.rule,
                                              xylosim_seconds=seconds)
             counts, how = rockpool_counts(args.rockpool_python, path, float(graph.dt), x)
-            rows["rockpool"] = measure.agreement(counts, base).as_dict() | {"spec": how} if counts is not None \
+            rows["rockpool"] = agreement(counts, base).as_dict() | {"spec": how} if counts is not None \
                 else {"failed": how}
-            rows["decays rounded"] = measure.agreement(float_counts(rounded_decays(ref), x), base).as_dict()
+            rows["decays rounded"] = agreement(float_counts(rounded_decays(ref), x), base).as_dict()
             rows["noise 1 %"] = ceiling(ref, x, base, 0.01)
             rows["noise 0.3 %"] = ceiling(ref, x, base, 0.003)
             print(f"\n{name}, {kind} inputs ({result['inputs'][kind]}):", flush=True)
             for flow, r in rows.items():
-                if "agreement" in r and "low" in r:
-                    print(f"  {flow:28s} {measure.Agreement(**{k: r[k] for k in measure.Agreement.__dataclass_fields__}).line()}"
+                if "share" in r:
+                    shown = "undefined" if r["share"] is None else f"{r['share']:.3f} [{r['low']:.3f}, {r['high']:.3f}]"
+                    print(f"  {flow:28s} {shown} over {r['decided']} decided samples"
                           + (f"   [{r['rule']}]" if "rule" in r else ""), flush=True)
-                elif "agreement" in r:
-                    print(f"  {flow:28s} {r['agreement']:.3f} (mean of {len(r['draws'])} draws), count correlation "
+                elif "mean_share" in r:
+                    print(f"  {flow:28s} {r['mean_share']:.3f} (mean of {len(r['draws'])} draws), count correlation "
                           f"{r['count_correlation']:.3f}", flush=True)
                 else:
                     print(f"  {flow:28s} {r}", flush=True)

@@ -15,9 +15,11 @@ if TYPE_CHECKING:   # what type checkers see: the functions themselves, with the
     from snncc.verbs.analyse_ttc import analyse_ttc
     from snncc.verbs.bench import bench_artefacts as bench
     from snncc.verbs.check import check_model as check
+    from snncc.verbs.compare import compare_model as compare
     from snncc.verbs.compile import compile_model as compile
     from snncc.verbs.data_analyse import data_analyse
     from snncc.verbs.data_encode import data_encode
+    from snncc.verbs.data_nir import data_nir
     from snncc.verbs.data_frames import data_frames
     from snncc.verbs.data_synth import data_synth
     from snncc.verbs.emulate import emulate_bundle as emulate
@@ -32,10 +34,11 @@ if TYPE_CHECKING:   # what type checkers see: the functions themselves, with the
 # public name -> "module:attribute" that defines it (verb names follow the CLI: ``compile``,
 # ``check``, ``data_encode`` for ``snncc data encode``, ...)
 
-# --- target verbs: compile, check, emulate, map, report, run, bench ---
+# --- target verbs: compile, check, compare, emulate, map, report, run, bench ---
 _TARGET_HOMES: dict[str, str] = {
     "compile": "snncc.verbs.compile:compile_model",
     "check": "snncc.verbs.check:check_model",
+    "compare": "snncc.verbs.compare:compare_model",
     "emulate": "snncc.verbs.emulate:emulate_bundle",
     "map": "snncc.verbs.map:map_cores",
     "report": "snncc.verbs.report:report_energy",
@@ -49,6 +52,7 @@ _MODEL_DATA_HOMES: dict[str, str] = {
     "export": "snncc.verbs.export:export",
     "data_synth": "snncc.verbs.data_synth:data_synth",
     "data_encode": "snncc.verbs.data_encode:data_encode",
+    "data_nir": "snncc.verbs.data_nir:data_nir",
     "data_frames": "snncc.verbs.data_frames:data_frames",
     "data_analyse": "snncc.verbs.data_analyse:data_analyse",
     "train": "snncc.verbs.train:train",

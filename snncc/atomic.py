@@ -6,10 +6,10 @@ Rules every snncc writer follows (files through :func:`atomic_path`, directories
 * the new content is written to a hidden sibling ``.NAME.PID.XXXX.part`` and renamed into place
   only once complete, so a crash, an error, a full disk or Ctrl-C never leaves a half-written
   output at the destination;
-* a destination that resolves (after symlinks) to an input of the running command, or a directory
-  that contains one, is refused (:func:`protecting` declares the inputs; a file the command reads
-  from inside an input directory, such as a data set's pickles, becomes one as it is read:
-  :func:`record_input`);
+* a destination that resolves (after symlinks) to an input of the running command, a directory
+  that contains one, or a path inside an input directory (an artefact directory the command reads)
+  is refused (:func:`protecting` declares the inputs; a file the command reads from inside an input
+  directory, such as a data set's pickles, becomes one as it is read: :func:`record_input`);
 * ``.``/``..``, the current directory or one of its parents, and an existing directory named as a
   file output are refused; an existing device or pipe (``-o /dev/null``) is written through, never
   replaced;
@@ -90,10 +90,14 @@ def check_destination(dest: str | os.PathLike, *, directory: bool = False) -> Pa
     if resolved == cwd or resolved in cwd.parents:
         raise SnnccError("is the current directory or one of its parents; give a new output name", file=shown,
                          field="output")
-    for protected in _inputs():
-        if resolved == protected:
-            raise SnnccError("is an input of this command; writing the output there would destroy it",
-                             file=shown, field="output")
+    inputs = _inputs()
+    if resolved in inputs:
+        raise SnnccError("is an input of this command; writing the output there would destroy it",
+                         file=shown, field="output")
+    for protected in inputs:
+        if protected in resolved.parents and protected.is_dir():
+            raise SnnccError(f"lies inside an input of this command ({protected}, a directory it reads); an output "
+                             "there would change that input: write it elsewhere", file=shown, field="output")
         if directory and resolved in protected.parents:
             raise SnnccError(f"contains an input of this command ({protected}); replacing it would delete that input",
                              file=shown, field="output")

@@ -32,7 +32,18 @@ from snncc.targets.base import (
 from snncc.targets.base import target_options as _target_options
 
 GROUP = "snncc.targets"
+DEFAULT_TARGET = "loihi"       # what compile, check and hpo use without --target (the paper's chip): the one place
 R = TypeVar("R", bound=OptionRecord)
+
+# the own parameters of the commands that offer target flags (compile, check, map, hpo run, compare; a test keeps
+# this list complete): a target option of one of these names would shadow them, so such a target is refused at
+# registration, alone (the capabilities' own options, declared in base, are not counted)
+RESERVED_OPTIONS = frozenset({
+    "agreement", "artefact", "batch_size", "data", "device", "dt", "emulate", "energy_samples", "epochs", "figure",
+    "grid_span", "heartbeat", "hidden", "json_out", "limit", "model", "name", "objectives", "output", "params", "plot",
+    "preset", "pruner", "quiet", "ranges", "reset", "restarts", "seed", "select", "source", "startup", "step",
+    "storage", "subset", "target", "targets", "threads", "threshold", "trials", "val_fraction", "workdir",
+})
 
 
 def available_targets() -> list[str]:
@@ -55,18 +66,62 @@ def targets_for_suffix(suffix: str) -> list[str]:
     return [name for name, declared in output_suffixes().items() if declared.lower() == suffix.lower()]
 
 
+def suffix_target(path: str) -> tuple[str | None, str]:
+    """(the installed target whose declared suffix ends the file name ``path``, that suffix), the longest match
+    winning, so a two-part suffix (``.null.json``) is matched as a whole; (None, "") when none matches or two
+    targets declare the same longest suffix."""
+    from pathlib import PurePath
+
+    name = PurePath(str(path)).name.lower()
+    matches = [(declared, target) for target, declared in output_suffixes().items()
+               if name.endswith(declared.lower()) and len(name) > len(declared)]
+    if not matches:
+        return None, ""
+    longest = max(len(d) for d, _ in matches)
+    best = [(d, t) for d, t in matches if len(d) == longest]
+    return (best[0][1], best[0][0]) if len(best) == 1 else (None, "")
+
+
+def _sealed(target: Target) -> Target:
+    """``target`` if its declaration is acceptable, else a one-line refusal: an option named like a command's own
+    parameter (``RESERVED_OPTIONS``) would shadow that parameter for every target."""
+    kind = getattr(target, "options_type", TargetOptions)
+    try:
+        names = set(declared_options(kind))
+    except (TypeError, ValueError) as ex:
+        raise SnnccError(f"target {getattr(target, 'name', '?')!r} declares its options wrongly: {ex}",
+                         field="--target") from None
+    capability_names = {n for record in CAPABILITY_OPTIONS.values() for n in declared_options(record)}
+    clash = sorted((names & RESERVED_OPTIONS) - capability_names)
+    if clash:
+        flags = ", ".join("--" + n.replace("_", "-") for n in clash)
+        raise SnnccError(f"target {getattr(target, 'name', '?')!r} declares {flags}, which snncc's commands use "
+                         "themselves; the target is not offered (rename its option)", field="--target")
+    return target
+
+
+def _load(ep: EntryPoint) -> Target:
+    try:
+        found: Target = ep.load()
+    except Exception as ex:
+        raise SnnccError(f"target {ep.name!r} is installed but does not load ({ep.value}): "
+                         f"{type(ex).__name__}: {ex}", field="--target") from None
+    return _sealed(found)
+
+
 def get_target(name: str) -> Target:
     """The registered target ``name`` (the first entry point of that name), or a one-line refusal: not
-    installed, or its entry point fails to load (the plug-in's own error, named)."""
+    installed, its entry point fails to load (the plug-in's own error, named), or its options clash with
+    a command's own (``RESERVED_OPTIONS``)."""
     for ep in entry_points(group=GROUP):
         if ep.name == name:
-            try:
-                found: Target = ep.load()
-            except Exception as ex:
-                raise SnnccError(f"target {name!r} is installed but does not load ({ep.value}): "
-                                 f"{type(ex).__name__}: {ex}", field="--target") from None
-            return found
+            return _load(ep)
     raise SnnccError(f"unknown target {name!r} (installed: {', '.join(available_targets()) or 'none'})", field="--target")
+
+
+def default_target() -> Target:
+    """``DEFAULT_TARGET``'s target object."""
+    return get_target(DEFAULT_TARGET)
 
 
 def loaded_targets() -> list[Target]:
@@ -78,8 +133,8 @@ def loaded_targets() -> list[Target]:
     out = []
     for name in sorted(first):
         try:
-            out.append(first[name].load())
-        except Exception:  # a broken plug-in must not take every command's flags down with it
+            out.append(_load(first[name]))
+        except SnnccError:  # a broken plug-in must not take every command's flags down with it
             continue
     return out
 
@@ -216,6 +271,6 @@ def takers(kind: str) -> list[str]:
 
 
 __all__ = ["Target", "Artefact", "Record", "TargetOptions", "AgreementOptions", "FinetuneOptions", "Offer",
-           "VerbOptions",
+           "VerbOptions", "DEFAULT_TARGET", "RESERVED_OPTIONS", "default_target", "suffix_target",
            "get_target", "available_targets", "loaded_targets", "capability", "target_options", "verb_options",
            "offered_options", "model_kinds", "offering", "takers", "output_suffixes", "targets_for_suffix"]

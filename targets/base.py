@@ -43,6 +43,8 @@ separate keyword argument, never an option.
     run(artefact, inputs, *, source, stream, backend)        -> RunResult       snncc run
     map(source, options)                                     -> CoreMap         snncc map
     estimate(source, inputs, *, data, note, limit, progress) -> Record          snncc report --energy
+    profile(graph, artefact, inputs, *, progress)            -> Profile         snncc compare (resources, real
+                                                                                time, energy, NeuroBench)
     bench(artefacts, *, data, samples, ..., progress)        -> Record          snncc bench
     hardware()                                               -> HardwareCosts   snncc hpo (per trial)
     arithmetic(options)                                      -> Arithmetic      snncc train --qat-from
@@ -271,8 +273,9 @@ class FinetuneOptions(OptionRecord):
                                    capabilities=("finetune",))
     device: str | None = option("With --finetune: where it trains: auto (CUDA when present), cpu (default), cuda "
                                 "or cuda:N.", capabilities=("finetune",))
-    finetune_samples: int = option("With --finetune, without --data: seeded random training samples (500 more "
-                                   "choose the kept epoch, 1,000 more are held out to measure it).", default=2048,
+    finetune_samples: int = option("With --finetune, without --data: seeded random training samples; validation (which "
+                                   "chooses the kept epoch) and held-out samples (which measure it) scale with them: "
+                                   "500 and 1,000 for 2,048, at least 128 and 256.", default=2048,
                                    minimum=1, rule="must be a whole number >= 1", capabilities=("finetune",))
     finetune_epochs: int = option("With --finetune: training epochs.", default=6, minimum=1,
                                   rule="must be a whole number >= 1", capabilities=("finetune",))
@@ -313,6 +316,11 @@ def target_options(target: Target, given: Given = None, capability: str | Sequen
     kind = getattr(target, "options_type", TargetOptions)
     if isinstance(given, kind):
         return given
+    steps = _values(kind, given).get("time_steps")
+    if isinstance(steps, (int, float)) and not isinstance(steps, bool):
+        from snncc.limits import check_time_steps
+
+        check_time_steps(float(steps), "this value", field="--time-steps")   # the cap every sample obeys
     declared = declared_options(kind)
     fields = {f.name for f in dataclasses.fields(kind)}
     values: dict[str, object] = {}
@@ -499,6 +507,14 @@ class Estimate(Protocol):
         ``snncc.inputs.RandomSpikes``)."""
 
 
+class Profile(Protocol):
+    def __call__(self, graph: Graph, artefact: Path, inputs: np.ndarray, *, progress: Progress | None = None) -> Record:
+        """What the written ``artefact`` (compiled from ``graph``) costs on its hardware
+        (``snncc.targets.kit.profile.Profile``): resources against the chip's limits, the real-time verdict and the
+        energy ESTIMATE where a published cost model exists, at the event rates of ``inputs`` (B, T, C) in the
+        graph's input layout; NeuroBench's metrics from its own emulation or run."""
+
+
 class Bench(Protocol):
     def __call__(self, artefacts: list[Path], *, data: Path | None = None, samples: int = 64, power: bool = False,
                  power_root: Path = Path("/"), rail: str = "VDD_IN", repeats: int = 3, warmup_passes: int = 6,
@@ -625,7 +641,7 @@ class TrainArithmetic(Protocol):
 CAPABILITIES: dict[str, type] = {
     "lower": Lower, "identify": Identify, "check": Check, "agree": Agree, "emulate": Emulate, "run": Run, "map": Map,
     "estimate": Estimate, "bench": Bench, "hardware": Hardware, "arithmetic": TrainArithmetic,
-    "finetune": Finetune,
+    "finetune": Finetune, "profile": Profile,
 }
 
 
@@ -669,6 +685,8 @@ def capability(target: Target, name: Literal["map"], rule: str | None = None) ->
 def capability(target: Target, name: Literal["estimate"], rule: str | None = None) -> Estimate: ...
 @overload
 def capability(target: Target, name: Literal["bench"], rule: str | None = None) -> Bench: ...
+@overload
+def capability(target: Target, name: Literal["profile"], rule: str | None = None) -> Profile: ...
 @overload
 def capability(target: Target, name: Literal["hardware"], rule: str | None = None) -> Hardware: ...
 @overload

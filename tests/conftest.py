@@ -29,6 +29,14 @@ def _one_torch_thread():
     torch.set_num_threads(before)
 
 
+@pytest.fixture(scope="session")
+def shared_nir():
+    """The real NIR graphs other frameworks wrote (tests/data/nir, BSD-3-Clause: see its README)."""
+    from pathlib import Path
+
+    return Path(__file__).resolve().parent / "data" / "nir"
+
+
 @pytest.fixture
 def small_rsnn_checkpoint(tmp_path):
     torch.manual_seed(0)

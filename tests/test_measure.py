@@ -75,7 +75,7 @@ def test_a_model_silent_in_float_gets_one_warning_line_naming_the_cause():
     x = (np.random.default_rng(0).random((4, 40, 8)) < 0.2).astype(np.float64)
     for graph, silent in ((small_graph(seed=1, scale=1e-4), True), (small_graph(seed=1), False)):
         res = simulate(graph, x, record="spikes")
-        figures = liveness.activity({k: v.numpy() for k, v in res.spikes.items()})
+        figures = liveness.activity(dict(res.spikes))
         line = liveness.float_silence_warning(graph, x, figures)
         if silent:
             assert "\n" not in line and "population 'hidden'" in line and "threshold or gain scale" in line

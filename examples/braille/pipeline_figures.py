@@ -71,7 +71,7 @@ def training_curves_figure(curves: list[dict], chance_percent: float):
     if not curves:
         return None
     plt = _pyplot()
-    fig, (loss_ax, acc_ax) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, (loss_ax, acc_ax) = plt.subplots(1, 2, figsize=(11, 4.6), layout="constrained")
     for i, curve in enumerate(curves):
         color = f"C{i % 10}"
         epochs = [e["epoch"] for e in curve["epochs"]]
@@ -89,8 +89,8 @@ def training_curves_figure(curves: list[dict], chance_percent: float):
         ax.xaxis.get_major_locator().set_params(integer=True)
     if all(e["loss"] > 0 for c in curves for e in c["epochs"]):
         readable_log_axis(loss_ax, "y")
-    loss_ax.legend(fontsize=7)
-    acc_ax.legend(fontsize=6, ncol=2)
+    handles, labels = acc_ax.get_legend_handles_labels()      # one legend, below the axes: it covers no point
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(4, len(labels)), fontsize=7)
     fig.suptitle(f"Training curves -- {SYNTHETIC}", fontsize=10)
     return fig
 
@@ -110,10 +110,14 @@ def accuracy_figure(models: list[dict]):
         if xs:
             bars = ax.bar(xs, ys, width=width, color=color, label=label)
             ax.bar_label(bars, labels=[f"{y:.1f}" for y in ys], fontsize=6, padding=1)
+    beside = {"paper_float": "float", "paper_loihi": "loihi_emulated"}     # each paper figure over its own bar
+    slot = {key: j for j, (key, _, _) in enumerate(COLUMNS)}
     for (key, label), marker in zip(PAPER_COLUMNS, ("D", "*")):
         xs = [i for i, m in enumerate(models) if m.get(key) is not None]
         if xs:
-            ax.scatter(xs, [models[i][key] for i in xs], marker=marker, s=70, color="k", zorder=3, label=label)
+            offset = -0.4 + (slot[beside[key]] + 0.5) * width
+            ax.scatter([i + offset for i in xs], [models[i][key] for i in xs], marker=marker, s=90, color="k",
+                       edgecolors="w", linewidths=0.5, zorder=3, label=label)
     ax.set_xticks(range(len(models)), [m["model"] for m in models], fontsize=8)
     ax.set(ylabel="test accuracy %", ylim=(0, 105))
     ax.grid(axis="y", alpha=0.3)
@@ -133,7 +137,7 @@ def energy_delay_figure(estimate: dict | None):
                ("delay per sample (ms)", estimate["delay_ms_per_sample"], paper["delay_ms_per_sample"]),
                ("cores", estimate["cores"], paper["cores"]))
     plt = _pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(11, 3.8))
+    fig, axes = plt.subplots(1, 3, figsize=(11, 3.8), layout="constrained")
     for ax, (label, ours, theirs) in zip(axes, figures):
         bars = ax.bar([0, 1], [ours, theirs], color=["tab:orange", "0.35"])
         bars[0].set_hatch("//")                     # the estimate is drawn hatched
@@ -144,5 +148,4 @@ def energy_delay_figure(estimate: dict | None):
     fig.suptitle("Loihi 1 per sample: snncc's ESTIMATE (Davies 2018 Table 2, dynamic energy only; this bundle on "
                  "SYNTHETIC inputs), not a measurement,\nbeside the paper's MEASUREMENT (its RSNN th1 on the chip, "
                  "real data)", fontsize=9)
-    fig.tight_layout(rect=(0, 0, 1, 0.9))
     return fig

@@ -7,8 +7,9 @@ import typer
 app = typer.Typer(
     name="snncc",
     help=(
-        "snncc: compile trained spiking networks (CUBA LIF RSNN/FFSNN) and LSTMs for Loihi and "
-        "Jetson, and prove what each target loses against one reference simulation."
+        "snncc: compile trained spiking networks (CUBA LIF RSNN/FFSNN, conv SNNs) and LSTMs for every installed "
+        "target (neuromorphic chips, GPUs, microcontrollers: snncc compile --help lists them), and prove what each "
+        "loses against one reference simulation."
     ),
     no_args_is_help=True,
     add_completion=False,

@@ -32,7 +32,7 @@ def bench_command(
     timed_passes: int = typer.Option(6, "--timed-passes", help="Timed passes over the data set per repeat (batch 1)."),
     stream: bool = typer.Option(False, "--stream", help="Benchmark the streaming step model instead of the sequence model."),
     backend: str = typer.Option("auto", "--backend", help="auto | tensorrt | onnxruntime."),
-    target: str = typer.Option("jetson", "--target", "-t", help="Target whose artefacts these are."),
+    target: Optional[str] = typer.Option(None, "--target", "-t", help="Target whose artefacts these are (default: the one that recognises them)."),
     json_out: bool = typer.Option(False, "--json", help="Print the benchmark record as JSON."),
 ) -> None:
     """Per-sample latency (and power/energy) of a Jetson artefact, the paper's protocol."""

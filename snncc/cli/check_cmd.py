@@ -14,6 +14,7 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
 from snncc.cli.app import app
+from snncc.cli.model_options import dt_option, params_option, reset_option
 from snncc.cli.paths import declares_paths
 from snncc.cli.output import print_record, progress_bar
 from snncc.cli.target_flags import with_target_flags
@@ -27,9 +28,9 @@ def check_command(
     artefact: Optional[Path] = typer.Option(None, "--artefact", "-a", help="A written artefact to measure (a Loihi bundle, a Jetson directory, ...); its target follows from it. Without it, the model is compiled as `snncc compile` would (with compile's options below), into a temporary directory, and that artefact is measured."),
     target: Optional[str] = typer.Option(None, "--target", "-t", help="Target to compile for and measure (default loihi; with --artefact, the artefact's)."),
     data: Optional[Path] = typer.Option(None, "--data", help="Data set: a Braille .npz (snncc data) or any .npz with inputs (N,T,C) and labels (N,); with --agreement, labels are not needed; without --data, seeded random spikes."),
-    params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file for a SpyTorch weight list."),
-    dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
-    reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR)."),
+    params: Optional[Path] = params_option(),
+    dt: Optional[float] = dt_option(),
+    reset: Optional[str] = reset_option(),
     limit: Optional[int] = typer.Option(None, "--limit", help="Use only the first N samples (without --data: N random samples)."),
     agreement: bool = typer.Option(False, "--agreement", help="Measure agreement with the float graph instead of accuracy (no labels needed; implied without --data)."),
     json_out: bool = typer.Option(False, "--json", help="Print the record as JSON."),

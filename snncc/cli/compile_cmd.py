@@ -8,10 +8,11 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.model_options import dt_option, params_option, reset_option
 from snncc.cli.paths import declares_paths
 from snncc.cli.output import bar_columns, print_record, progress_bar
 from snncc.cli.target_flags import with_target_flags
-from snncc.targets import available_targets
+from snncc.targets import available_targets, output_suffixes
 
 
 @app.command("compile")
@@ -19,11 +20,11 @@ from snncc.targets import available_targets
 @declares_paths(inputs=("model", "params"), outputs=("output",))
 def compile_command(
     model: Path = typer.Argument(..., help="Model file: snncc checkpoint (.pt), SpyTorch weight list (.pt, needs --params), NIR graph (.nir) or snncc IR (.snnir)."),
-    target: Optional[str] = typer.Option(None, "--target", "-t", help=f"Target to compile for ({', '.join(available_targets())}). Default: the one -o's suffix names (.net -> loihi, .snnir -> ir); a Jetson directory or any other name needs --target, and a suffix that names another target is refused."),
-    output: Path = typer.Option(..., "--output", "-o", help="Artefact to write (a file for ir/loihi, a directory for jetson). Written atomically."),
-    params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file (key value per line) for a SpyTorch weight list."),
-    dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for formats that do not store one (NIR)."),
-    reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats that do not store one (NIR): zero | subtract | zero-delayed (snnTorch's one-step-late zero reset)."),
+    target: Optional[str] = typer.Option(None, "--target", "-t", help=f"Target to compile for ({', '.join(available_targets())}). Default: the one -o's suffix names ({', '.join(f'{s} -> {t}' for t, s in output_suffixes().items())}); any other name needs --target, and a suffix that names another target is refused."),
+    output: Path = typer.Option(..., "--output", "-o", help="Artefact to write (a file or a directory, as the target writes it). Written atomically."),
+    params: Optional[Path] = params_option(),
+    dt: Optional[float] = dt_option(),
+    reset: Optional[str] = reset_option(),
     json_out: bool = typer.Option(False, "--json", help="Print the compile report as JSON."),
     target_options: dict = {},
 ) -> None:

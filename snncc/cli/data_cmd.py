@@ -72,6 +72,21 @@ def synth_cmd(
     _show(record, json_out)
 
 
+@data_app.command("nir")
+@declares_paths(outputs=("out",))
+def nir_cmd(
+    out: Path = typer.Option(..., "--out", "-o", help="The .npz to write (inputs, labels, classes; atomically)."),
+    samples: int = typer.Option(700, "--samples", "-n", help="Samples, balanced over the 7 letters."),
+    seed: int = typer.Option(0, "--seed", help="Random seed; the same seed gives the same samples."),
+    steps: int = typer.Option(256, "--steps", help="Steps per sample (the NIR paper's: 256)."),
+    json_out: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+) -> None:
+    """SYNTHETIC Braille letters in the NIR paper's layout (Space, A, E, I, O, U, Y; 12 channels, ON and OFF merged; 256 steps), labelled, for check --data and compare --data on the NIR Braille graphs."""
+    from snncc.api import data_nir
+
+    _show(data_nir(out=out, samples=samples, seed=seed, steps=steps), json_out)
+
+
 @data_app.command("encode")
 @declares_paths(inputs=("src",), outputs=("out",))
 def encode_cmd(

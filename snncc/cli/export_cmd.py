@@ -8,6 +8,7 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.model_options import dt_option, params_option, reset_option
 from snncc.cli.paths import declares_paths
 from snncc.cli.output import console, print_json
 
@@ -18,9 +19,9 @@ def export_command(
     model: Path = typer.Argument(..., help="Model file: snncc checkpoint (.pt), SpyTorch weight list (.pt, needs --params), NIR (.nir) or snncc IR (.snnir)."),
     to: str = typer.Option("nir", "--to", help="Format to write (nir)."),
     output: Path = typer.Option(..., "--output", "-o", help="File to write (written atomically)."),
-    params: Optional[Path] = typer.Option(None, "--params", help="The authors' parameters file for a SpyTorch weight list."),
-    dt: Optional[float] = typer.Option(None, "--dt", help="Time step in seconds, for input formats that do not store one."),
-    reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for input formats that do not store one (NIR): zero | subtract | zero-delayed (snnTorch's late zero reset)."),
+    params: Optional[Path] = params_option(),
+    dt: Optional[float] = dt_option(),
+    reset: Optional[str] = reset_option(),
     nir_dt: Optional[float] = typer.Option(None, "--nir-dt", help="Step the NIR time constants are written for (default: the model's dt; snnTorch's importer has assumed 1e-4 s)."),
     json_out: bool = typer.Option(False, "--json", help="Print the export report as JSON."),
 ) -> None:

@@ -7,6 +7,7 @@ from typing import List, Optional
 
 import typer
 
+from snncc.targets import DEFAULT_TARGET
 from snncc.cli.app import app
 from snncc.cli.paths import declares_paths
 from snncc.cli.target_flags import with_target_flags
@@ -64,7 +65,7 @@ def run_command(
     device: str = typer.Option("auto", "--device", help="auto (CUDA when available), cpu, cuda or cuda:N."),
     threads: int = typer.Option(1, "--threads", help="Torch CPU threads."),
     heartbeat: int = typer.Option(30, "--heartbeat", help="Seconds between a running trial's heartbeats; a trial silent for 2x+1 is re-queued."),
-    target: str = typer.Option("loihi", "--target", "-t", help="Target whose hardware figures cost each trial (its objectives: loihi energy, cores, ...; xylo neurons, feasible, real_time_margin)."),
+    target: str = typer.Option(DEFAULT_TARGET, "--target", "-t", help="Target whose hardware figures cost each trial (its objectives: loihi energy, cores, ...; xylo neurons, feasible, real_time_margin)."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bars."),
     json_out: bool = typer.Option(False, "--json", help="Print the run summary as JSON."),
     target_options: dict = {},

@@ -8,6 +8,7 @@ from typing import Optional
 import typer
 
 from snncc.cli.app import app
+from snncc.cli.model_options import dt_option, params_option, reset_option
 from snncc.cli.paths import declares_paths
 from snncc.cli.output import console, print_json
 
@@ -16,9 +17,9 @@ from snncc.cli.output import console, print_json
 @declares_paths(inputs=("model", "params"))
 def inspect_command(
     model: Path = typer.Argument(..., help="Model file (.pt, .nir, .snnir)."),
-    params: Optional[Path] = typer.Option(None, "--params", help="Parameters file for a SpyTorch weight list."),
-    dt: Optional[float] = typer.Option(None, "--dt", help="Time step (s) for formats without one."),
-    reset: Optional[str] = typer.Option(None, "--reset", help="Reset mode for formats without one."),
+    params: Optional[Path] = params_option(),
+    dt: Optional[float] = dt_option(),
+    reset: Optional[str] = reset_option(),
     json_out: bool = typer.Option(False, "--json", help="Print as JSON."),
 ) -> None:
     """Load a model, validate its IR and print it: nodes, sizes, time constants, delays, reset."""

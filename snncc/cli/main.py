@@ -24,7 +24,7 @@ import warnings
 # Each module registers its verb(s) on the typer app when imported; they import only typer,
 # rich and the standard library at module level, so ``snncc --help`` starts at once.
 VERB_MODULES = (
-    "compile_cmd", "inspect_cmd", "emulate_cmd", "check_cmd", "map_cmd", "report_cmd", "export_cmd",
+    "compile_cmd", "inspect_cmd", "emulate_cmd", "check_cmd", "compare_cmd", "map_cmd", "report_cmd", "export_cmd",
     "run_cmd", "data_cmd", "train_cmd", "bench_cmd", "analyse_cmd", "hpo_cmd",
 )
 INTERRUPTED = "snncc: interrupted; no partial output was left behind"
@@ -92,9 +92,11 @@ def _usage_line(ex, args: list[str]) -> str:
         field = (opts[0] if opts and opts[0].startswith("-") else
                  (getattr(param, "human_readable_name", None) or getattr(param, "name", None)))
     field = field or getattr(ex, "option_name", None)
-    unknown = re.match(r"No such command '(.*)'", message)
+    unknown = re.match(r"No such command '([^']*)'\.?\s*(.*)", message)
     if field is None and unknown:
         field = unknown.group(1)
+        hint = unknown.group(2).strip()
+        message = "no such command" + (f" ({hint[0].lower() + hint[1:]})" if hint else "; snncc --help lists them")
     return _refusal(message or "bad usage (see --help)", file=where, field=field, args=args)
 
 

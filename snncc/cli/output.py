@@ -59,15 +59,35 @@ def bar_columns(remaining: bool = False) -> tuple:
     return columns + ((TimeRemainingColumn(),) if remaining else ())
 
 
+LINE_EVERY_S = 10.0      # outside a terminal: a progress line per phase and at most this often within one
+
+
+def _on_terminal() -> bool:
+    try:
+        return bool(err_console.file.isatty())
+    except (AttributeError, ValueError, OSError):
+        return False
+
+
 @contextlib.contextmanager
 def progress_bar(*columns, disable: bool = False, transient: bool = True):
-    """Yields ``progress(done, total, phase)`` for a verb: a bar on stderr (removed at the end when
-    ``transient``), started at the first report that leaves work to do (a run finished in one report
-    shows none)."""
+    """Yields ``progress(done, total, phase)`` for a verb. On a terminal: a bar on stderr (removed at the end when
+    ``transient``), started at the first report that leaves work to do (a run finished in one report shows none).
+    Anywhere else (a pipe, a log): one line on stderr when a phase starts and at most every ``LINE_EVERY_S``
+    seconds within it, ``snncc: progress: <phase>: <done>/<total>``, so long steps never look hung."""
+    import time
+
     state: dict[str, Any] = {}
 
     def report(done: int, total: int, phase: str = "") -> None:
         if disable:
+            return
+        if not _on_terminal():
+            now = time.monotonic()
+            if phase != state.get("phase") or now - state.get("said", 0.0) >= LINE_EVERY_S:
+                if done < total:       # a phase already complete says nothing new
+                    print(f"snncc: progress: {phase or 'working'}: {done}/{total}", file=err_console.file, flush=True)
+                state["phase"], state["said"] = phase, now
             return
         if "bar" not in state:
             if done >= total:

@@ -24,7 +24,7 @@ def run_command(
     stream: bool = typer.Option(False, "--stream", help="Feed step.onnx one time step at a time (any T, streaming)."),
     output: Optional[Path] = typer.Option(None, "--output", "-o", help="Write the results to this .npz (atomically)."),
     backend: str = typer.Option("auto", "--backend", help="auto (TensorRT if importable and an engine was built, else ONNX Runtime) | tensorrt | onnxruntime."),
-    target: str = typer.Option("jetson", "--target", "-t", help="Target whose artefact this is."),
+    target: Optional[str] = typer.Option(None, "--target", "-t", help="Target whose artefact this is (default: the one that recognises it)."),
     json_out: bool = typer.Option(False, "--json", help="Print the result summary as JSON."),
 ) -> None:
     """Run a Jetson artefact on inputs: the whole-sequence model, or the step model with --stream."""

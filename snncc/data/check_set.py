@@ -43,10 +43,16 @@ def load_check_data(path: Path, graph, limit: int | None = None, labels: bool = 
     if inputs is None:
         try:
             with np.load(path, allow_pickle=False) as z:
-                if "inputs" not in z or "labels" not in z:
+                if "inputs" not in z:
                     raise SnnccError("a check data set needs arrays 'inputs' (N, T, C) and 'labels' (N,)",
-                                     file=str(path), field="inputs" if "inputs" not in z else "labels")
+                                     file=str(path), field="inputs")
+                if "labels" not in z:
+                    raise SnnccError("has inputs but no 'labels' (N,): pass --agreement to measure the artefact's "
+                                     "agreement with the float model on these inputs instead of accuracy",
+                                     file=str(path), field="labels")
                 inputs, labels = z["inputs"], z["labels"]
+                if "synthetic" in z and z["synthetic"].shape == () and z["synthetic"].dtype == bool:
+                    meta["synthetic"] = bool(z["synthetic"])
         except SnnccError:
             raise
         except Exception as ex:  # not an npz / corrupt

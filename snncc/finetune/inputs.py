@@ -21,6 +21,15 @@ DEFAULT_DENSITY = 0.08
 DEFAULT_TRAIN = 2048
 DEFAULT_VALIDATION = 500
 DEFAULT_HELD_OUT = 1000
+MIN_VALIDATION = 128          # floors of the parts that scale with the training samples: 128 validation samples
+MIN_HELD_OUT = 256            # tell a paired gain of about 10 points; 256 held-out give an interval of about +-0.06
+
+
+def synthetic_sizes(train: int) -> tuple[int, int]:
+    """(validation, held-out) samples for ``train`` seeded training samples: in the default's proportions (2,048 ->
+    500 and 1,000), never below ``MIN_VALIDATION`` and ``MIN_HELD_OUT``."""
+    return (max(MIN_VALIDATION, round(train * DEFAULT_VALIDATION / DEFAULT_TRAIN)),
+            max(MIN_HELD_OUT, round(train * DEFAULT_HELD_OUT / DEFAULT_TRAIN)))
 
 
 @dataclass
@@ -109,8 +118,9 @@ def model_split(graph, inputs=None, labels=None, *, time_steps: int | None = Non
                 samples: int = DEFAULT_TRAIN, seed: int = 0, data: str | None = None) -> Split:
     """The split a target's ``finetune`` capability learns from (``FinetuneOptions``): the user's ``inputs``
     (read from ``data``; a quarter held out, at most 1,000, an eighth for validation, at most 500, the rest
-    trains; their steps must match ``time_steps`` when given), else ``samples`` seeded random spike trains of
-    ``density`` and the model's steps (``snncc.ir.timebase.sample_steps``), 500 validation, 1,000 held out."""
+    trains; their steps must match ``time_steps`` when given), else ``samples`` seeded random training spike trains
+    of ``density`` and the model's steps (``snncc.ir.timebase.sample_steps``) and validation and held-out parts in
+    proportion (``synthetic_sizes``: 500 and 1,000 for the default 2,048)."""
     from snncc.ir.nodes import Input
     from snncc.ir.timebase import sample_steps
 
@@ -125,4 +135,6 @@ def model_split(graph, inputs=None, labels=None, *, time_steps: int | None = Non
                             validation=min(DEFAULT_VALIDATION, max(1, n // 8)),
                             held_out=min(DEFAULT_HELD_OUT, max(1, n // 4)), seed=seed, source=data)
     steps, _ = sample_steps(graph, time_steps)
-    return split_inputs(width=width, steps=steps, density=density, train=samples, seed=seed)
+    validation, held_out = synthetic_sizes(int(samples))
+    return split_inputs(width=width, steps=steps, density=density, train=samples, validation=validation,
+                        held_out=held_out, seed=seed)

@@ -28,29 +28,25 @@ class TeacherRun:
                           {k: v[index] for k, v in self.voltage.items()})
 
 
-def _pre_reset(op: LIF, dt: float, spikes, current, voltage):
-    """V before reset from the simulator's records (torch tensors (B, T, n))."""
-    import torch
-
+def _pre_reset(op: LIF, dt: float, spikes: np.ndarray, current: np.ndarray, voltage: np.ndarray) -> np.ndarray:
+    """V before reset from the simulator's records ((B, T, n) arrays)."""
     _, beta = op.decays(dt)
-    beta = torch.as_tensor(beta, dtype=voltage.dtype)
-    prev = torch.cat([torch.zeros_like(voltage[:, :1]), voltage[:, :-1]], dim=1)
+    beta = np.asarray(beta, dtype=voltage.dtype)
+    prev = np.concatenate([np.zeros_like(voltage[:, :1]), voltage[:, :-1]], axis=1)
     pre = beta * prev + current
     if op.bias is not None and op.bias_placement == "voltage":
-        pre = pre + torch.as_tensor(op.bias, dtype=voltage.dtype)
+        pre = pre + np.asarray(op.bias, dtype=voltage.dtype)
     if op.refractory > 1:   # held at 0 for refractory - 1 steps after a spike
-        held = torch.zeros_like(spikes, dtype=torch.bool)
+        held = np.zeros(spikes.shape, dtype=bool)
         for k in range(1, op.refractory):
             held[:, k:] |= spikes[:, :-k] > 0
-        pre = torch.where(held, torch.zeros_like(pre), pre)
+        pre = np.where(held, 0.0, pre)
     return pre
 
 
 def run_teacher(graph: Graph, x: np.ndarray, populations: tuple[str, ...], *, voltage: bool = True,
                 batch: int = TEACHER_BATCH, progress=None) -> TeacherRun:
     """Spikes (and V_pre / theta) of every population of ``graph`` on inputs (N, T, C), in batches."""
-    import torch
-
     from snncc.ir.simulate import simulate
 
     spikes = {p: [] for p in populations}
@@ -59,12 +55,12 @@ def run_teacher(graph: Graph, x: np.ndarray, populations: tuple[str, ...], *, vo
         res = simulate(graph, x[start:start + batch], record="all" if voltage else "spikes")
         for p in populations:
             s = res.spikes[p]
-            spikes[p].append(s.numpy().astype(np.uint8))
+            spikes[p].append(np.asarray(s).astype(np.uint8))
             if voltage:
                 op = graph.node(p)
                 pre = _pre_reset(op, graph.dt, s, res.current[p], res.voltage[p])
-                theta = torch.as_tensor(op.threshold, dtype=pre.dtype)
-                volts[p].append((pre / theta).numpy().astype(np.float32))
+                theta = np.asarray(op.threshold, dtype=pre.dtype)
+                volts[p].append((pre / theta).astype(np.float32))
         if progress is not None:
             progress(min(start + batch, x.shape[0]))
     out = TeacherRun(counts=np.zeros((x.shape[0], 0)))

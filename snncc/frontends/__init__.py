@@ -52,9 +52,9 @@ def load_model(path: str | Path, options: LoadOptions | None = None) -> Graph:
     path = Path(path)
     options = options or LoadOptions()
     if not path.is_file():
-        from snncc.artefact_paths import wrong_path
+        from snncc.artefacts import not_a_model_file
 
-        raise wrong_path(path, "a model file")
+        raise not_a_model_file(path)
     suffix = path.suffix.lower()
     spec = _LOADERS.get(suffix, _LOADERS[".pt"])
     try:

@@ -227,10 +227,29 @@ def infer_dt(flat: _Flat) -> float:
             raise SnnccError("cannot infer dt: r/tau_mem differs between neurons, so the graph does not follow "
                              f"the snnTorch convention r = tau_mem/dt; {hint}", field=f"node '{name}'.r")
     dt = float(f"{float(ref):.12g}")
-    if dt >= float(np.min(np.concatenate(taus))):
-        raise SnnccError(f"cannot infer dt: r = tau_mem/dt would give dt = {dt:g} s, not below every time constant "
-                         f"(r = 1 is Norse's convention, not snnTorch's); {hint}", field="dt")
+    for name, tau in _time_constants(flat):     # a step as long as a time constant leaves no memory: another model
+        shortest = float(np.min(tau))
+        if dt >= shortest * (1 - MEMORY_TOLERANCE):
+            raise SnnccError(f"cannot infer dt: r = tau/dt gives dt = {dt:g} s, which is not below this population's "
+                             f"time constant ({shortest:g} s): it would keep no state from one step to the next "
+                             f"(r = 1 is Norse's convention, not snnTorch's); {hint}", field=f"node '{name}'")
     return dt
+
+
+MEMORY_TOLERANCE = 1e-6      # relative: a float32 tau equal to dt up to rounding counts as equal
+
+
+def _time_constants(flat: _Flat) -> list[tuple[str, np.ndarray]]:
+    """(node, its time constants) of every leaky neuron node, in the graph's order."""
+    out = []
+    for name, kind in flat.kinds.items():
+        node = flat.nodes[name]
+        if kind in ("CubaLIF", "CubaLI"):
+            out.append((name, np.concatenate([_arr(node, "tau_mem", name).reshape(-1),
+                                              _arr(node, "tau_syn", name).reshape(-1)])))
+        elif kind in ("LIF", "LI"):
+            out.append((name, _arr(node, "tau", name).reshape(-1)))
+    return out
 
 
 def _graph_meta_dt(nir_graph: Any) -> float | None:

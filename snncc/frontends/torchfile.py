@@ -28,13 +28,14 @@ def _hdf5_kind(path: Path) -> str | None:
             names = set(f.keys())
     except (OSError, ValueError):
         return "a damaged HDF5 file, not a model file"
-    if "layer" in names:   # netx's layout: a Loihi bundle
-        from snncc.artefact_paths import LOIHI_BUNDLE, READERS
+    from snncc.artefacts import artefact_note
 
-        return f"is {LOIHI_BUNDLE}, not a model file: {READERS[LOIHI_BUNDLE]}"
+    note = artefact_note(path)      # an installed target's artefact (a Loihi bundle is HDF5)
+    if note is not None:
+        return f"{note}; it is not a model file"
     if "node" in names:
         return "is a NIR graph (an HDF5 file) under another suffix: name it .nir"
-    return "an HDF5 file that is neither a model file, a NIR graph nor a Loihi bundle"
+    return "an HDF5 file that is neither a model file, a NIR graph nor an artefact an installed target recognises"
 
 
 def _classify(path: Path) -> str:

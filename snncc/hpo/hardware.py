@@ -12,6 +12,8 @@ from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from snncc.targets import DEFAULT_TARGET
+
 if TYPE_CHECKING:
     from collections.abc import Mapping
 
@@ -19,7 +21,7 @@ if TYPE_CHECKING:
 
     from snncc.targets.base import Figure, HardwareCosts, HardwareFigures
 
-SEARCH_TARGET = "loihi"     # the target every study is costed on (its figures are the report's columns)
+SEARCH_TARGET = DEFAULT_TARGET     # the target a study is costed on unless it names one (the registry's default)
 
 
 @lru_cache(maxsize=None)

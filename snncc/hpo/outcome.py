@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
+from snncc.targets import DEFAULT_TARGET
 from snncc.errors import SnnccError
 
 
@@ -68,7 +69,7 @@ class TrialOutcome:
     worker: str
     train_seconds: float
     notes: list = field(default_factory=list)
-    target: str = "loihi"                # whose hardware figures ``hardware`` holds (studies before it: Loihi)
+    target: str = DEFAULT_TARGET                # whose hardware figures ``hardware`` holds (studies before it: Loihi)
 
     def as_dict(self) -> dict:
         return asdict(self)

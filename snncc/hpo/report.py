@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from snncc.targets import DEFAULT_TARGET
 from snncc.hpo.annealing import pareto_ranks
 from snncc.hpo.outcome import TrialOutcome, directions
 from snncc.training.presets import PRESETS
@@ -40,7 +41,7 @@ class TrialRow:
     worker: str | None = None
     error: str | None = None
     hardware: dict | None = None            # the target's figures as recorded (HardwareFigures.as_dict())
-    target: str = "loihi"
+    target: str = DEFAULT_TARGET
 
     def value(self, name: str) -> float | None:
         """``accuracy``, or the figure the target's objective or report column ``name`` names (None: not measured)."""
@@ -71,7 +72,7 @@ class HpoReport:
     paper_presets: dict
     synthetic_data: bool
     notes: list = field(default_factory=list)
-    target: str = "loihi"        # whose hardware figures the trials hold (its columns are the report's)
+    target: str = DEFAULT_TARGET        # whose hardware figures the trials hold (its columns are the report's)
     columns: dict = field(default_factory=dict)     # name -> Figure (the target's declared report columns)
     front_axes: list = field(default_factory=list)  # the hardware objectives the front weighs beside accuracy
 

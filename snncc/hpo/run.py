@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from snncc.targets import DEFAULT_TARGET
 from snncc.errors import SnnccError
 from snncc.hpo.annealing import evenly_spaced_restarts
 from snncc.hpo.trial import TrialObjective
@@ -51,7 +52,7 @@ class HpoRequest:
     workdir: str = "hpo"
     device: str = "auto"
     heartbeat: int = 30
-    target: str = "loihi"             # whose hardware figures cost each trial
+    target: str = DEFAULT_TARGET             # whose hardware figures cost each trial
     target_options: dict = field(default_factory=dict)   # its lower options (compile's flags), given values only
 
 

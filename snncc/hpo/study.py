@@ -21,6 +21,7 @@ import warnings
 from dataclasses import asdict, dataclass, field, fields
 from typing import Callable
 
+from snncc.targets import DEFAULT_TARGET
 from snncc.errors import SnnccError
 from snncc.hpo.outcome import TrialOutcome, directions
 from snncc.hpo.space import GRID_KEYS, Range, grid_around, preset_in_space, space_from_dict
@@ -61,7 +62,7 @@ class StudyPlan:
     n_startup: int = 3                # anneal: prior draws after each (re)initialisation
     enqueue_preset: bool = True       # anneal: the paper's preset for the threshold as trial 0
     from_study: str | None = None     # grid: the step-1 study it is centred on
-    target: str = "loihi"             # whose ``hardware`` capability costs each trial (its objectives)
+    target: str = DEFAULT_TARGET             # whose ``hardware`` capability costs each trial (its objectives)
     target_options: dict = field(default_factory=dict)   # the target's lower options each trial compiles with
 
     # fields a rerun may change without changing the study

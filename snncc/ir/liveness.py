@@ -75,8 +75,8 @@ def population_activity(graph: Graph, inputs: np.ndarray) -> dict[str, SpikeActi
     for name in names:
         theta = np.asarray(graph.node(name).threshold, np.float64)
         finite = np.isfinite(theta) & (theta > 0)
-        v = res.voltage[name].numpy()[..., finite] / theta[finite]
-        out[name] = spike_activity(res.spikes[name].numpy(), refractory.get(name, 1))
+        v = np.asarray(res.voltage[name])[..., finite] / theta[finite]
+        out[name] = spike_activity(np.asarray(res.spikes[name]), refractory.get(name, 1))
         out[name].peak = float(v.max()) if v.size else 0.0
     return out
 

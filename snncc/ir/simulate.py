@@ -1,6 +1,6 @@
 """The reference simulator: the single definition of what an IR graph computes.
 
-Batched and vectorised in torch, float32 or float64. One time step t evaluates every node in
+Batched and vectorised in numpy, float64 (or float32). One time step t evaluates every node in
 the topological order of the zero-delay edges; an edge with delay d delivers its source's
 output of step t - d (zeros before t = 0). Node equations are those in ``snncc.ir.nodes``:
 
@@ -10,10 +10,12 @@ output of step t - d (zeros before t = 0). Node equations are those in ``snncc.i
           min(m, ceil(V/theta) - 1) on V > theta; V <- 0 | V - s*theta where s > 0)
     LSTM: PyTorch's cell, gate order i, f, g, o
 
-    Dense: y = W x (+b);  Conv: PyTorch's convNd on the C-order flattened map (``snncc.ir.conv``)
+    Dense: y = W x (+b);  Conv: the convolution on the C-order flattened map, as its connection matrix
+           (``snncc.ir.conv.conv_matrix``: y = A x + bias)
 
 Parts of the graph fed only by inputs through linear nodes (Dense, Conv; no state) are computed
-for the whole sequence at once before the time loop.
+for the whole sequence at once before the time loop. Results are numpy arrays; no torch is imported
+(compile, check and emulate run it without loading torch).
 """
 
 from __future__ import annotations
@@ -22,11 +24,9 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 import numpy as np
-import torch
 
 from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.ir.conv import conv_apply
 from snncc.ir.nodes import LIF, LINEAR, LSTM, Conv, Dense, Input, Output, Readout
 
 RECORD_CHOICES = ("outputs", "spikes", "all")
@@ -34,40 +34,52 @@ RECORD_CHOICES = ("outputs", "spikes", "all")
 
 @dataclass
 class SimulationResult:
-    """What a simulation produced. Tensors are (B, T, n) unless stated."""
+    """What a simulation produced. Arrays are (B, T, n) unless stated."""
 
-    outputs: dict[str, torch.Tensor]
-    spikes: dict[str, torch.Tensor] = field(default_factory=dict)
-    voltage: dict[str, torch.Tensor] = field(default_factory=dict)
-    current: dict[str, torch.Tensor] = field(default_factory=dict)
-    hidden: dict[str, torch.Tensor] = field(default_factory=dict)
-    readout: torch.Tensor | None = None      # (B, n): the score the Readout takes argmax of
-    prediction: torch.Tensor | None = None   # (B,) int64, ties to the lowest index
+    outputs: dict[str, np.ndarray]
+    spikes: dict[str, np.ndarray] = field(default_factory=dict)
+    voltage: dict[str, np.ndarray] = field(default_factory=dict)
+    current: dict[str, np.ndarray] = field(default_factory=dict)
+    hidden: dict[str, np.ndarray] = field(default_factory=dict)
+    readout: np.ndarray | None = None      # (B, n): the score the Readout takes argmax of
+    prediction: np.ndarray | None = None   # (B,) int64, ties to the lowest index
 
     @property
-    def output(self) -> torch.Tensor:
-        """The single Output node's (B, T, n) tensor."""
+    def output(self) -> np.ndarray:
+        """The single Output node's (B, T, n) array."""
         if len(self.outputs) != 1:
             raise SnnccError(f"graph has {len(self.outputs)} outputs; name one", field="outputs")
         return next(iter(self.outputs.values()))
 
 
-def as_input_tensor(x, dtype: torch.dtype) -> torch.Tensor:
-    """Accept (T, C) or (B, T, C) numpy/torch data; return (B, T, C) of ``dtype``."""
-    t = torch.as_tensor(np.asarray(x) if not isinstance(x, torch.Tensor) else x)
-    if t.dim() == 2:
-        t = t.unsqueeze(0)
-    if t.dim() != 3:
-        raise SnnccError(f"input must have shape (T, C) or (B, T, C), got {tuple(t.shape)}", field="input")
-    return t.to(dtype)
+def real_dtype(dtype: object) -> np.dtype:
+    """float32 or float64 from a numpy dtype, its name, or a torch dtype (``torch.float32``), without torch."""
+    try:
+        found = np.dtype(dtype)                        # type: ignore[call-overload]
+    except TypeError:
+        name = str(dtype).replace("torch.", "")
+        found = np.dtype({"float": "float32", "double": "float64"}.get(name, name))
+    if found not in (np.float32, np.float64):
+        raise SnnccError(f"the reference runs in float32 or float64, not {dtype}", field="dtype")
+    return found
 
 
-def spike_count(v: torch.Tensor, theta: torch.Tensor, max_spikes: int, fire_test: str) -> torch.Tensor:
+def as_input_array(x, dtype: np.dtype) -> np.ndarray:
+    """Accept (T, C) or (B, T, C) arrays (numpy, or anything ``np.asarray`` reads); return (B, T, C) of ``dtype``."""
+    a = np.asarray(x.detach().cpu().numpy() if hasattr(x, "detach") else x)
+    if a.ndim == 2:
+        a = a[None]
+    if a.ndim != 3:
+        raise SnnccError(f"input must have shape (T, C) or (B, T, C), got {tuple(a.shape)}", field="input")
+    return a.astype(dtype, copy=False)
+
+
+def spike_count(v: np.ndarray, theta: np.ndarray, max_spikes: int, fire_test: str) -> np.ndarray:
     """Spikes in one step under a LIF's spike rule: how many times ``v`` passes ``fire_test`` theta while
     theta is subtracted, at most ``max_spikes`` (theta > 0; +inf never fires)."""
     ratio = v / theta
-    n = torch.floor(ratio) if fire_test == ">=" else torch.ceil(ratio) - 1.0
-    return torch.clamp(n, min=0.0, max=float(max_spikes))
+    n = np.floor(ratio) if fire_test == ">=" else np.ceil(ratio) - 1.0
+    return np.clip(n, 0.0, float(max_spikes))
 
 
 def _schedule(g: Graph) -> list[str]:
@@ -91,44 +103,58 @@ SPARSE_MIN_SIZE = 1 << 20      # Dense weights this large and at most a quarter 
 SPARSE_MAX_DENSITY = 0.25      # products (same sums, another summation order)
 
 
-def _weight_tensor(op, dtype: torch.dtype) -> torch.Tensor:
-    w = torch.as_tensor(op.weight, dtype=dtype)
-    if isinstance(op, Dense) and w.numel() >= SPARSE_MIN_SIZE and \
-            int(torch.count_nonzero(w)) <= SPARSE_MAX_DENSITY * w.numel():
-        import warnings
+def _weight_matrix(op, dtype: np.dtype):
+    """The node's weight as the matrix y = x @ W.T uses: dense, or scipy CSR where large and sparse (and always
+    for a Conv, its connection matrix)."""
+    if isinstance(op, Conv):
+        from snncc.ir.conv import conv_matrix
 
-        with warnings.catch_warnings():   # torch calls its sparse CSR support beta; products are plain
-            warnings.simplefilter("ignore", UserWarning)
-            return w.to_sparse_csr()
+        return conv_matrix(op).astype(dtype)
+    w = np.asarray(op.weight, dtype=dtype)
+    if w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size:
+        import scipy.sparse as sp
+
+        return sp.csr_matrix(w)
     return w
 
 
-def _shift(x: torch.Tensor, d: int) -> torch.Tensor:
+def _bias_vector(op, dtype: np.dtype) -> np.ndarray | None:
+    if isinstance(op, Conv):
+        from snncc.ir.conv import conv_bias_vector
+
+        b = conv_bias_vector(op)
+    else:
+        b = op.bias
+    return None if b is None else np.asarray(b, dtype=dtype)
+
+
+def _shift(x: np.ndarray, d: int) -> np.ndarray:
     """x[:, t - d] along time, zeros for t < d."""
     if d == 0:
         return x
-    out = torch.zeros_like(x)
+    out = np.zeros_like(x)
     if d < x.shape[1]:
         out[:, d:] = x[:, :-d]
     return out
 
 
+def _sigmoid(x: np.ndarray) -> np.ndarray:
+    return 0.5 * (1.0 + np.tanh(0.5 * x))
+
+
 class _Runner:
-    def __init__(self, g: Graph, dtype: torch.dtype, record: str):
+    def __init__(self, g: Graph, dtype: np.dtype, record: str):
         self.g, self.dtype, self.record = g, dtype, record
         self.order = _schedule(g)
         self.static = _static_nodes(g)
-        self.t_ = {}  # torch copies of parameters
+        self.p: dict[str, tuple] = {}  # parameters as arrays of ``dtype``
         for name, op in g.items():
             if isinstance(op, LINEAR):
-                self.t_[name] = (
-                    _weight_tensor(op, dtype),
-                    None if op.bias is None else torch.as_tensor(op.bias, dtype=dtype),
-                )
+                self.p[name] = (_weight_matrix(op, dtype), _bias_vector(op, dtype))
             elif isinstance(op, LIF):
                 alpha, beta = op.decays(g.dt)
-                self.t_[name] = tuple(
-                    torch.as_tensor(a, dtype=dtype)
+                self.p[name] = tuple(
+                    np.asarray(a, dtype=dtype)
                     for a in (alpha, beta, op.threshold, op.bias if op.bias is not None else np.zeros(op.n))
                 )
             elif isinstance(op, LSTM):
@@ -136,29 +162,24 @@ class _Runner:
                 for extra in (op.bias_ih, op.bias_hh):
                     if extra is not None:
                         b = b + extra
-                self.t_[name] = (
-                    torch.as_tensor(op.weight_ih, dtype=dtype),
-                    torch.as_tensor(op.weight_hh, dtype=dtype),
-                    torch.as_tensor(b, dtype=dtype),
-                )
+                self.p[name] = (np.asarray(op.weight_ih, dtype=dtype), np.asarray(op.weight_hh, dtype=dtype),
+                                np.asarray(b, dtype=dtype))
 
-    def linear(self, name: str, x: torch.Tensor) -> torch.Tensor:
+    def linear(self, name: str, x: np.ndarray) -> np.ndarray:
         """A Dense or Conv node applied to (..., in) -> (..., out)."""
-        op = self.g.node(name)
-        w, b = self.t_[name]
-        if isinstance(op, Conv):
-            return conv_apply(op, x, w, b)
-        if w.layout == torch.sparse_csr:    # y^T = W x^T, W sparse (a folded convolution)
-            flat = x.reshape(-1, x.shape[-1])
-            y = (w @ flat.T).T.reshape(tuple(x.shape[:-1]) + (w.shape[0],))
-        else:
+        w, b = self.p[name]
+        if isinstance(w, np.ndarray):
             y = x @ w.T
+        else:                                  # y^T = W x^T, W sparse (a convolution, a folded one)
+            flat = x.reshape(-1, x.shape[-1])
+            y = np.asarray((w @ flat.T).T).reshape(tuple(x.shape[:-1]) + (w.shape[0],))
+        y = y.astype(self.dtype, copy=False)
         return y if b is None else y + b
 
-    def run(self, inputs: dict[str, torch.Tensor]) -> SimulationResult:
+    def run(self, inputs: dict[str, np.ndarray]) -> SimulationResult:
         g = self.g
         batch, steps = next(iter(inputs.values())).shape[:2]
-        full: dict[str, torch.Tensor] = {}
+        full: dict[str, np.ndarray] = {}
         for name in self.order:
             if name not in self.static:
                 continue
@@ -171,20 +192,20 @@ class _Runner:
 
         dynamic = [n for n in self.order if n not in self.static]
         # per-step histories of dynamic nodes' outputs: hist[(node, port)][t]
-        hist: dict[tuple[str, str], list[torch.Tensor]] = {}
-        state: dict[str, dict[str, torch.Tensor]] = {}
-        static_drive: dict[str, torch.Tensor] = {}
+        hist: dict[tuple[str, str], list[np.ndarray]] = {}
+        state: dict[str, dict[str, np.ndarray]] = {}
+        static_drive: dict[str, np.ndarray] = {}
         for name in dynamic:
             op = g.node(name)
             ports = {g.port(name, s) for s in g.successors(name)} | {"spikes"}
             for port in ports:
                 hist[(name, port)] = []
             if isinstance(op, LIF):
-                z = torch.zeros(batch, op.n, dtype=self.dtype)
-                state[name] = {"I": z, "V": z.clone(), "ref": torch.zeros(batch, op.n, dtype=torch.int32)}
+                z = np.zeros((batch, op.n), dtype=self.dtype)
+                state[name] = {"I": z, "V": z.copy(), "ref": np.zeros((batch, op.n), dtype=np.int32)}
             elif isinstance(op, LSTM):
-                z = torch.zeros(batch, op.hidden_size, dtype=self.dtype)
-                state[name] = {"h": z, "c": z.clone()}
+                z = np.zeros((batch, op.hidden_size), dtype=self.dtype)
+                state[name] = {"h": z, "c": z.copy()}
             static_preds = [p for p in g.predecessors(name) if p in self.static]
             if static_preds and isinstance(op, (LIF, Readout, Output, LSTM) + LINEAR):
                 static_drive[name] = sum(_shift(full[p], g.delay(p, name)) for p in static_preds)
@@ -192,7 +213,7 @@ class _Runner:
         want_state = self.record == "all"
         want_spikes = self.record in ("spikes", "all")
 
-        def fetch(src: str, dst: str, t: int) -> torch.Tensor | None:
+        def fetch(src: str, dst: str, t: int) -> np.ndarray | None:
             d = g.delay(src, dst)
             if src in self.static:
                 return None  # already in static_drive
@@ -200,15 +221,15 @@ class _Runner:
                 return None
             return hist[(src, g.port(src, dst))][t - d]
 
-        def drive(name: str, t: int, width: int) -> torch.Tensor:
+        def drive(name: str, t: int, width: int) -> np.ndarray:
             total = static_drive[name][:, t] if name in static_drive else None
             for p in g.predecessors(name):
                 v = fetch(p, name, t)
                 if v is not None:
                     total = v if total is None else total + v
-            return total if total is not None else torch.zeros(batch, width, dtype=self.dtype)
+            return total if total is not None else np.zeros((batch, width), dtype=self.dtype)
 
-        per_step: dict[str, dict[str, list[torch.Tensor]]] = {n: {} for n in dynamic}
+        per_step: dict[str, dict[str, list[np.ndarray]]] = {n: {} for n in dynamic}
         ports_of = {n: [p for (m, p) in hist if m == n] for n in dynamic}
         for t in range(steps):
             for name in dynamic:
@@ -216,7 +237,7 @@ class _Runner:
                 if isinstance(op, LINEAR):
                     out = {"spikes": self.linear(name, drive(name, t, op.in_size))}
                 elif isinstance(op, LIF):
-                    alpha, beta, theta, bias = self.t_[name]
+                    alpha, beta, theta, bias = self.p[name]
                     st = state[name]
                     i_new = alpha * st["I"] + drive(name, t, op.n)
                     if op.bias is not None and op.bias_placement == "current":
@@ -225,34 +246,35 @@ class _Runner:
                     if op.bias is not None and op.bias_placement == "voltage":
                         v_new = v_new + bias
                     refractory = st["ref"] > 0
-                    v_new = torch.where(refractory, torch.zeros_like(v_new), v_new)
-                    ref = torch.where(refractory, st["ref"] - 1, st["ref"])
+                    v_new = np.where(refractory, 0.0, v_new).astype(self.dtype, copy=False)
+                    ref = np.where(refractory, st["ref"] - 1, st["ref"])
                     if op.standard_spikes:
-                        s = (v_new > theta).to(self.dtype)
+                        s = (v_new > theta).astype(self.dtype)
                     else:
-                        s = spike_count(v_new, theta, op.max_spikes, op.fire_test)
+                        s = spike_count(v_new, theta, op.max_spikes, op.fire_test).astype(self.dtype, copy=False)
                     fired = s > 0
                     if op.reset == "zero":
-                        v_after = torch.where(fired, torch.zeros_like(v_new), v_new)
+                        v_after = np.where(fired, 0.0, v_new).astype(self.dtype, copy=False)
                     elif op.standard_spikes:
-                        v_after = torch.where(fired, v_new - theta, v_new)  # no 0*inf for integrators
+                        v_after = np.where(fired, v_new - theta, v_new)  # no 0*inf for integrators
                     else:
-                        v_after = torch.where(fired, v_new - s * theta, v_new)
+                        with np.errstate(invalid="ignore"):     # s = 0 where theta = inf: not taken
+                            v_after = np.where(fired, v_new - s * theta, v_new)
                     if op.refractory > 1:
-                        ref = torch.where(fired, torch.full_like(ref, op.refractory - 1), ref)
+                        ref = np.where(fired, op.refractory - 1, ref).astype(np.int32, copy=False)
                     st["I"], st["V"], st["ref"] = i_new, v_after, ref
                     out = {"spikes": s, "voltage": v_after}
                     if want_state:
                         per_step[name].setdefault("current", []).append(i_new)
                         per_step[name].setdefault("voltage", []).append(v_after)
                 elif isinstance(op, LSTM):
-                    w_ih, w_hh, b = self.t_[name]
+                    w_ih, w_hh, b = self.p[name]
                     st = state[name]
                     x = drive(name, t, op.input_size)
                     gates = x @ w_ih.T + st["h"] @ w_hh.T + b
-                    i, f, gg, o = gates.chunk(4, dim=1)
-                    c = torch.sigmoid(f) * st["c"] + torch.sigmoid(i) * torch.tanh(gg)
-                    h = torch.sigmoid(o) * torch.tanh(c)
+                    i, f, gg, o = np.split(gates, 4, axis=1)
+                    c = _sigmoid(f) * st["c"] + _sigmoid(i) * np.tanh(gg)
+                    h = _sigmoid(o) * np.tanh(c)
                     st["h"], st["c"] = h, c
                     out = {"spikes": h}
                 else:  # Readout, Output: pass the input through
@@ -260,14 +282,14 @@ class _Runner:
                 for port in ports_of[name]:
                     hist[(name, port)].append(out[port])
 
-        def stack(seq: list[torch.Tensor]) -> torch.Tensor:
-            return torch.stack(seq, dim=1)
+        def stack(seq: list[np.ndarray]) -> np.ndarray:
+            return np.stack(seq, axis=1)
 
         result = SimulationResult(outputs={})
         for name, op in g.items():
             series = full.get(name)
             if series is None and (name, "spikes") in hist:
-                series = stack(hist[(name, "spikes")]) if steps else torch.zeros(batch, 0, op.size, dtype=self.dtype)
+                series = stack(hist[(name, "spikes")]) if steps else np.zeros((batch, 0, op.size), dtype=self.dtype)
             if isinstance(op, Output):
                 result.outputs[name] = series
             elif isinstance(op, LIF) and (want_spikes or want_state):
@@ -279,13 +301,13 @@ class _Runner:
                 result.hidden[name] = series
             if isinstance(op, Readout):
                 if op.mode == "spike_count":
-                    score = series.sum(dim=1)
+                    score = series.sum(axis=1)
                 elif op.mode == "membrane_max":
-                    score = series.max(dim=1).values
+                    score = series.max(axis=1)
                 else:
                     score = series[:, -1]
                 result.readout = score
-                result.prediction = torch.argmax(score, dim=1)
+                result.prediction = np.argmax(score, axis=1).astype(np.int64)
         return result
 
 
@@ -293,36 +315,38 @@ def simulate(
     g: Graph,
     inputs,
     *,
-    dtype: torch.dtype = torch.float64,
+    dtype: object = np.float64,
     record: str = "outputs",
 ) -> SimulationResult:
     """Run the reference semantics of ``g`` on ``inputs``.
 
     ``inputs``: an array (T, C) / (B, T, C) for a graph with one Input, or a dict by Input name.
+    ``dtype``: float64 (default) or float32 (a numpy dtype, its name, or a torch dtype).
     ``record``: "outputs" (outputs and readout only), "spikes" (+ every LIF's spikes) or "all"
     (+ LIF current and post-reset voltage, LSTM hidden states). Every sample starts from zero state.
     """
     if record not in RECORD_CHOICES:
         raise SnnccError(f"record must be one of {RECORD_CHOICES}", field="record")
+    real = real_dtype(dtype)
     in_names = g.of_kind(Input)
     if not isinstance(inputs, dict):
         if len(in_names) != 1:
             raise SnnccError(f"graph has {len(in_names)} inputs; pass a dict by name", field="inputs")
         inputs = {in_names[0]: inputs}
-    tensors: dict[str, torch.Tensor] = {}
+    arrays: dict[str, np.ndarray] = {}
     shape = None
     for name in in_names:
         if name not in inputs:
             raise SnnccError("no data given for this input", field=f"input '{name}'")
-        x = as_input_tensor(inputs[name], dtype)
+        x = as_input_array(inputs[name], real)
         width = g.node(name).size
         if x.shape[2] != width:
             raise SnnccError(f"input has {x.shape[2]} channels, the graph expects {width}", field=f"input '{name}'")
-        if not torch.all(torch.isfinite(x)):
+        if not np.all(np.isfinite(x)):
             raise SnnccError("input contains NaN or Inf", field=f"input '{name}'")
         if shape is not None and x.shape[:2] != shape:
             raise SnnccError("all inputs must share batch and time sizes", field=f"input '{name}'")
         shape = x.shape[:2]
-        tensors[name] = x
-    with torch.no_grad():
-        return _Runner(g, dtype, record).run(tensors)
+        arrays[name] = x
+    with np.errstate(over="ignore"):       # an unbounded neuron's state may overflow to inf, as torch's did
+        return _Runner(g, real, record).run(arrays)

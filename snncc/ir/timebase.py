@@ -2,10 +2,13 @@
 
     --time-steps T                          if given;
     ceil(recording_length_s / dt)           if the model states its recording length (graph metadata);
-    DEFAULT_TIME_STEPS (100)                otherwise, and the compile report says so in one line.
+    DEFAULT_TIME_STEPS (256)                otherwise, and the compile report says so in one line.
 
-A Loihi bundle's tSample, a Jetson artefact's unrolled T and the inputs compile checks an artefact on
-all follow it, so a model that states no recording length is treated alike by every target.
+A Loihi bundle's tSample, a Jetson artefact's unrolled T, a Xylo artefact's calibration samples, the C
+target's, and the inputs every check, comparison and fine-tuning runs on all follow it, so a model that
+states no recording length is treated alike by every target. 256 is the sample length of the one task
+the published NIR graphs carry (the NIR paper's Braille data: 256 steps of 0.1 ms per letter); until
+this round Loihi and Jetson used 100 and Xylo 256, so one graph ran different experiments per target.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from snncc.ir.graph import Graph
 
-DEFAULT_TIME_STEPS = 100
+DEFAULT_TIME_STEPS = 256
 NO_LENGTH_RULE = (f"{DEFAULT_TIME_STEPS} steps, snncc's default for a model that states no recording length "
                   "(pass --time-steps to set it)")
 

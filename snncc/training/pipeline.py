@@ -11,6 +11,7 @@ from typing import Callable
 import numpy as np
 import torch
 
+from snncc.targets import DEFAULT_TARGET
 from snncc.errors import SnnccError, one_line
 from snncc.frontends.checkpoint import is_checkpoint, module_from_checkpoint, save_checkpoint
 from snncc.frontends.params import PaperParams, load_params
@@ -48,7 +49,7 @@ class TrainRequest:
     params_file: str | None = None
     qat_from: str | None = None
     qat_epochs: int = 3
-    qat_target: str = "loihi"         # the target whose arithmetic QAT trains through (capability ``arithmetic``)
+    qat_target: str = DEFAULT_TARGET         # the target whose arithmetic QAT trains through (capability ``arithmetic``)
     device: str = "auto"
     n_hidden: int | None = None      # spiking models: hidden neurons (None: the paper's 450)
 

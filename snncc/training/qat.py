@@ -20,11 +20,11 @@ from torch.func import functional_call
 
 from snncc.errors import SnnccError
 from snncc.models import SpikingClassifier
+from snncc.targets import DEFAULT_TARGET
 
 if TYPE_CHECKING:
     from snncc.targets.base import Arithmetic, QuantizedParameters
 
-DEFAULT_TARGET = "loihi"
 
 
 def target_arithmetic(target: str = DEFAULT_TARGET) -> Arithmetic:

@@ -48,19 +48,24 @@ class ComparisonResult:
         self.comparison.render_text(console)
 
 
-def bench_artefacts(artefacts: str | Path | list[str | Path], *, target: str = "jetson", data: str | Path | None = None,
+def bench_artefacts(artefacts: str | Path | list[str | Path], *, target: str | None = None, data: str | Path | None = None,
                     samples: int = 64, power: bool = False, power_root: str | Path = Path("/"), rail: str = "VDD_IN",
                     repeats: int = 3, warmup_passes: int = 6, timed_passes: int = 6, stream: bool = False,
                     backend: str = "auto", progress: VerbProgress | None = None) -> BenchResult | ComparisonResult:
     """Benchmark one artefact (``BenchResult``) or several side by side (``ComparisonResult``)."""
-    from snncc.targets import capability, get_target
+    from snncc.artefacts import target_for
+    from snncc.targets import capability
 
     paths = [Path(a) for a in ([artefacts] if isinstance(artefacts, (str, Path)) else artefacts)]
     for name, value in (("--repeats", repeats), ("--warmup-passes", warmup_passes + 1),
                         ("--timed-passes", timed_passes), ("--samples", samples)):
         if value < 1:
             raise SnnccError("must be >= 1 (warm-up passes >= 0)", field=name)
-    bench = capability(get_target(target), "bench")
+    owners = [target_for(p, target, "bench") for p in paths]
+    if len({t.name for t in owners}) > 1:
+        raise SnnccError(f"the artefacts belong to different targets ({', '.join(sorted({t.name for t in owners}))}); "
+                         "bench times one target's artefacts side by side", field="artefacts")
+    bench = capability(owners[0], "bench")
     record = bench(paths, data=None if data is None else Path(data), samples=samples, power=power,
                    power_root=Path(power_root), rail=rail, repeats=repeats, warmup_passes=warmup_passes,
                    timed_passes=timed_passes, stream=stream, backend=backend, progress=progress)

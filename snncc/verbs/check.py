@@ -82,7 +82,7 @@ def check_model(model: str | Path, *, artefact: str | Path | None = None, target
     from snncc.targets.kit.measured import compiled as compiled_artefact
     from snncc.data.check_set import load_check_data
     from snncc.frontends import LoadOptions, load_model
-    from snncc.targets import AgreementOptions, capability, get_target, verb_options
+    from snncc.targets import DEFAULT_TARGET, AgreementOptions, capability, get_target, verb_options
 
     model = Path(model)
     where = None if data is None else Path(data)
@@ -108,7 +108,7 @@ def check_model(model: str | Path, *, artefact: str | Path | None = None, target
         source_note = check_source(identity, graph, model)
         written: contextlib.AbstractContextManager[Path] = contextlib.nullcontext(Path(artefact))
     else:
-        tgt = get_target(target or "loihi")
+        tgt = get_target(target or DEFAULT_TARGET)
         split = verb_options(tgt, given, (use, "lower"), OFFERS)   # the options of compiling it too
         written = compiled_artefact(tgt, graph, split.target)
     if labelled:

@@ -66,15 +66,15 @@ class CompileRecord:
 
 
 def resolve_target(output: str | Path, target: str | None) -> tuple[str, str]:
-    """(target name, how it was chosen) from ``target`` and the suffix of ``output`` (module docstring)."""
-    from snncc.targets import available_targets, output_suffixes
+    """(target name, how it was chosen) from ``target`` and the suffix ending ``output``'s name (module docstring;
+    the longest declared suffix that ends the name wins, so ``.null.json`` is matched as a whole)."""
+    from snncc.targets import available_targets, output_suffixes, suffix_target
 
-    suffix = Path(output).suffix
+    by_suffix, suffix = suffix_target(str(output))
     suffixes = output_suffixes()
-    named = [name for name, declared in suffixes.items() if suffix and declared.lower() == suffix.lower()]
-    by_suffix = named[0] if len(named) == 1 else None
     if target is not None:
-        if by_suffix is not None and by_suffix != target:
+        if by_suffix is not None and by_suffix != target and not str(output).lower().endswith(
+                suffixes.get(target, "\0").lower()):
             own = f" ({suffixes[target]})" if target in suffixes else ""
             raise SnnccError(f"the suffix '{suffix}' names the {by_suffix} target, not {target}: name the output "
                              f"for {target}{own} or drop --target", file=str(output), field="--target")

@@ -6,6 +6,7 @@ import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Mapping, Sequence
 
+from snncc.targets import DEFAULT_TARGET
 from snncc.errors import one_line
 
 if TYPE_CHECKING:
@@ -50,7 +51,7 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
             seed: int = 0, val_fraction: float = 0.2, select: str = "val", hidden: int | None = None,
             batch_size: int = 128, energy_samples: int = 16, emulate: int = 0, pruner: str = "median",
             startup: int = 3, preset: bool = True, storage: str | None = None, workdir: str | os.PathLike = "hpo",
-            device: str = "auto", threads: int = 1, heartbeat: int = 30, target: str = "loihi",
+            device: str = "auto", threads: int = 1, heartbeat: int = 30, target: str = DEFAULT_TARGET,
             target_options: Mapping[str, object] | None = None, view: StudyView | None = None) -> HpoRunResult:
     """Run or resume the search ``name`` (step 2's study is NAME-grid) in this worker (see docs/hpo.md).
 
@@ -66,6 +67,10 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
     rich bars); None: silent. Ctrl-C re-queues the running trial and raises
     ``snncc.hpo.study.Interrupted``.
     """
+    from snncc.targets import get_target, verb_options
+
+    given = {k: v for k, v in (target_options or {}).items() if v is not None and v is not False}
+    verb_options(get_target(target), given, "lower")   # validated first, whether or not a trial compiles with them
     import torch
 
     from snncc.errors import SnnccError
@@ -85,7 +90,7 @@ def hpo_run(name: str, *, data: str | os.PathLike, threshold: int = 1, step: str
                      batch_size=batch_size, n_hidden=hidden, energy_samples=energy_samples, emulate_samples=emulate,
                      pruner=pruner, n_startup=startup, enqueue_preset=preset, storage=storage, workdir=str(workdir),
                      device=device, heartbeat=heartbeat, target=target,
-                     target_options={k: v for k, v in (target_options or {}).items() if v is not None and v is not False})
+                     target_options=given)
     before = torch.get_num_threads()
     torch.set_num_threads(threads)
     try:

@@ -1,4 +1,4 @@
-"""``snncc map``: place a bundle (or a model, lowered first) on the target's cores and report the core map."""
+"""``snncc map``: place a written artefact (or a model file, compiled first) on its target's cores or chip, and report it."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from snncc.errors import one_line
+from snncc.errors import SnnccError, one_line
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -30,16 +30,49 @@ class MapRecord:
 
 
 def map_cores(source: str | Path, *, target: str | None = None, plot: str | Path | None = None,
+              params: str | Path | None = None, dt: float | None = None, reset: str | None = None,
               **options: object) -> MapRecord:
-    """The core map of ``source``; ``plot`` also draws utilisation per core as a PNG (atomically).
-    ``options``: the target's for ``map`` (Loihi: ``timing``, ``scale``: they apply only when ``source``
-    is a model file, lowered first)."""
-    from snncc.artefacts import target_for
-    from snncc.targets import capability, verb_options
+    """The core map (or the chip usage) of ``source``: a written artefact, mapped as it is, or a model file,
+    compiled first exactly as ``snncc compile`` would (the model options ``params``, ``dt``, ``reset`` and the
+    target's compile options among ``options``; target ``target``, else ``snncc.targets.DEFAULT_TARGET``) into a
+    temporary directory. ``plot`` also draws the map as a PNG (atomically; the name must end in .png)."""
+    from snncc.artefacts import recognised, target_for
+    from snncc.targets import DEFAULT_TARGET, capability, get_target, verb_options
 
-    tgt = target_for(source, target, "map")
-    mapped = capability(tgt, "map")
-    cmap = mapped(Path(source), verb_options(tgt, options, "map").target)
+    path = Path(source)
+    if plot is not None and Path(plot).suffix.lower() != ".png":
+        raise SnnccError("the map is drawn as a PNG: name the file .png", file=str(plot), field="--plot")
+    if target is not None and not recognised(path) or not recognised(path) and path.is_file():
+        return _map_model(path, target or DEFAULT_TARGET, plot, params, dt, reset, options)
+    tgt = target_for(path, target, "map")
+    given = {"--params": params, "--dt": dt, "--reset": reset}
+    given.update({"--" + k.replace("_", "-"): v for k, v in options.items() if v not in (None, False)})
+    extra = next((flag for flag, value in given.items() if value is not None), None)
+    if extra is not None:
+        raise SnnccError("does not apply to a written artefact (compile fixed it); map the model file to choose it",
+                         field=extra)
+    cmap = capability(tgt, "map")(path, verb_options(tgt, {}, "map").target)
     if plot is not None:
         cmap.plot(plot)
     return MapRecord(str(source), cmap, None if plot is None else str(plot))
+
+
+def _map_model(path: Path, name: str, plot: str | Path | None, params: str | Path | None, dt: float | None,
+               reset: str | None, options: dict[str, object]) -> MapRecord:
+    from snncc.frontends import LoadOptions, load_model
+    from snncc.targets import capability, get_target, verb_options
+    from snncc.targets.kit.measured import compiled
+
+    tgt = get_target(name)
+    mapped = capability(tgt, "map", rule=f"target '{tgt.name}' has no map in this snncc")
+    graph = load_model(path, LoadOptions(params=None if params is None else Path(params), dt=dt, reset=reset))
+    split = verb_options(tgt, {**options, "source": str(path)}, "lower", ("lower", "map"))
+    with compiled(tgt, graph, split.target) as written:
+        cmap = mapped(written, verb_options(tgt, {}, "map").target)
+        notes = getattr(cmap, "notes", None)
+        if isinstance(notes, list):
+            notes.append(f"the model file was compiled first for {tgt.name}, exactly as snncc compile would with these "
+                         "options")
+        if plot is not None:
+            cmap.plot(plot)
+    return MapRecord(str(path), cmap, None if plot is None else str(plot))

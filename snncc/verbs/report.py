@@ -1,5 +1,6 @@
-"""``snncc report --energy``: ESTIMATE (not a measurement) of energy and delay per sample of a bundle,
-beside the paper's measurement, on a data set, a spike file or seeded random inputs."""
+"""``snncc report``: what a written artefact (or a model file, compiled first) uses of its hardware; with
+``--energy`` the target's ESTIMATE (not a measurement) of energy and delay per sample on a data set, a spike
+file or seeded random inputs (a published measurement beside it only for the model it was measured on)."""
 
 from __future__ import annotations
 
@@ -18,16 +19,31 @@ if TYPE_CHECKING:
 
 def report_energy(bundle: str | Path, *, target: str | None = None, energy: bool = False, data: str | Path | None = None,
                   input: str | Path | None = None, limit: int | None = None, samples: int | None = None,
-                  rate: float | None = None, seed: int | None = None, progress: VerbProgress | None = None) -> Record:
-    """The target's energy report (``as_dict``, ``render_text``) for ``bundle``. Inputs: ``data`` (a data
-    set .npz), ``input`` (a spike .npy), or ``samples`` seeded random samples (default 8) with spike
-    probability ``rate`` (default 0.05) per channel and step, ``seed`` (default 0)."""
-    from snncc.inputs import RandomSpikes, load_array
+                  rate: float | None = None, seed: int | None = None, params: str | Path | None = None,
+                  dt: float | None = None, reset: str | None = None, progress: VerbProgress | None = None,
+                  **options: object) -> Record:
+    """Without ``energy``: the resource report of ``bundle`` (``snncc.api.map``'s record: a written artefact, or a
+    model file compiled first with the model options and ``options``). With ``energy``: the target's energy
+    report (``as_dict``, ``render_text``) of the written artefact ``bundle``. Inputs: ``data`` (a data set .npz),
+    ``input`` (a spike .npy), or ``samples`` seeded random samples (default 8) with spike probability ``rate``
+    (default 0.05) per channel and step, ``seed`` (default 0)."""
     from snncc.artefacts import target_for
+    from snncc.inputs import RandomSpikes, load_array
     from snncc.targets import capability
 
     if not energy:
-        raise SnnccError("nothing to report without it: pass --energy", field="--energy")
+        for flag, value in (("--data", data), ("--input", input), ("--limit", limit), ("--samples", samples),
+                            ("--rate", rate), ("--seed", seed)):
+            if value is not None:
+                raise SnnccError("applies to --energy (the estimate runs inputs); the resource report runs none",
+                                 field=flag)
+        from snncc.verbs.map import map_cores
+
+        return map_cores(bundle, target=target, params=params, dt=dt, reset=reset, **options)
+    for flag, value in (("--params", params), ("--dt", dt), ("--reset", reset)):
+        if value is not None:
+            raise SnnccError("applies to a model file's resource report; --energy estimates a written artefact "
+                             "(compile the model first)", field=flag)
     if data is not None and input is not None:
         raise SnnccError("give --data or --input, not both", field="--input")
     if limit is not None and limit < 1:

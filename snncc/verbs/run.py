@@ -39,17 +39,19 @@ class RunRecord:
             console.print(f"wrote {one_line(self.output)}", markup=False)
 
 
-def run_artefact(artefact: str | Path, *, input: str | Path, target: str = "jetson", stream: bool = False,
+def run_artefact(artefact: str | Path, *, input: str | Path, target: str | None = None, stream: bool = False,
                  output: str | Path | None = None, backend: str = "auto") -> RunRecord:
     """Run ``artefact`` on ``input`` (.npy (T, C) or (B, T, C), or a data-set .npz's inputs): the whole
-    sequence model, or with ``stream`` the step model one step at a time; ``output`` saves the arrays."""
+    sequence model, or with ``stream`` the step model one step at a time; ``output`` saves the arrays. The target
+    is the artefact's (``target``, when given, must agree with it)."""
     import numpy as np
 
     from snncc.atomic import atomic_path
     from snncc.inputs import load_array
-    from snncc.targets import capability, get_target
+    from snncc.artefacts import target_for
+    from snncc.targets import capability
 
-    run = capability(get_target(target), "run")
+    run = capability(target_for(artefact, target, "run"), "run")
     result = run(Path(artefact), load_array(input), source=str(input), stream=stream, backend=backend)
     if output is not None:
         save: Callable[..., None] = np.savez       # its keywords are array names here, never allow_pickle

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from snncc.errors import SnnccError
-from snncc.progress import Progress as PhaseProgress
+from snncc.targets.kit import SnnccError
+from snncc.targets.kit import Progress as PhaseProgress
 from snncc.targets.base import Given, TargetOptions, target_options
 
 if TYPE_CHECKING:

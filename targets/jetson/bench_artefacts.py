@@ -8,7 +8,7 @@ from typing import Callable
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 
 
 def synthetic_inputs(manifest: dict, samples: int, seed: int) -> np.ndarray:
@@ -37,7 +37,7 @@ def bench_one(artefact: Path, *, data: Path | None = None, samples: int = 64, po
     runner = open_runner(artefact, backend, "step" if stream else "sequence")
     labels = None
     if data is not None:
-        from snncc.data.dataset_file import load_dataset
+        from snncc.targets.kit.inputs import load_dataset
 
         inputs, labels, meta = load_dataset(data)
         label = _data_label(data, meta, len(labels))
@@ -77,7 +77,7 @@ def bench_many(artefacts: list[Path], *, data: Path | None = None, samples: int 
 
     loaded = None
     if data is not None:
-        from snncc.data.dataset_file import load_dataset
+        from snncc.targets.kit.inputs import load_dataset
 
         loaded = load_dataset(data)
     entries = []

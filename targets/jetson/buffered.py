@@ -22,17 +22,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import torch
 
-import snncc
-from snncc.errors import InternalError, SnnccError
+from snncc.targets.jetson.options import DEFAULT_JETPACK, JetsonOptions
+from snncc.targets.kit import SNNCC_VERSION, InternalError, SnnccError
 from snncc.targets.jetson.export import _export, opset_for_jetpack
 from snncc.targets.jetson.manifest import FORMAT, FORMAT_VERSION, ArtefactFiles, manifest_bytes
 from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK, build_engine_script
 from snncc.targets.jetson.validate import VALUE_TOLERANCE, check_structure, session
-from snncc.threads import one_thread
+from snncc.targets.kit.compute import one_thread
 
 if TYPE_CHECKING:
-    from snncc.frontends.buffered import BufferedModel
-    from snncc.models.baselines import BufferedClassifier
+    from snncc.targets.kit.models import BufferedModel
+    from snncc.targets.kit.models import BufferedClassifier
 
 MAIN_BATCH, SECOND_BATCH = 8, 3
 
@@ -82,7 +82,7 @@ def build_buffered_manifest(module: BufferedClassifier, meta: dict, opset: int, 
     return {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
-        "snncc_version": snncc.__version__,
+        "snncc_version": SNNCC_VERSION,
         "model": {"name": cfg.kind, "kind": cfg.kind, "update_order": None},
         "source": {"file": source, "sha256": source_sha256},
         "jetpack": str(jetpack),
@@ -129,19 +129,19 @@ class BufferedArtefact(ArtefactFiles):
             console.print(f"note: {note}")
 
 
-def lower_buffered(model: BufferedModel, options: dict | None = None, progress=None) -> BufferedArtefact:
+def lower_buffered(model: BufferedModel, options: JetsonOptions | None = None, progress=None) -> BufferedArtefact:
     """A validated Jetson artefact of a buffered classifier (``snncc.frontends.buffered.BufferedModel``;
     options: jetpack, seed, time_steps); ``progress(done, total, phase)`` through export and validation."""
     from snncc.targets.jetson.lower import EXPORTING, VALIDATING, runner_source
 
     module, meta = model.module, dict(model.metadata)
-    options = {**dict(options or {}), "source": model.source_file, "source_sha256": model.source_sha256}
+    options = options or JetsonOptions()
     report = progress or (lambda done, total, phase: None)
-    given = options.get("time_steps")
+    given = options.time_steps
     if given is not None and int(given) != module.config.n_steps:
         raise SnnccError(f"a buffered {module.config.kind} takes exactly {module.config.n_steps} frames "
                          f"(its architecture), not {given}", field="--time-steps")
-    jetpack = str(options.get("jetpack") or "4.6")
+    jetpack = str(options.jetpack or DEFAULT_JETPACK)
     opset = opset_for_jetpack(jetpack)
     module = module.eval()
     with one_thread():
@@ -151,10 +151,10 @@ def lower_buffered(model: BufferedModel, options: dict | None = None, progress=N
                            opset)
         report(1, 1, EXPORTING)
         report(0, 1, VALIDATING)
-        validation = validate_buffered(module, exported.data, seed=int(options.get("seed") or 0))
+        validation = validate_buffered(module, exported.data, seed=int(options.seed))
         report(1, 1, VALIDATING)
-    manifest = build_buffered_manifest(module, meta, opset, jetpack, validation, options.get("source"),
-                                       options.get("source_sha256"))
+    manifest = build_buffered_manifest(module, meta, opset, jetpack, validation, model.source_file,
+                                       model.source_sha256)
     files = {"model.onnx": exported.data, "manifest.json": manifest_bytes(manifest),
              "build_engine.sh": build_engine_script(manifest).encode("utf-8"), "run.py": runner_source()}
     notes = ["validated in ONNX Runtime against the PyTorch module on this machine; TensorRT engines are built "

@@ -5,42 +5,29 @@ This module imports nothing heavy: listing or choosing the target loads neither 
     lower  -> JetsonArtefact     (lower.py: ONNX sequence + step models validated in ONNX Runtime;
                                   buffered.py for a buffered classifier, which has no IR graph)
     identify -> ArtefactIdentity (written.py: is a directory a Jetson artefact, from which model)
-    check  -> JetsonCheckRecord  (lower.py, check.py: the written artefact vs the IR reference on a data set)
-    agree  -> JetsonCheckRecord  (lower.py, check.py: the same without labels, random or given inputs)
+    check  -> CheckReport        (lower.py, check.py: the written artefact vs the IR reference on a data set)
+    agree  -> CheckReport        (lower.py, check.py: the same without labels, random or given inputs)
     run    -> RunResult          (run_artefact.py: an artefact on inputs, TensorRT or ONNX Runtime)
     bench  -> BenchRecord / LatencyComparison (bench_artefacts.py: the paper's latency and power protocol)
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from snncc.progress import Progress as PhaseProgress
+from snncc.targets.kit import Progress as PhaseProgress
 from snncc.targets.base import (
-    AgreementOptions, Artefact, Given, Progress, Record, RunResult, TargetOptions, capability_options, option,
-    target_options,
+    AgreementOptions, Artefact, Given, Progress, Record, RunResult, capability_options, target_options,
 )
+from snncc.targets.jetson.options import JetsonOptions
 
 if TYPE_CHECKING:
     import numpy as np
 
-    from snncc.artefacts import ArtefactIdentity
+    from snncc.targets.kit.artefact import ArtefactIdentity
     from snncc.ir.graph import Graph
     from snncc.targets.base import Model
-
-
-@dataclass(frozen=True)
-class JetsonOptions(TargetOptions):
-    """Jetson's options; ``seed`` (of the validation inputs) is a setting no flag offers."""
-
-    jetpack: str | None = option(
-        "JetPack version of the board (default 4.6); selects the ONNX opset (4.6 -> 13, 5.x/6.0 -> 17, "
-        "6.1/6.2 -> 20).", capabilities=("lower",))
-    time_steps: int | None = option("T of the unrolled sequence model (default: recording length / dt).",
-                                    minimum=1, rule="time steps must be a whole number >= 1", capabilities=("lower",))
-    seed: int = 0
 
 
 class JetsonTarget:
@@ -60,9 +47,9 @@ class JetsonTarget:
         return opts
 
     def lower(self, model: Model, options: Given = None, *, progress: PhaseProgress | None = None) -> Artefact:
-        from snncc.frontends.buffered import BufferedModel
+        from snncc.targets.kit.models import BufferedModel
 
-        settings = self._options(options, "lower").as_dict()
+        settings = self._options(options, "lower")
         if isinstance(model, BufferedModel):
             from snncc.targets.jetson.buffered import lower_buffered
 
@@ -83,37 +70,36 @@ class JetsonTarget:
               progress: Progress | None = None) -> Record:
         """The written artefact ``artefact`` (None: the one compile would write, in a temporary directory)
         vs the IR reference on a data set (``lower.check_graph``)."""
-        from snncc.targets.kit.measured import compiled as compiled_artefact
         from snncc.targets.jetson.lower import check_graph
+        from snncc.targets.kit.measured import artefact_to_measure
 
         settings = self._options(options, "check")
-        if artefact is None:
-            with compiled_artefact(self, graph, options) as path:
-                return self.check(graph, inputs, labels, settings, artefact=path, data=data, synthetic=synthetic,
-                                  progress=progress)
-        found: Record = check_graph(graph, inputs, labels, settings.as_dict(), artefact=artefact, data=data,
-                                    synthetic=synthetic, progress=progress)
+        with artefact_to_measure(self, graph, settings, artefact) as path:
+            found: Record = check_graph(graph, inputs, labels, artefact=path, data=data, synthetic=synthetic,
+                                        progress=progress)
         return found
 
     def agree(self, graph: Graph, inputs: np.ndarray | None, options: Given = None,
               agreement: AgreementOptions | None = None, *, artefact: Path | None = None, data: str | None = None,
               progress: Progress | None = None) -> Record:
-        """The written artefact's agreement with the float model without labels (``lower.agree_graph``);
-        ``agreement.noise`` (the float model's sensitivity to 8-bit-sized weight noise) is a Loihi figure."""
-        from snncc.targets.kit.measured import compiled as compiled_artefact
-        from snncc.errors import SnnccError
+        """The written artefact's agreement with the float model without labels (``lower.agree_graph``), with
+        the float graph's own ceiling under ``agreement.noise``."""
         from snncc.targets.jetson.lower import agree_graph
+        from snncc.targets.kit.measured import artefact_to_measure
 
         how = agreement or capability_options(AgreementOptions)
-        if how.noise != capability_options(AgreementOptions).noise:
-            raise SnnccError("applies to --target loihi (the float model's sensitivity to 8-bit-sized weight noise); "
-                             "the Jetson artefact runs in float32", field="--noise")
         settings = self._options(options, "agree")
-        if artefact is None:
-            with compiled_artefact(self, graph, options) as path:
-                return self.agree(graph, inputs, settings, how, artefact=path, data=data, progress=progress)
-        found: Record = agree_graph(graph, inputs, artefact=artefact, samples=how.samples, density=how.density,
-                                    data=data, progress=progress)
+        with artefact_to_measure(self, graph, settings, artefact) as path:
+            found: Record = agree_graph(graph, inputs, artefact=path, samples=how.samples, density=how.density,
+                                        noise=how.noise, data=data, progress=progress)
+        return found
+
+    def profile(self, graph: Graph, artefact: Path, inputs: np.ndarray, *,
+                progress: Progress | None = None) -> Record:
+        """Parameters and file sizes, and NeuroBench's metrics (``profile.py``); no real-time or energy estimate."""
+        from snncc.targets.jetson.profile import profile_artefact
+
+        found: Record = profile_artefact(graph, artefact, inputs, progress)
         return found
 
     def run(self, artefact: Path, inputs: np.ndarray, *, source: str | None = None, stream: bool = False,
@@ -128,7 +114,7 @@ class JetsonTarget:
               timed_passes: int = 6, stream: bool = False, backend: str = "auto",
               progress: PhaseProgress | None = None) -> Record:
         """One artefact: a ``BenchRecord`` (with power); several: a ``LatencyComparison`` (ratios to the first)."""
-        from snncc.errors import SnnccError
+        from snncc.targets.kit import SnnccError
         from snncc.targets.jetson.bench_artefacts import bench_many, bench_one
 
         if len(artefacts) > 1:

@@ -1,4 +1,4 @@
-"""``snncc check --target jetson``: the IR reference against the written artefact, on a data set.
+"""``snncc check --target jetson``: the IR reference against the written artefact (``kit.checks.CheckReport``).
 
 The artefact is run from its directory (``written.py``: ``model.onnx`` in ONNX Runtime, or
 ``step.onnx`` step by step for inputs of another length). Reports accuracy of both (when labels
@@ -6,72 +6,21 @@ are given), prediction agreement (``snncc.measure.agreement``: samples whose flo
 the top or is silent are left out and counted), output spike agreement (SNNs), max |delta| of
 scores and outputs, the fp16 emulation's spike flips and prediction changes, and every
 population's liveness (in float; on the artefact: its output population, the one the ONNX model
-exposes). The reference is ``snncc.ir.simulate`` in float64; the artefact runs in float32.
+exposes). The reference is ``snncc.ir.simulate`` in float64; the artefact runs in float32, the one cause of
+loss that can occur on it ("other": float32 arithmetic; the fp16 emulation is shown beside, not a stage).
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
-
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.targets.jetson.plan import GraphPlan
 from snncc.targets.jetson.populations import float_spikes, output_population
 from snncc.targets.jetson.validate import FP16_METHOD, fp16_run, host_score, reference
+from snncc.targets.kit.checks import CheckReport
 
 BATCH = 64
-
-
-@dataclass
-class JetsonCheckRecord:
-    target: str
-    samples: int
-    time_steps: int
-    reference: str
-    runtime: str                                # which written model ran, and where (e.g. "model.onnx, ONNX Runtime")
-    accuracy_reference: float | None
-    accuracy_artefact: float | None
-    accuracy_fp16: float | None
-    prediction_agreement: float | None          # share of decided samples (None: undefined, e.g. outputs silent)
-    spike_agreement: float | None
-    max_abs_delta_score: float
-    max_abs_delta_outputs: float | None
-    fp16: dict
-    validation: dict = field(default_factory=dict)
-    notes: list = field(default_factory=list)
-    argmax: dict = field(default_factory=dict)            # ArgmaxAgreement: decided, ties, silent, 95 % interval
-    liveness: dict = field(default_factory=dict)          # "float": every population; "jetson": the output population
-    flagged: list = field(default_factory=list)
-    warnings: list = field(default_factory=list)
-
-    def as_dict(self) -> dict:
-        return asdict(self)
-
-    def render_text(self, console) -> None:
-        def pct(v):
-            return "n/a (no labels)" if v is None else f"{v:.2%}"
-
-        console.print(f"[bold]snncc check --target jetson[/bold]  {self.samples} samples x {self.time_steps} steps")
-        console.print(f"accuracy: IR reference {pct(self.accuracy_reference)}, ONNX Runtime artefact "
-                      f"{pct(self.accuracy_artefact)}, fp16 emulation {pct(self.accuracy_fp16)}")
-        from snncc.measure.agreement import ArgmaxAgreement
-
-        console.print(f"prediction agreement (artefact vs reference): {ArgmaxAgreement(**self.argmax).text()}",
-                      markup=False)
-        if self.spike_agreement is not None:
-            console.print(f"output spike agreement: {self.spike_agreement:.4%}")
-        console.print(f"max |delta| score: {self.max_abs_delta_score:.3g}" +
-                      ("" if self.max_abs_delta_outputs is None else f"; outputs: {self.max_abs_delta_outputs:.3g}"))
-        flips = f"{self.fp16['spike_flips']} spike flips, " if "spike_flips" in self.fp16 else ""
-        console.print(f"fp16: {flips}{self.fp16['predictions_changed']} predictions changed, max |delta| score "
-                      f"{self.fp16['max_abs_delta_score']:.3g}")
-        for line in self.flagged:
-            console.print(f"liveness: {line}", markup=False)
-        for line in self.warnings:
-            console.print(f"warning: {line}", markup=False)
-        for note in self.notes:
-            console.print(f"note: {note}", markup=False)
 
 
 def _base_channels(plan: GraphPlan, x: np.ndarray) -> np.ndarray:
@@ -87,17 +36,19 @@ def _base_channels(plan: GraphPlan, x: np.ndarray) -> np.ndarray:
 
 
 def check_artefact(plan: GraphPlan, written, inputs: np.ndarray, labels: np.ndarray | None,
-                   progress=None) -> JetsonCheckRecord:
+                   progress=None, *, inputs_text: str = "the given inputs", noise: float | None = None) -> CheckReport:
     """The written artefact (``written.WrittenJetson``) against the IR reference on ``inputs``;
     ``progress(n)`` (optional) is called with the number of samples done after each batch."""
     from snncc.ir import liveness
-    from snncc.measure.agreement import argmax_agreement
+    from snncc.targets.kit.agreement import argmax_agreement, count_correlation
+    from snncc.targets.kit.checks import ceiling_record, report_from, stage
+    from snncc.targets.kit.reference import noise_ceiling
 
     x = _base_channels(plan, np.asarray(inputs, dtype=np.float32))
     if labels is not None and len(labels) != x.shape[0]:
         raise SnnccError(f"{len(labels)} labels for {x.shape[0]} samples", field="labels")
     from snncc.ir.nodes import LIF
-    from snncc.measure.agreement import chunk_size
+    from snncc.targets.kit.agreement import chunk_size
 
     batch = chunk_size(sum(plan.graph.node(p).n for p in plan.graph.of_kind(LIF)), x.shape[1], BATCH)
     ref_seq, ref_score, got_seq, got_score = [], [], [], []
@@ -150,16 +101,36 @@ def check_artefact(plan: GraphPlan, written, inputs: np.ndarray, labels: np.ndar
     if "step.onnx" in written.ran:
         notes.append(f"the data have {x.shape[1]} steps and model.onnx is unrolled for {written.time_steps}: the step "
                      "model ran them one step at a time")
-    return JetsonCheckRecord(
-        target="jetson", samples=int(x.shape[0]), time_steps=int(x.shape[1]),
-        reference="snncc.ir.simulate (float64)", runtime=f"{written.variants_ran()}, ONNX Runtime (float32)",
-        accuracy_reference=acc(np.argmax(ref_score_a, 1)), accuracy_artefact=acc(pred), accuracy_fp16=acc(pred16),
-        prediction_agreement=agreement.share,
-        spike_agreement=float(np.mean(got_seq_a == ref_seq_a)) if (got_seq_a is not None and plan.spiking_output) else None,
-        max_abs_delta_score=float(np.max(np.abs(got_score_a - ref_score_a))),
-        max_abs_delta_outputs=float(np.max(np.abs(got_seq_a - ref_seq_a))) if got_seq_a is not None else None,
-        fp16=fp16, validation=written.manifest["validation"], notes=notes, argmax=agreement.as_dict(),
-        liveness={"float": liveness.as_dicts(f_act), "jetson": liveness.as_dicts(t_act)},
+    ceiling = None
+    if noise is not None and noise > 0 and spiking and plan.has_lif:
+        ceiling = ceiling_record(noise_ceiling(plan.graph, _tiled(plan, x), ref_score_a.astype(np.int64), noise), noise)
+    spike_agreement = (float(np.mean(got_seq_a == ref_seq_a)) if (got_seq_a is not None and plan.spiking_output)
+                       else None)
+    details = {"runtime": f"{written.variants_ran()}, ONNX Runtime (float32)", "reference_precision": "float64",
+               "spike_agreement": spike_agreement,
+               "max_abs_delta_score": float(np.max(np.abs(got_score_a - ref_score_a))),
+               "max_abs_delta_outputs": float(np.max(np.abs(got_seq_a - ref_seq_a))) if got_seq_a is not None else None,
+               "fp16": {**fp16, "accuracy": acc(pred16)}, "validation": written.manifest["validation"]}
+    lines = [f"runs: {details['runtime']}; reference float64"]
+    if spike_agreement is not None:
+        lines.append(f"output spike agreement: {spike_agreement:.4%}")
+    lines.append(f"max |delta| score: {details['max_abs_delta_score']:.3g}" + (
+        "" if details["max_abs_delta_outputs"] is None else f"; outputs: {details['max_abs_delta_outputs']:.3g}"))
+    flips = f"{fp16['spike_flips']} spike flips, " if "spike_flips" in fp16 else ""
+    lines.append(f"fp16 (TensorRT --fp16, emulated): {flips}{fp16['predictions_changed']} predictions changed, max "
+                 f"|delta| score {fp16['max_abs_delta_score']:.3g}" + (
+                     "" if labels is None else f", accuracy {100 * acc(pred16):.2f} %"))
+    stages = [stage("artefact", f"the written {written.variants_ran()} in ONNX Runtime, float32", "other", agreement,
+                    acc(pred))]
+    return report_from(
+        "jetson", inputs=inputs_text, samples=int(x.shape[0]), steps=int(x.shape[1]), artefact=agreement,
+        count_correlation=count_correlation(got_score_a, ref_score_a), stages=stages, possible=("other",),
+        accuracy=None if labels is None else {"float": acc(np.argmax(ref_score_a, 1)), "artefact": acc(pred)},
+        ceiling=ceiling, liveness={"float": liveness.as_dicts(f_act), "jetson": liveness.as_dicts(t_act)},
         flagged=liveness.flagged(f_act, "in float") + liveness.flagged(t_act, "on the Jetson artefact"),
-        warnings=[warning] if warning else [],
-    )
+        warnings=[warning] if warning else [], notes=notes, details=details, detail_lines=lines)
+
+
+def _tiled(plan: GraphPlan, x: np.ndarray) -> np.ndarray:
+    """``x`` with the graph's input copies applied (what the IR graph takes)."""
+    return np.tile(x, (1, 1, plan.input_copies)) if plan.input_copies > 1 else x

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import onnx
 import torch
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.targets.jetson.plan import GraphPlan
 from snncc.targets.jetson.torch_graph import StepModel, UnrolledModel, WholeSequenceModel
 

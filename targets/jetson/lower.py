@@ -15,17 +15,20 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.timebase import sample_steps
-from snncc.progress import Progress
-from snncc.targets.jetson.check import JetsonCheckRecord, check_artefact
+from snncc.targets.kit import Progress
+from snncc.targets.jetson.check import check_artefact
+from snncc.targets.jetson.options import DEFAULT_JETPACK, JetsonOptions
+from snncc.targets.kit.artefact import model_record
+from snncc.targets.kit.checks import CheckReport
 from snncc.targets.jetson.export import export_sequence, export_step, opset_for_jetpack
 from snncc.targets.jetson.manifest import ArtefactFiles, build_manifest, manifest_bytes
 from snncc.targets.jetson.plan import GraphPlan, plan_graph
 from snncc.targets.jetson.recipe import build_engine_script
 from snncc.targets.jetson.validate import validate_export
-from snncc.threads import one_thread
+from snncc.targets.kit.compute import one_thread
 
 MAX_UNROLLED_STEPS = 5000
 EXPORTING = "exporting the ONNX models"
@@ -37,10 +40,10 @@ def runner_source() -> bytes:
     return (Path(__file__).with_name("standalone_runner.py")).read_bytes()
 
 
-def resolve_steps(plan: GraphPlan, options: dict[str, Any]) -> tuple[int, str]:
+def resolve_steps(plan: GraphPlan, options: JetsonOptions) -> tuple[int, str]:
     """(T for the export, the rule that gave it): --time-steps, else recording_length_s / dt, else the
     default every target uses for a model that states no recording length (``snncc.ir.timebase``)."""
-    steps, rule = sample_steps(plan.graph, options.get("time_steps"))
+    steps, rule = sample_steps(plan.graph, options.time_steps)
     if plan.has_lif and steps > MAX_UNROLLED_STEPS:
         raise SnnccError(f"{steps} steps is too long to unroll (max {MAX_UNROLLED_STEPS}); the step model "
                          "runs any length", field="--time-steps")
@@ -88,7 +91,7 @@ class JetsonArtefact(ArtefactFiles):
                       f"{inp['note']}")
         seq, step, fp16 = v["sequence"], v["step"], v["fp16"]
         if "spike_agreement" in seq:
-            from snncc.measure.agreement import ArgmaxAgreement
+            from snncc.targets.kit.agreement import ArgmaxAgreement
 
             decided = (ArgmaxAgreement(**seq["prediction"]).text() if "prediction" in seq
                        else f"{seq['prediction_agreement']:.0%} equal")
@@ -108,12 +111,12 @@ class JetsonArtefact(ArtefactFiles):
             console.print(f"note: {note}")
 
 
-def lower_graph(graph: Graph, options: dict[str, Any], progress: Progress | None = None) -> JetsonArtefact:
+def lower_graph(graph: Graph, options: JetsonOptions, progress: Progress | None = None) -> JetsonArtefact:
     """The validated artefact of ``graph`` (options: jetpack, time_steps, seed, source);
     ``progress(done, total, phase)`` through the export and the validation."""
     plan = plan_graph(graph.copy())
     steps, steps_rule = resolve_steps(plan, options)
-    jetpack = str(options.get("jetpack") or "4.6")
+    jetpack = str(options.jetpack or DEFAULT_JETPACK)
     opset = opset_for_jetpack(jetpack)
     report = progress or (lambda done, total, phase: None)
     report(0, 2, EXPORTING)
@@ -123,9 +126,9 @@ def lower_graph(graph: Graph, options: dict[str, Any], progress: Progress | None
         step = export_step(plan, opset)
         report(2, 2, EXPORTING)
     report(0, 1, VALIDATING)
-    record = validate_export(plan, steps, sequence, step, seed=int(options.get("seed") or 0))
+    record = validate_export(plan, steps, sequence, step, seed=int(options.seed))
     report(1, 1, VALIDATING)
-    manifest = build_manifest(plan, steps, opset, jetpack, record.as_dict(), options.get("source"))
+    manifest = build_manifest(plan, steps, opset, jetpack, record.as_dict(), options.source, model_record(graph))
     files = {
         "model.onnx": sequence.data,
         "step.onnx": step.data,
@@ -141,9 +144,8 @@ def lower_graph(graph: Graph, options: dict[str, Any], progress: Progress | None
     return JetsonArtefact(files, manifest, notes)
 
 
-def check_graph(graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, options: dict[str, Any], *,
-                artefact: Path, data: str | None = None, synthetic: bool = False,
-                progress=None) -> JetsonCheckRecord:
+def check_graph(graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, *, artefact: Path,
+                data: str | None = None, synthetic: bool = False, progress=None) -> CheckReport:
     """The written artefact directory ``artefact`` against the IR reference on a data set
     (``check.check_artefact``: model.onnx, or step.onnx for data of another length); errors name ``data``."""
     from snncc.targets.jetson.written import WrittenJetson
@@ -152,9 +154,10 @@ def check_graph(graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, opt
     if x.ndim == 2:
         x = x[None]
     written = WrittenJetson.open(artefact)
+    what = f"{x.shape[0]} labelled samples of {data or 'the data set'}" + (" (SYNTHETIC)" if synthetic else "")
     try:
         with one_thread():
-            record = check_artefact(plan_graph(graph.copy()), written, x, labels, progress)
+            record = check_artefact(plan_graph(graph.copy()), written, x, labels, progress, inputs_text=what)
     except SnnccError as err:
         raise (err.with_file(data) if data is not None else err) from None
     if synthetic:
@@ -163,12 +166,12 @@ def check_graph(graph: Graph, inputs: np.ndarray, labels: np.ndarray | None, opt
 
 
 def agree_graph(graph: Graph, inputs: np.ndarray | None, *, artefact: Path, samples: int | None, density: float,
-                data: str | None = None, progress=None) -> JetsonCheckRecord:
+                noise: float | None = None, data: str | None = None, progress=None) -> CheckReport:
     """The written artefact's agreement with the float model without labels: on ``inputs``, or on
-    ``samples`` (default ``snncc.measure.agreement.default_samples``) seeded random 0/1 trains of
-    ``density`` as long as the artefact's T (SYNTHETIC)."""
+    ``samples`` (default ``kit.agreement.default_samples``) seeded random 0/1 trains of ``density`` as long
+    as the artefact's T (SYNTHETIC); the float graph's own ceiling under ``noise`` weight noise."""
     from snncc.ir.nodes import LIF
-    from snncc.measure.agreement import default_samples, default_samples_note, random_inputs
+    from snncc.targets.kit.agreement import default_samples, default_samples_note, random_inputs
     from snncc.targets.jetson.written import WrittenJetson
 
     written = WrittenJetson.open(artefact)
@@ -180,13 +183,12 @@ def agree_graph(graph: Graph, inputs: np.ndarray | None, *, artefact: Path, samp
                      f"(density {density:g} per channel and step, seed 0), {written.time_steps} steps (SYNTHETIC)")
     else:
         x = np.asarray(inputs)
-        described = f"{x.shape[0]} given input trains of {x.shape[1]} steps"
+        described = f"{x.shape[0]} samples of {data or 'the given inputs'} (no labels used)"
     try:
         with one_thread():
-            record = check_artefact(plan, written, x, None, progress)
+            record = check_artefact(plan, written, x, None, progress, inputs_text=described, noise=noise)
     except SnnccError as err:
         raise (err.with_file(data) if data is not None else err) from None
-    record.notes.insert(0, f"inputs: {described}")
     if inputs is None:
         record.notes.append("random inputs: agreement with the float model, not accuracy on real data")
     return record

@@ -11,12 +11,14 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-import snncc
-from snncc.atomic import atomic_dir, foreign_entries
-from snncc.input_layout import frame_shape
+from snncc.targets.kit import SNNCC_VERSION
+from snncc.targets.kit.inputs import frame_shape
+from snncc.targets.kit.artefact import model_record
+from snncc.targets.kit.manifest import ManifestFormat, source_identity
 from snncc.ir.nodes import LIF
 from snncc.targets.jetson.plan import GraphPlan
 from snncc.targets.jetson.recipe import TENSORRT_FOR_JETPACK
@@ -53,7 +55,7 @@ def _downstream(g, start: str) -> set[str]:
 
 
 def build_manifest(plan: GraphPlan, steps: int, opset: int, jetpack: str, validation: dict,
-                   source: str | None) -> dict:
+                   source: str | None, loaded: dict | None = None) -> dict:
     from snncc.targets.jetson.export import input_name, sequence_output_names   # torch: only when building
     from snncc.targets.jetson.torch_graph import state_slots
 
@@ -75,9 +77,10 @@ def build_manifest(plan: GraphPlan, steps: int, opset: int, jetpack: str, valida
     return {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
-        "snncc_version": snncc.__version__,
+        "snncc_version": SNNCC_VERSION,
         "model": {"name": g.name, "kind": model_kind(plan), "update_order": meta.get("update_order")},
-        "source": {"file": meta.get("source_file") or source, "sha256": meta.get("source_sha256")},
+        "source": source_identity(meta, source),
+        "loaded_model": loaded if loaded is not None else model_record(g),
         "jetpack": str(jetpack),
         "opset": opset,
         "tensorrt": TENSORRT_FOR_JETPACK.get(opset),
@@ -117,46 +120,47 @@ EXECUTABLE = ("build_engine.sh", "run.py")
 WRITTEN_FILES = (MANIFEST, *EXECUTABLE)
 
 
-def write_artefact(path, files: dict[str, bytes]) -> None:
-    """Write an artefact directory atomically, replacing only an earlier snncc artefact (``replace_refusal``)."""
-    import os
-    from pathlib import Path
-
-    with atomic_dir(Path(path), replaceable=replace_refusal) as tmp:
-        for name, data in files.items():
-            (tmp / name).write_bytes(data)
-            if name in EXECUTABLE:
-                os.chmod(tmp / name, 0o755)
-
-
-def own_names(manifest: dict) -> set[str]:
-    """The names of an artefact's own files: the manifest, the files it lists (variants, recipe,
-    runner) and the ``.plan`` engines ``build_engine.sh`` writes beside the variants."""
-    ours = set(WRITTEN_FILES)
+def listed_files(manifest: Mapping[str, Any]) -> dict[str, str | None]:
+    """The artefact's own files as its manifest names them (the manifest, the recipe and runner, every
+    variant's model file); the Jetson manifest records no file hashes (the summary does)."""
+    names = set(WRITTEN_FILES)
     for variant in manifest.get("variants") or []:
-        name = variant.get("file") if isinstance(variant, dict) else None
-        if isinstance(name, str):
-            ours |= {name, name.replace(".onnx", ".plan")}
-    return ours
+        if isinstance(variant, dict) and isinstance(variant.get("file"), str):
+            names.add(variant["file"])
+    return {name: None for name in sorted(names)}
 
 
-def replace_refusal(directory) -> str | None:
-    """None if ``directory`` is an earlier snncc Jetson artefact holding nothing else; else why not.
+def engines(manifest: Mapping[str, Any]) -> set[str]:
+    """The TensorRT ``.plan`` engines ``build_engine.sh`` writes beside the variants (the board's, not ours)."""
+    return {name.replace(".onnx", ".plan") for name in listed_files(manifest) if name.endswith(".onnx")}
 
-    Its own files are the manifest, the files it lists (variants, recipe, runner) and the
-    ``.plan`` engines ``build_engine.sh`` writes beside them; anything else is a user's file.
-    """
-    from pathlib import Path
 
-    directory = Path(directory)
-    path = directory / MANIFEST
-    try:
-        manifest = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return f"it has no readable {MANIFEST} of an snncc Jetson artefact"
-    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
-        return f"its {MANIFEST} is not an snncc Jetson manifest"
-    return foreign_entries(directory, own_names(manifest))
+def _where(manifest: Mapping[str, Any], name: str) -> str:
+    """The manifest entry that names the file ``name``."""
+    for i, variant in enumerate(manifest.get("variants") or []):
+        if isinstance(variant, dict) and variant.get("file") == name:
+            return f"{MANIFEST}/variants/{i}/file"
+    return MANIFEST
+
+
+def _describe(manifest: Mapping[str, Any]) -> str:
+    return f"Jetson artefact (ONNX opset {manifest.get('opset')}, JetPack {manifest.get('jetpack')})"
+
+
+JETSON_FORMAT = ManifestFormat(format=FORMAT, target="jetson", kind="an snncc Jetson artefact",
+                               files=listed_files, own_extra=engines, describe=_describe, executable=EXECUTABLE,
+                               model_key="loaded_model", where=_where)
+
+
+def write_artefact(path, files: dict[str, bytes]) -> None:
+    """Write an artefact directory atomically, replacing only an earlier snncc Jetson artefact holding nothing
+    but its own files and engines (``kit.manifest.ManifestFormat.write``)."""
+    JETSON_FORMAT.write(path, files)
+
+
+def own_names(manifest: Mapping[str, Any]) -> set[str]:
+    """The names of an artefact's own files and the engines built beside them."""
+    return set(listed_files(manifest)) | engines(manifest)
 
 
 @dataclass

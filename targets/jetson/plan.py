@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Conv, Dense, Input, Output, Readout
 from snncc.ir.validate import refuse_spike_rules

@@ -14,7 +14,7 @@ def float_spikes(plan: GraphPlan, x: np.ndarray) -> dict[str, np.ndarray]:
 
     tiled = np.tile(x, (1, 1, plan.input_copies)) if plan.input_copies > 1 else x
     res = simulate(plan.graph, tiled.astype(np.float64), record="spikes")
-    return {k: v.numpy().astype(np.uint8) for k, v in res.spikes.items()}
+    return {k: np.asarray(v).astype(np.uint8) for k, v in res.spikes.items()}
 
 
 def output_population(plan: GraphPlan) -> str:

@@ -19,7 +19,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 
 DEFAULT_RAIL = "VDD_IN"
 # names the main input rail has on other boards (Nano: POM_5V_IN; some docs: 5V_IN)

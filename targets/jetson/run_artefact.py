@@ -12,18 +12,17 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 
 
 def open_runner(artefact: Path, backend: str, variant: str | None = None):
     """An ``ArtefactRunner`` on the artefact directory, with ``variant``'s model already loaded (so
     that a damaged model file is named as part of the artefact), or a one-line error (another kind of
     artefact, a Loihi bundle say, is named with the command that reads it)."""
-    from snncc.artefact_paths import JETSON_ARTEFACT, wrong_path
+    from snncc.targets.jetson.manifest import JETSON_FORMAT
     from snncc.targets.jetson.standalone_runner import ArtefactRunner, RunnerError
 
-    if not Path(artefact).is_dir():
-        raise wrong_path(artefact, JETSON_ARTEFACT)
+    JETSON_FORMAT.open(artefact)          # a Jetson artefact whose files are regular files inside it, else one line
     try:
         runner = ArtefactRunner(str(artefact), backend)
         if variant is not None:
@@ -36,7 +35,7 @@ def open_runner(artefact: Path, backend: str, variant: str | None = None):
 
 def _record_own_files(artefact: Path, manifest: dict) -> None:
     """The artefact's own files are inputs of the running command: no output may replace them."""
-    from snncc.atomic import record_input
+    from snncc.targets.kit.writing import record_input
     from snncc.targets.jetson.manifest import own_names
 
     for name in own_names(manifest):
@@ -71,10 +70,10 @@ def run_artefact(artefact: Path, inputs, *, source: str | None = None, stream: b
                  backend: str = "auto") -> ArtefactRun:
     """Check ``inputs`` (T, C) or (B, T, C) -- or CNN frames (B, T, C, H, W), flattened -- against the
     artefact's input signal and run the sequence model, or with ``stream`` the step model one step at a time."""
-    from snncc.inputs import check_batch
+    from snncc.targets.kit.inputs import check_batch
     from snncc.targets.jetson.standalone_runner import RunnerError
 
-    from snncc.input_layout import InputLayout, to_artefact_layout
+    from snncc.targets.kit.inputs import InputLayout, to_artefact_layout
 
     runner = open_runner(artefact, backend, "step" if stream else "sequence")
     spec = runner.manifest["input"]

@@ -20,8 +20,8 @@ import onnx
 import onnxruntime as ort
 import torch
 
-from snncc.errors import InternalError, SnnccError
-from snncc.threads import one_thread
+from snncc.targets.kit import InternalError, SnnccError
+from snncc.targets.kit.compute import one_thread
 from snncc.ir.simulate import simulate
 from snncc.targets.jetson.export import ExportedModel
 from snncc.targets.jetson.plan import GraphPlan
@@ -107,8 +107,8 @@ def seeded_inputs(plan: GraphPlan, batch: int, steps: int, seed: int) -> np.ndar
 def reference(plan: GraphPlan, x: np.ndarray):
     """IR reference (float64) on base-channel data: copies tiled as the authors do."""
     tiled = np.tile(x, (1, 1, plan.input_copies)) if plan.input_copies > 1 else x
-    res = simulate(plan.graph, tiled.astype(np.float64), dtype=torch.float64)
-    return res.output.numpy(), (res.readout.numpy() if res.readout is not None else None)
+    res = simulate(plan.graph, tiled.astype(np.float64))
+    return np.asarray(res.output), (np.asarray(res.readout) if res.readout is not None else None)
 
 
 def host_score(mode: str | None, seq: np.ndarray) -> np.ndarray:
@@ -157,7 +157,7 @@ def _compare(plan: GraphPlan, got_seq: np.ndarray | None, got_score: np.ndarray,
                          field=label)
     pred, ref_pred = np.argmax(got_score, axis=1), np.argmax(ref_score, axis=1)
     if plan.spiking_output and plan.score_mode in (None, "spike_count"):
-        from snncc.measure.agreement import argmax_agreement
+        from snncc.targets.kit.agreement import argmax_agreement
 
         decisions = argmax_agreement(ref_score, got_score)   # silent or tied float outputs: left out, counted
         rec["prediction_agreement"] = decisions.share        # None: undefined (outputs silent)

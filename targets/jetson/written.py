@@ -11,47 +11,24 @@ which ran).
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from snncc.artefacts import ArtefactIdentity
-from snncc.errors import SnnccError
-from snncc.targets.jetson.manifest import EXECUTABLE, FORMAT, MANIFEST
+from snncc.targets.jetson.manifest import JETSON_FORMAT, listed_files
+from snncc.targets.kit import SnnccError
+from snncc.targets.kit.artefact import ArtefactIdentity
 
 
 def artefact_files(manifest: dict) -> list[str]:
     """The artefact's own files, as named by its manifest (sorted)."""
-    names = {MANIFEST, *EXECUTABLE}
-    for variant in manifest.get("variants") or []:
-        if isinstance(variant, dict) and isinstance(variant.get("file"), str):
-            names.add(variant["file"])
-    return sorted(names)
-
-
-def _manifest(path: Path) -> dict | None:
-    try:
-        manifest = json.loads((path / MANIFEST).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return manifest if isinstance(manifest, dict) and manifest.get("format") == FORMAT else None
+    return sorted(listed_files(manifest))
 
 
 def identify_directory(path: str | Path) -> ArtefactIdentity | None:
     """The artefact's identity, or None when ``path`` is no directory with an snncc Jetson manifest."""
-    path = Path(path)
-    if not path.is_dir():
-        return None
-    manifest = _manifest(path)
-    if manifest is None:
-        return None
-    source = manifest.get("source") if isinstance(manifest.get("source"), dict) else {}
-    return ArtefactIdentity(target="jetson", path=str(path), files=artefact_files(manifest),
-                            source_sha256=source.get("sha256") or None, source_file=source.get("file") or None,
-                            description=f"Jetson artefact (ONNX opset {manifest.get('opset')}, JetPack "
-                                        f"{manifest.get('jetpack')})")
+    return JETSON_FORMAT.identify(path)
 
 
 @dataclass
@@ -64,12 +41,8 @@ class WrittenJetson:
 
     @classmethod
     def open(cls, path: str | Path) -> "WrittenJetson":
-        path = Path(path)
-        manifest = _manifest(path)
-        if manifest is None:
-            raise SnnccError("not an snncc Jetson artefact (no manifest.json of that format)", file=str(path),
-                             field=MANIFEST)
-        return cls(str(path), manifest)
+        """The artefact at ``path``: every file its manifest lists a regular file inside it (else one line)."""
+        return cls(str(path), JETSON_FORMAT.open(path))
 
     @property
     def runner(self):

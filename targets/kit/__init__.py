@@ -13,6 +13,8 @@ and an out-of-tree test target proves a third party needs nothing else. Each mod
     kit.reference   the float graph run by the IR reference: output counts in bounded chunks, one thread
     kit.finetuned   a fine-tuned artefact (``FinetunedArtefact``): written, summarised, its record
     kit.finetuning  the fine-tuning engine, teacher, input split and straight-through operations (torch)
+    kit.profile     what an artefact costs (``Profile``: resources, real time, energy ESTIMATE, NeuroBench)
+    kit.neurobench  NeuroBench 2.3's metrics from a deployed network's synapses and its emulator's spikes
     kit.search      a search trial's figures (``SearchCosts``: objectives, columns, front, published)
     kit.compute     one compute thread, rounding with error feedback, Ctrl-C around numba, memory bounds
     kit.inputs      arrays a user feeds an artefact: checked, laid out, seeded random spikes
@@ -20,12 +22,13 @@ and an out-of-tree test target proves a third party needs nothing else. Each mod
     kit.graphs      pure Graph -> Graph passes (linear folding, current biases, reset change)
     kit.models      model records other than a graph (a buffered classifier)
 
-This module itself imports nothing heavy: the error types and the progress conventions.
+This module itself imports nothing heavy: the error types, the progress conventions and snncc's version.
 """
 
 from __future__ import annotations
 
+from snncc import __version__ as SNNCC_VERSION
 from snncc.errors import InternalError, SnnccError, one_line
 from snncc.progress import Progress, StepProgress, counting
 
-__all__ = ["SnnccError", "InternalError", "one_line", "Progress", "StepProgress", "counting"]
+__all__ = ["SnnccError", "InternalError", "one_line", "Progress", "StepProgress", "counting", "SNNCC_VERSION"]

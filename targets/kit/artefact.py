@@ -75,7 +75,7 @@ def member(directory: str | os.PathLike, name: str, *, field_name: str | None = 
     shown = field_name or name
     parts = Path(name).parts
     if not name or Path(name).is_absolute() or ".." in parts or any(p in ("", ".") for p in parts):
-        raise SnnccError("names a file outside the artefact directory", file=str(directory), field=shown)
+        raise SnnccError("is not a file name inside the artefact directory", file=str(directory), field=shown)
     path = directory
     for part in parts:
         path = path / part
@@ -87,8 +87,8 @@ def member(directory: str | os.PathLike, name: str, *, field_name: str | None = 
             raise SnnccError(f"cannot be read ({os.strerror(ex.errno or 0) or ex})", file=str(directory / name),
                              field=shown) from None
         if stat.S_ISLNK(mode):
-            raise SnnccError("is a symbolic link; an artefact's files are regular files inside its directory",
-                             file=str(path), field=shown)
+            raise SnnccError("is a symbolic link (it may lead outside the artefact); an artefact's files are regular "
+                             "files inside its directory", file=str(path), field=shown)
     if not stat.S_ISREG(mode):
         raise SnnccError("is not a regular file; an artefact's files are regular files inside its directory",
                          file=str(path), field=shown)

@@ -11,7 +11,8 @@ says which format tag is its own and which files belong to an artefact; it then
                             (a size-bounded regular file; nothing else is read)
     open(path)              the manifest, after checking that every listed file is a regular file inside the
                             directory and, where the manifest records its SHA-256, has those bytes
-    identify(path)          ``kit.artefact.ArtefactIdentity`` (the capability ``identify``), or None
+    identify(path)          ``kit.artefact.ArtefactIdentity`` (the capability ``identify``), or None; its ``model``
+                            is the manifest's ``model_key`` entry (``kit.artefact.model_record`` of the loaded model)
 """
 
 from __future__ import annotations
@@ -67,6 +68,9 @@ class ManifestFormat:
     describe: Callable[[Mapping[str, Any]], str] = field(default=lambda manifest: "")
     executable: tuple[str, ...] = ()
     manifest_name: str = MANIFEST
+    model_key: str = "model"          # where the manifest holds ``kit.artefact.model_record`` of the loaded model
+    where: Callable[[Mapping[str, Any], str], str] = field(
+        default=lambda manifest, name: f"{MANIFEST}/files/{name}")   # the manifest entry that lists ``name``
 
     # -- reading --------------------------------------------------------------------------------------
     def manifest(self, path: str | os.PathLike) -> dict[str, Any] | None:
@@ -107,7 +111,12 @@ class ManifestFormat:
             if not isinstance(name, str):
                 raise SnnccError("the manifest lists a file name that is not text", file=str(path),
                                  field=self.manifest_name)
-            file = member(path, name)
+            try:
+                file = member(path, name)
+            except SnnccError as err:       # named by the manifest entry that lists it
+                shown = name.encode("unicode_escape").decode("ascii")
+                raise SnnccError(f"lists '{shown}', which {err.rule}", file=str(path),
+                                 field=self.where(manifest, name)) from None
             if recorded is not None and file_sha256(file) != recorded:
                 raise SnnccError(f"its SHA-256 differs from the one {self.manifest_name} records (the file was changed)",
                                  file=str(file), field=name)
@@ -125,9 +134,11 @@ class ManifestFormat:
             description = self.describe(manifest)
         except (KeyError, TypeError, AttributeError, ValueError):
             names, description = [self.manifest_name], self.kind
+        model = manifest.get(self.model_key)
         return ArtefactIdentity(target=self.target, path=str(path), files=names,
                                 source_sha256=source.get("sha256") or None, source_file=source.get("file") or None,
-                                description=description)
+                                description=description,
+                                model=model if isinstance(model, dict) and "graph_sha256" in model else None)
 
     # -- writing --------------------------------------------------------------------------------------
     def replace_refusal(self, directory: str | os.PathLike) -> str | None:

@@ -5,6 +5,7 @@
                                           ``replaceable(dest)`` returns None (an earlier artefact of ours)
     write_bytes_atomic / write_text_atomic / write_npz_atomic
     foreign_entries(directory, ours)      why a directory holding other files than ``ours`` is not ours
+    record_input(path)                    a file read from inside an input directory: no output may replace it
     npz_bytes(arrays)                     .npz bytes that are identical for identical arrays (fixed member dates)
 
 An output is refused before anything is written when it resolves to one of the command's inputs or
@@ -17,7 +18,8 @@ import io
 import zipfile
 
 from snncc.atomic import (
-    atomic_dir, atomic_path, foreign_entries, preflight, write_bytes_atomic, write_npz_atomic, write_text_atomic,
+    atomic_dir, atomic_path, foreign_entries, preflight, record_input, write_bytes_atomic, write_npz_atomic,
+    write_text_atomic,
 )
 
 ZIP_DATE = (1980, 1, 1, 0, 0, 0)
@@ -39,5 +41,6 @@ def npz_bytes(arrays: dict, compresslevel: int = 6) -> bytes:
     return buf.getvalue()
 
 
-__all__ = ["atomic_dir", "atomic_path", "foreign_entries", "preflight", "write_bytes_atomic", "write_npz_atomic",
+__all__ = ["atomic_dir", "atomic_path", "foreign_entries", "preflight", "record_input", "write_bytes_atomic",
+           "write_npz_atomic",
            "write_text_atomic", "npz_bytes", "ZIP_DATE"]

@@ -32,7 +32,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.targets.xylo.chip import CORE, XyloChip, get_chip
 
 WEIGHT_FIELDS = ("weights_in", "weights_rec", "weights_out")
@@ -294,7 +294,7 @@ class XyloSpec:
 
     def save_npz(self, path) -> None:
         """Write ``path`` atomically (complete or not at all)."""
-        from snncc.atomic import write_npz_atomic
+        from snncc.targets.kit.writing import write_npz_atomic
 
         write_npz_atomic(path, self.npz_arrays())
 

@@ -13,11 +13,12 @@ from pathlib import Path
 
 import pytest
 
-from snncc_test_helpers import run_cli
+from snncc_test_helpers import run_cli, without_progress
 
 
 def one_error_line(code: int, err: str, status: int = 2) -> str:
-    lines = [line for line in err.splitlines() if line.strip()]
+    """The one line a failure ends with (progress lines before it, printed outside a terminal, set aside)."""
+    lines = [line for line in without_progress(err).splitlines() if line.strip()]
     assert code == status, err
     assert len(lines) == 1 and lines[0].startswith("snncc: "), err
     assert "Traceback" not in err and "internal error" not in err
@@ -28,7 +29,7 @@ def one_error_line(code: int, err: str, status: int = 2) -> str:
     (["compile"], "Missing argument"),
     (["compile", "m.pt"], "Missing option"),
     (["compile", "m.pt", "-o", "x", "--no-such-option"], "No such option"),
-    (["frobnicate"], "No such command"),
+    (["frobnicate"], "no such command"),
     (["train", "rsnn", "--data", "d", "-o", "x.pt", "--epochs", "many"], "--epochs"),
     (["emulate", "b.net", "-i", "x.npy", "-o", "o.npz", "--gap", "1.5"], "--gap"),
 ])

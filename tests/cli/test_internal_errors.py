@@ -31,7 +31,7 @@ def test_a_failing_lowering_check_ends_with_one_internal_error_line_and_status_1
     lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("snncc: note:")]
     assert code == 1 and len(lines) == 1, err
     assert lines[0].startswith("snncc: internal error: timing: check failed: the lowered timing does not "
-                               "reproduce the IR in float (layer 'lif1' first differs at step 16)"), err
+                               "reproduce the IR in float (layer 'lif1' first differs at step "), err
     assert "Traceback" not in err and not out.exists()
 
 
@@ -39,7 +39,7 @@ def test_debug_shows_the_traceback_of_an_internal_error(tmp_path, capsys, monkey
     import snncc.targets.loihi.lowering.timing as timing
 
     monkeypatch.setattr(timing, "_late_voltage_biases", lambda graph, shift: [])
-    with pytest.raises(InternalError, match="first differs at step 16"):
+    with pytest.raises(InternalError, match=r"first differs at step \d+"):
         run_cli(["compile", DATA / "two_lif_neurons.nir", "--dt", "1e-3", "--target", "loihi",
                  "-o", tmp_path / "x.net", "--debug"], capsys)
 

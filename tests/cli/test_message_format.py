@@ -21,6 +21,8 @@ import numpy as np
 import pytest
 import torch
 
+from snncc_test_helpers import without_progress
+
 from snncc.frontends.checkpoint import save_checkpoint
 from snncc.models import SNNConfig, SpikingClassifier
 
@@ -102,14 +104,14 @@ def cases(tmp_path_factory):
          "--storage"),
         (["hpo", "report", "s", "--storage", f"sqlite:///{d / 'none' / 'x.db'}"], None, "--storage"),
         (["bench", s(d / "jet"), "--samples", "0"], "snncc bench", "--samples"),
-        (["emulate", s(d / "m.net"), "-i", s(d / "x.npy"), "-o", o, "--gap", "5"], "snncc emulate", "--gap"),
-        (["report", s(d / "m.net")], "snncc report", "--energy"),
+        (["emulate", s(d / "m.net"), "-i", s(d / "x.npy"), "-o", s(d / "o.npz"), "--gap", "5"], "snncc emulate", "--gap"),
+        (["report", s(d / "m.net"), "--limit", "3"], "snncc report", "--limit"),
         (["data", "synth", "-o", o, "--release", "3"], "snncc data synth", "--release"),
         (["compile", s(d / "tau0.nir"), "-o", o, "--dt", "0.001"], s(d / "tau0.nir"), "node 'lif'.tau_mem"),
         (["compile", s(d / "tau0.nir"), "-o", o], s(d / "tau0.nir"), "node 'lif'.tau_mem"),
         (["compile", s(d / "stride0.nir"), "-o", o], s(d / "stride0.nir"), "node 'conv'.stride"),
         (["compile", s(d / "complex.nir"), "-o", o], s(d / "complex.nir"), "node 'conv'.weight"),
-        (["compile", s(d / "no\nsuch.pt"), "-o", o], s(d / "no\\nsuch.pt"), "path"),
+        (["compile", s(d / "no\nsuch.pt"), "-o", o], s(d / "no\\nsuch.pt"), "model"),
         (["compile", s(odd), "-t", "ir", "-o", o, "--dt", "0.001"], s(d / "we\\nird:\\x20name.pt"), "--dt"),
         (["compile", s(d / "m.pt"), "-o", s(d / "plain.txt" / "o.snnir")], s(d / "plain.txt" / "o.snnir"), "output"),
         (["emulate", s(d / "m.net"), "-i", s(d / "x.npy"), "-o", s(d / "plain.txt" / "o.npz")], s(d / "plain.txt"),
@@ -125,7 +127,7 @@ def test_every_refusal_is_one_three_part_line(cases, tmp_path):
     results = json.loads(proc.stdout)
     wrong = []
     for (argv, file, field), (code, err) in zip(cases, results):
-        lines = err.splitlines()
+        lines = without_progress(err).splitlines()
         match = LINE.match(lines[0]) if len(lines) == 1 else None
         if code != 2 or match is None or "sqlite://" in match["file"] \
                 or (file is not None and match["file"] != file) or (field is not None and match["field"] != field):

@@ -68,7 +68,7 @@ def test_dt_suggestion_rounds_down_to_1_2_5_and_mentions_snntorchs_step():
 
 
 def test_loihi_report_counts_the_synapse_formats_it_uses():
-    from snncc.targets.loihi.bundle.hdf5 import netx_compat
+    from snncc.targets.loihi.bundle.write import netx_compat
     from tests.loihi.helpers import random_network
 
     net = random_network(3, split_exponents=True)

@@ -65,15 +65,30 @@ def test_teacher_pre_reset_voltage_for_subtract_reset():
         s = t.spikes[p].astype(bool)
         # where it fired, the pre-reset voltage was above threshold (1.0); after a subtract reset V = V_pre - 1
         assert np.all(t.voltage[p][s] > 1.0)
-        np.testing.assert_allclose(t.voltage[p][s] - 1.0, res.voltage[p].numpy()[s], rtol=1e-5, atol=1e-6)
+        np.testing.assert_allclose(t.voltage[p][s] - 1.0, np.asarray(res.voltage[p])[s], rtol=1e-5, atol=1e-6)
     assert t.counts.shape == (3, 3)
 
 
 def test_task_like_braille_inputs():
-    from snncc.finetune.braille_inputs import NIR_LETTERS, nir_braille_inputs
+    from snncc.data.nir_letters import NIR_LETTERS, nir_braille_inputs
 
     x, y = nir_braille_inputs(14, seed=3)
     x2, y2 = nir_braille_inputs(14, seed=3)
     assert x.shape == (14, 256, 12) and x.dtype == np.uint8 and set(np.unique(x)) <= {0, 1}
     assert np.array_equal(x, x2) and np.array_equal(y, y2)
     assert set(y.tolist()) <= set(range(len(NIR_LETTERS))) and x.sum() > 0
+
+
+def test_validation_and_held_out_follow_the_training_samples():
+    """--finetune-samples 256 builds 640 samples, not 1,756: the other parts scale, with their floors."""
+    from snncc.finetune.inputs import MIN_HELD_OUT, MIN_VALIDATION, model_split, synthetic_sizes
+    from snncc.frontends.builders import snn_graph
+
+    assert synthetic_sizes(2048) == (500, 1000) and synthetic_sizes(256) == (MIN_VALIDATION, MIN_HELD_OUT)
+    assert synthetic_sizes(8192) == (2000, 4000)
+    rng = np.random.default_rng(0)
+    g = snn_graph(rng.normal(0, 0.6, (6, 10)), rng.normal(0, 0.5, (10, 3)), None, dt=0.005, tau_syn=0.006,
+                  tau_mem=0.06, metadata={"recording_length_s": 0.05})
+    split = model_split(g, samples=256)
+    assert (split.train.size, split.validation.size, split.held_out.size) == (256, 128, 256)
+    assert split.x.shape == (640, 10, 6)

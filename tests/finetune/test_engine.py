@@ -13,7 +13,8 @@ from snncc.finetune.engine import KEEP_P, FinetuneConfig, TaskSet
 from snncc.finetune.inputs import split_inputs
 from snncc.finetune.loss import LossWeights
 from snncc.frontends.builders import snn_graph
-from snncc.targets.loihi.finetune import finetune_loihi
+from snncc.targets.loihi.finetune.run import finetune_loihi
+from snncc.targets.loihi.options import LoihiOptions
 
 STEPS = 32
 
@@ -35,7 +36,7 @@ def _split(seed=0, **kw):
 
 def _run(config=None, split=None, **kw):
     config = config or FinetuneConfig(epochs=2, force_epochs=1, batch=16)
-    return finetune_loihi(tiny_graph(), {"scale": "per-layer", "allow_reset_change": True}, split or _split(),
+    return finetune_loihi(tiny_graph(), LoihiOptions(scale="per-layer", allow_reset_change=True), split or _split(),
                           config=config, **kw)
 
 

@@ -1,6 +1,7 @@
 """Zoo modules and snncc checkpoints become IR graphs that compute what the module computes."""
 
 import pytest
+import numpy as np
 import torch
 
 from snncc.frontends import graph_from_object, load_model
@@ -21,7 +22,7 @@ def test_snn_module_and_ir_agree_spike_for_spike(order, recurrent):
     g = graph_from_object(m)
     r = simulate(g, x.repeat(1, 1, 2), record="spikes")
     assert hid.sum() > 0
-    assert torch.equal(r.spikes["hidden"], hid) and torch.equal(r.output, out)
+    assert np.array_equal(r.spikes["hidden"], hid.numpy()) and np.array_equal(r.output, out.numpy())
 
 
 def test_lstm_checkpoint_round_trip_predicts_like_the_module(tmp_path):
@@ -36,8 +37,8 @@ def test_lstm_checkpoint_round_trip_predicts_like_the_module(tmp_path):
     with torch.no_grad():
         scores = m(x)
     r = simulate(g, x)
-    torch.testing.assert_close(r.readout, scores)
-    assert torch.equal(r.prediction, scores.argmax(1))
+    np.testing.assert_allclose(r.readout, scores.numpy(), rtol=1.3e-6, atol=1e-5)     # torch's float32 tolerances
+    assert np.array_equal(r.prediction, scores.argmax(1).numpy())
 
 
 def test_paper_parameter_counts():

@@ -24,7 +24,7 @@ def reference(graph, x):
     k = graph.metadata.get("input_copies", 1) or 1
     tiled = np.tile(x, (1, 1, k)) if graph.node("input").width != x.shape[2] else x
     res = simulate(graph, tiled.astype(np.float64))
-    return res.output.numpy(), res.prediction.numpy()
+    return np.asarray(res.output), np.asarray(res.prediction)
 
 
 @pytest.mark.parametrize("name", ALL)

@@ -31,11 +31,12 @@ def test_jetson_agreement_without_labels_on_the_written_directory(tmp_path, caps
     written = _json(capsys, ["check", small_rsnn_checkpoint, "--artefact", out, "--limit", "6", "--json"])
     assert here.pop("artefact")["sha256"] == written.pop("artefact")["sha256"] == report["sha256"]
     assert here == written
-    assert written["samples"] == 6 and written["time_steps"] == manifest["time_steps"]
+    assert written["samples"] == 6 and written["steps"] == manifest["time_steps"] and written["target"] == "jetson"
     a = written["argmax"]
-    assert a["decided"] + a["ties"] + a["silent"] == 6 and written["prediction_agreement"] == a["share"]
+    assert a["decided"] + a["ties"] + a["silent"] == 6 and written["argmax_agreement"] == a["share"]
     assert set(written["liveness"]["float"]) == {"hidden", "out"} and set(written["liveness"]["jetson"]) == {"out"}
-    assert written["runtime"].startswith("model.onnx")
+    assert written["details"]["runtime"].startswith("model.onnx")
+    assert written["possible"] == ["other"] and written["causes"]["reset"] is None          # "—" on this target
 
 
 def test_data_of_another_length_run_through_the_step_model(tmp_path, capsys, small_rsnn_checkpoint):
@@ -46,6 +47,6 @@ def test_data_of_another_length_run_through_the_step_model(tmp_path, capsys, sma
     np.savez(tmp_path / "d.npz", inputs=(rng.random((4, 17, 24)) < 0.2).astype(np.uint8),
              labels=rng.integers(0, 28, 4))
     rec = _json(capsys, ["check", small_rsnn_checkpoint, "--artefact", out, "--data", tmp_path / "d.npz", "--json"])
-    assert steps != 17 and rec["time_steps"] == 17 and rec["runtime"].startswith("step.onnx")
+    assert steps != 17 and rec["steps"] == 17 and rec["details"]["runtime"].startswith("step.onnx")
     assert any("step model ran them one step at a time" in n for n in rec["notes"])
-    assert rec["spike_agreement"] == 1.0 and rec["accuracy_artefact"] == rec["accuracy_reference"]
+    assert rec["details"]["spike_agreement"] == 1.0 and rec["accuracy"]["artefact"] == rec["accuracy"]["float"]

@@ -180,7 +180,7 @@ def test_run_with_bad_input_is_one_line(compiled, capsys, tmp_path):
     code, _, err = run_cli(["run", out, "--input", tmp_path / "bad.npy"], capsys)
     assert_one_line_error(code, err, "bad.npy", "7 channels")
     code, _, err = run_cli(["run", tmp_path, "--input", tmp_path / "bad.npy"], capsys)
-    assert_one_line_error(code, err, "manifest.json")
+    assert_one_line_error(code, err, "is not an artefact any installed target recognises")
     assert not (tmp_path / "o.npz").exists()
 
 
@@ -217,7 +217,7 @@ def test_check_through_the_cli(compiled, capsys, tmp_path):
                                  "--json"], capsys)
     assert code == 0, err
     rec = json.loads(stdout)
-    assert rec["target"] == "jetson" and rec["samples"] == 6 and rec["time_steps"] == STEPS
-    assert rec["spike_agreement"] >= 0.999 and rec["prediction_agreement"] == 1.0
-    assert rec["accuracy_reference"] == rec["accuracy_artefact"]
-    assert "spike_flips" in rec["fp16"]
+    assert rec["target"] == "jetson" and rec["samples"] == 6 and rec["steps"] == STEPS
+    assert rec["details"]["spike_agreement"] >= 0.999 and rec["argmax_agreement"] == 1.0
+    assert rec["accuracy"]["float"] == rec["accuracy"]["artefact"]
+    assert "spike_flips" in rec["details"]["fp16"]

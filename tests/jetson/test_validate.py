@@ -72,12 +72,12 @@ def test_check_reports_accuracy_agreement_and_fp16(graphs):
     x = seeded_inputs(g, 10, 12, seed=31)
     labels = np.arange(10) % 5
     rec = target.check(g, x, labels, {})
-    assert rec.samples == 10 and rec.time_steps == 12
-    assert rec.spike_agreement >= 0.999 and rec.prediction_agreement == 1.0
-    assert rec.accuracy_reference == rec.accuracy_artefact
-    assert rec.fp16["spike_flips"] >= 0 and rec.accuracy_fp16 is not None
+    assert rec.samples == 10 and rec.steps == 12
+    assert rec.details["spike_agreement"] >= 0.999 and rec.argmax_agreement == 1.0
+    assert rec.accuracy["float"] == rec.accuracy["artefact"]
+    assert rec.details["fp16"]["spike_flips"] >= 0 and rec.details["fp16"]["accuracy"] is not None
     d = rec.as_dict()
-    assert d["validation"]["sequence"]["spike_agreement"] >= 0.999
+    assert d["details"]["validation"]["sequence"]["spike_agreement"] >= 0.999
     from rich.console import Console
 
     console = Console(record=True, width=120)

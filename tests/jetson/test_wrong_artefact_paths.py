@@ -1,5 +1,6 @@
-"""An artefact of one target given to another target's command: the refusal names what it is and
-which command reads it (not 'file does not exist')."""
+"""An artefact given to a command its target does not offer, or where a model file is expected: the refusal names
+which target's artefact it is and which commands read it (the core asks every target's ``identify``; it names
+no target itself)."""
 
 from __future__ import annotations
 
@@ -17,18 +18,26 @@ def _bundle(tmp_path):
     return path
 
 
+def _line(args, capsys):
+    code, _, err = run_cli(args, capsys)
+    assert code == 2, args
+    (line,) = err.strip().splitlines()
+    return line
+
+
 def test_emulate_map_report_inspect_of_a_jetson_artefact_say_what_it_is(artefacts, tmp_path, capsys):
     jetson_dir = artefacts["rsnn"][2]
     x = tmp_path / "x.npy"
     np.save(x, np.zeros((2, 30, 6), np.uint8))
-    for args in (["emulate", jetson_dir, "-i", x, "-o", tmp_path / "o.npz"], ["map", jetson_dir],
-                 ["report", jetson_dir, "--energy"], ["inspect", jetson_dir], ["compile", jetson_dir, "-o", tmp_path / "c.net"]):
-        code, _, err = run_cli(args, capsys)
-        assert code == 2, args
-        (line,) = err.strip().splitlines()
-        assert line.startswith(f"snncc: error: {jetson_dir}: ") and "does not exist" not in line, line
-        assert "is a Jetson artefact (a directory)" in line and "`snncc run` runs it" in line, line
-        assert ", not a model file" in line or ", not a Loihi bundle" in line, line
+    for args, verb in ((["emulate", jetson_dir, "-i", x, "-o", tmp_path / "o.npz"], "emulate"), (["map", jetson_dir], "map"),
+                       (["report", jetson_dir, "--energy"], "estimate")):
+        line = _line(args, capsys)
+        assert line == (f"snncc: error: {jetson_dir}: artefact: is a jetson artefact; the jetson target has no {verb} "
+                        "(`snncc run` runs it, `snncc bench` times it, `snncc check MODEL --artefact` measures it)"), line
+    for args in (["inspect", jetson_dir], ["compile", jetson_dir, "-o", tmp_path / "c.net"]):
+        line = _line(args, capsys)
+        assert line.startswith(f"snncc: error: {jetson_dir}: model: is Jetson artefact (ONNX opset"), line
+        assert "(target jetson): `snncc run` runs it" in line and line.endswith("; it is not a model file"), line
     assert not (tmp_path / "o.npz").exists() and not (tmp_path / "c.net").exists()
 
 
@@ -36,11 +45,9 @@ def test_run_and_bench_of_a_loihi_bundle_say_what_it_is(tmp_path, capsys):
     bundle = _bundle(tmp_path)
     x = tmp_path / "x.npy"
     np.save(x, np.zeros((2, 30, 8), np.uint8))
-    for args in (["run", bundle, "-i", x], ["bench", bundle, "--samples", "2"]):
-        code, _, err = run_cli(args, capsys)
-        assert code == 2, args
-        (line,) = err.strip().splitlines()
-        assert "is a Loihi bundle (.net, an HDF5 file), not a Jetson artefact" in line, line
+    for args, verb in ((["run", bundle, "-i", x], "run"), (["bench", bundle, "--samples", "2"], "bench")):
+        line = _line(args, capsys)
+        assert line.startswith(f"snncc: error: {bundle}: artefact: is a loihi artefact; the loihi target has no {verb} ("), line
         assert "`snncc emulate` runs it" in line, line
 
 
@@ -48,9 +55,12 @@ def test_missing_paths_and_plain_directories_are_still_named_so(tmp_path, capsys
     (tmp_path / "empty").mkdir()
     x = tmp_path / "x.npy"
     np.save(x, np.zeros((2, 30, 8), np.uint8))
-    code, _, err = run_cli(["emulate", tmp_path / "none.net", "-i", x, "-o", tmp_path / "o.npz"], capsys)
-    assert code == 2 and err.strip().endswith("none.net: path: file does not exist")
-    code, _, err = run_cli(["emulate", tmp_path / "empty", "-i", x, "-o", tmp_path / "o.npz"], capsys)
-    assert code == 2 and err.strip().endswith("empty: path: is a directory, not a Loihi bundle (.net, an HDF5 file)")
-    code, _, err = run_cli(["run", tmp_path / "none", "-i", x], capsys)
-    assert code == 2 and err.strip().endswith("none: path: does not exist")
+    line = _line(["emulate", tmp_path / "none.net", "-i", x, "-o", tmp_path / "o.npz"], capsys)
+    assert line.endswith("none.net: artefact: file does not exist"), line
+    line = _line(["emulate", tmp_path / "empty", "-i", x, "-o", tmp_path / "o.npz"], capsys)
+    assert line.startswith(f"snncc: error: {tmp_path / 'empty'}: artefact: is not an artefact any installed target "
+                           "recognises ("), line
+    line = _line(["run", tmp_path / "none", "-i", x], capsys)
+    assert line.endswith("none: artefact: file does not exist"), line
+    line = _line(["inspect", tmp_path / "none.nir"], capsys)
+    assert line.endswith("none.nir: model: file does not exist"), line

@@ -22,7 +22,8 @@ import pytest
 from snncc.errors import SnnccError
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.lowering import bias_sources
-from snncc.targets.loihi.bundle.hdf5 import check_network, read_bundle, write_bundle
+from snncc.targets.loihi.bundle.read import read_bundle
+from snncc.targets.loihi.bundle.write import check_network, write_bundle
 from snncc.targets.loihi.emulation.emulator import reference_run
 from snncc.targets.loihi.network import LoihiLayer
 from snncc.targets.loihi.mapping.partition import map_network
@@ -136,7 +137,7 @@ import json
 import snncc.targets.loihi.chip as chip
 chip.COMPARTMENTS_PER_CORE = 4      # the one-line change, made before any user is imported
 chip.Q_BITS = 9
-from snncc.targets.loihi.emulation import kernel as _kernel
+from snncc.targets.loihi.emulation import flat as _kernel
 from snncc.targets.loihi.mapping import fanin
 from snncc.targets.loihi.mapping.partition import map_network
 from snncc.targets.loihi.mapping.resources import LOIHI1

@@ -154,12 +154,10 @@ def continuous_euler(w: np.ndarray, node: nir.CubaLIF, x: np.ndarray, dt: float)
 
 
 def run_cli(args: list, capsys) -> tuple[int, str, str]:
-    """Run ``snncc args`` in-process; return (exit status, stdout, stderr)."""
-    from snncc.cli.main import run
+    """Run ``snncc args`` in-process; return (exit status, stdout, stderr without its progress lines)."""
+    from snncc_test_helpers import run_cli as run
 
-    code = run([str(a) for a in args])
-    out = capsys.readouterr()
-    return code, out.out, out.err
+    return run(args, capsys)
 
 
 # -- a trained graph ---------------------------------------------------------------------------------

@@ -57,7 +57,8 @@ def _never_over_silence(record, outputs_silent):
 def test_check_reports_the_hash_and_figures_compile_reports(name, tmp_path, capsys):
     flags = ["--allow-reset-change"] if "subtract" in name else []
     report, rec = _same_as_compile(capsys, name, "loihi", tmp_path / "g.net", flags)
-    assert rec["scale_rule"] == report["scale_rule"] and rec["candidates"] == report["scale_candidates"]
+    details = rec["details"]
+    assert details["scale_rule"] == report["scale_rule"] and details["candidates"] == report["scale_candidates"]
     float_silent = report["liveness"]["float"][list(report["liveness"]["float"])[-1]]["status"] == "silent"
     if float_silent:   # compile said so too, and claimed no agreement
         assert report["validation"]["prediction_agreement"] is None and len(report["warnings"]) == 1

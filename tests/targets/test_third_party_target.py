@@ -91,7 +91,7 @@ def test_compile_and_check_with_a_third_party_target(toy, toy_data, small_rsnn_c
 
     with np.load(toy_data) as z:
         x, y = z["inputs"], z["labels"]
-    expected = float(np.mean(simulate(load_model(small_rsnn_checkpoint), x.astype(np.float32)).prediction.numpy() == y))
+    expected = float(np.mean(np.asarray(simulate(load_model(small_rsnn_checkpoint), x.astype(np.float32)).prediction) == y))
     assert record == {"target": "toy", "samples": 6, "accuracy": expected, "precision": None}
     code, stdout, _ = run_cli(["check", small_rsnn_checkpoint, "--target", "toy", "--data", toy_data], capsys)
     assert code == 0 and "\ntoy check: 6 samples, accuracy" in stdout and stdout.startswith("measured artefact: toy")
@@ -111,7 +111,8 @@ def test_a_capability_the_target_lacks_is_refused_in_one_line(toy, toy_data, sma
                        (["bench", out], "bench")):
         code, stdout, err = run_cli([*args, "--target", "toy"], capsys)
         assert code == 2 and stdout == ""
-        assert err == f"snncc: error: snncc {args[0]}: --target: target 'toy' has no {verb} in this snncc\n"
+        assert err == (f"snncc: error: {out}: artefact: is a toy artefact; the toy target has no {verb} "
+                       "(`snncc check MODEL --artefact --data D` measures it)\n")
     assert not (tmp_path / "o.npz").exists()
     code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "toy", "-o", out, "--scale", "global"], capsys)
     assert code == 2 and err == ("snncc: error: snncc compile: --scale: does not apply to --target toy (it takes "
@@ -152,7 +153,8 @@ def test_the_toy_option_is_offered_with_help_naming_its_target(toy, capsys):
     assert offers["allow_reset_change"].targets == ("loihi", "xylo")          # Loihi's and Xylo's switch
     assert "toy_precision" in {o.name for o in offered_options(["check", "agree"])}
     assert "toy_precision" not in {o.name for o in offered_options(["map"])}
-    for verb, shown in (("compile", True), ("check", True), ("map", False)):
+    assert "toy_precision" in {o.name for o in offered_options(["map", "lower"])}   # snncc map MODEL compiles
+    for verb, shown in (("compile", True), ("check", True), ("emulate", False)):
         code, stdout, _ = run_cli([verb, "--help"], capsys)
         assert code == 0 and ("--toy-precision" in stdout) == shown, verb
 

@@ -66,7 +66,7 @@ class ToyTarget:
 
     def identify(self, path):
         """A JSON file holding the toy summary's keys is a toy artefact (it records no source hash)."""
-        from snncc.artefacts import ArtefactIdentity
+        from snncc.targets.kit.artefact import ArtefactIdentity
 
         try:
             record = json.loads(Path(path).read_text())
@@ -84,7 +84,7 @@ class ToyTarget:
         opts = target_options(self, options, "check")
         if artefact is not None and json.loads(Path(artefact).read_text())["nodes"] != len(list(graph)):
             raise ValueError("the toy artefact describes another graph")
-        prediction = simulate(graph, np.asarray(inputs, np.float32)).prediction.numpy()
+        prediction = np.asarray(simulate(graph, np.asarray(inputs, np.float32)).prediction)
         if progress is not None:
             progress(len(labels))
         return ToyCheck(len(labels), float(np.mean(prediction == np.asarray(labels))), opts.toy_precision)

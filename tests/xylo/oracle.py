@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from snncc.targets.xylo.emulator import XyloResult
+from snncc.targets.xylo.emulation.emulator import XyloResult
 from snncc.targets.xylo.spec import XyloSpec
 
 

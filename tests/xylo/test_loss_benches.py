@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 
 from snncc.ir.serialize import save_graph
-from snncc.targets.xylo.emulator import emulate
-from snncc.targets.xylo.lowering import lower, twin_counts
+from snncc.targets.xylo.emulation.emulator import emulate
+from snncc.targets.xylo.lowering.lower import twin_counts
+from xylo_models import lower_with
 from snncc.targets.xylo.spec import XyloSpec
-from snncc.targets.xylo.written import read_artefact
+from snncc.targets.xylo.artefact.read import read_artefact
 from snncc_test_helpers import load_bench, run_cli
 
 from xylo_models import chain, spikes
@@ -42,7 +43,8 @@ def test_layer_swaps_reproduce_the_artefact(tmp_path, capsys, model):
     names = set(got["figures"])
     assert {"chip", "float readout, chip hidden (copies' mean)", "float readout, chip hidden copy 0",
             "float readout, chip hidden copy 1", "chip readout, float hidden"} == names
-    assert all(a.counted + a.ties_or_silent == 24 for a in got["figures"].values())
+    assert all(a.argmax.samples == 24 and a.decided + a.argmax.ties + a.argmax.silent == 24
+               for a in got["figures"].values())
     assert got["outputs"]["chip"].shape == (24, 3) and got["outputs"]["chip"].sum() > 0
 
 
@@ -50,7 +52,7 @@ def test_loss_sources_removes_one_approximation_at_a_time(model):
     """Relays 1x finer and uncapped are the twin itself; 100x finer changes the relays' registers only; the twin
     emulator runs an unrounded spec."""
     bench = load_bench("xylo_loss_sources")
-    low = lower(model, dict(QUICK, rule="relayed", replicas=2))
+    low = lower_with(model, dict(QUICK, rule="relayed", replicas=2))
     x = spikes(np.random.default_rng(4), 16, 40, 6, 0.15)
     assert np.array_equal(twin_counts(bench.finer_relays(low, 1.0), low.timing, x),
                           twin_counts(low.twin, low.timing, x))
@@ -60,7 +62,7 @@ def test_loss_sources_removes_one_approximation_at_a_time(model):
     assert np.allclose(theta[relay_cells] * 100, low.twin.node("hidden").threshold[relay_cells])
     others = np.setdiff1d(np.arange(theta.size), relay_cells)
     assert np.array_equal(theta[others], low.twin.node("hidden").threshold[others])
-    unrounded = lower(model, dict(QUICK, rule="relayed", replicas=2, rounding="none",
+    unrounded = lower_with(model, dict(QUICK, rule="relayed", replicas=2, rounding="none",
                                   emulator=bench.twin_emulator(model.dt)))
     assert unrounded.spec["weights_rec"].dtype == np.float64
     assert twin_counts(unrounded.twin, unrounded.timing, x).shape == (16, 3)

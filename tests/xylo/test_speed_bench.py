@@ -8,7 +8,7 @@ from argparse import Namespace
 import numpy as np
 
 from snncc.rounding import round_with_feedback
-from snncc.targets.xylo import identify
+from snncc.targets.xylo.lowering import regression as identify
 from snncc_test_helpers import load_bench
 
 
@@ -31,10 +31,10 @@ def test_the_baselines_compute_what_the_library_computes():
 
 def test_the_former_arithmetic_is_patched_in_and_restored():
     bench = load_bench("bench_xylo_finetune")
-    from snncc.targets.xylo import assemble, quantize
+    from snncc.targets.xylo.lowering import integers
 
-    current = identify.normal_equations, assemble.round_with_feedback, quantize.round_with_feedback
+    current = identify.normal_equations, integers.round_with_feedback
     with bench.former_arithmetic():
         assert identify.normal_equations is bench.per_neuron_normal_equations
-        assert assemble.round_with_feedback is quantize.round_with_feedback is bench.former_rounding
-    assert (identify.normal_equations, assemble.round_with_feedback, quantize.round_with_feedback) == current
+        assert integers.round_with_feedback is bench.former_rounding
+    assert (identify.normal_equations, integers.round_with_feedback) == current

@@ -205,17 +205,6 @@ def test_the_registered_module_imports_nothing_heavy():
     assert json.loads(proc.stdout) == []
 
 
-def test_declared_choices_are_the_chips_and_rules():
-    from snncc.targets.xylo.capabilities import CHIP_KEYS, MAX_REPLICAS, RELAY_SETS, RULES
-    from snncc.targets.xylo.chip import CHIPS
-    from snncc.targets.xylo.lowering import MAX_REPLICAS as LOWERING_MAX_REPLICAS
-    from snncc.targets.xylo.lowering import RELAY_SETS as LOWERING_RELAY_SETS
-    from snncc.targets.xylo.lowering import RULES as LOWERING_RULES
-
-    assert CHIP_KEYS == tuple(CHIPS) and RULES == LOWERING_RULES and MAX_REPLICAS == LOWERING_MAX_REPLICAS
-    assert RELAY_SETS == LOWERING_RELAY_SETS
-
-
 def test_emulate_map_and_report_find_the_target_from_the_artefact(compiled, tmp_path, capsys):
     _, out, x_path = compiled
     code, _, err = run_cli(["emulate", out, "--input", x_path, "-o", tmp_path / "e.npz"], capsys)

@@ -44,3 +44,19 @@ def run_xylosim(spec: dict, x: np.ndarray, record: bool = False):
     n = np.asarray(spec["threshold"]).size
     full = {"aliases": [[] for _ in range(n)], "dt": 1e-3, **spec}     # hand-made specs may leave these out
     return XyloSimOracle(XyloSpec(**full)).run(np.asarray(x), record=record)
+
+
+STUDY_KNOBS = ("calibration", "density", "emulator", "rounding", "refit", "readout")
+
+
+def lower_with(graph, settings: dict | None = None):
+    """``lowering.lower.lower`` with ``settings`` split as the library takes them: the option record validated by
+    the target's declarations (as every verb builds it) and the study knobs (``XyloStudyKnobs``)."""
+    from snncc.targets.base import target_options
+    from snncc.targets.xylo.capabilities import target
+    from snncc.targets.xylo.lowering.lower import lower
+    from snncc.targets.xylo.options import XyloStudyKnobs
+
+    settings = dict(settings or {})
+    knobs = XyloStudyKnobs(**{k: settings.pop(k) for k in list(settings) if k in STUDY_KNOBS})
+    return lower(graph, target_options(target, settings, "lower"), knobs)

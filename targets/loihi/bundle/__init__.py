@@ -1,5 +1,9 @@
 """Loihi bundles on disk.
 
-    hdf5.py         the HDF5 bundle in the lava-dl netx layout: read, write, check
-    load.py         what ``map`` and ``report`` read: a bundle, or a model lowered for Loihi first
+    layout.py        the HDF5 layout (lava-dl netx's, plus snncc's own groups), stated once
+    write.py         the bundle written (atomic, byte-identical), after the reader's rules are checked
+    read.py          a bundle read and validated (snncc's, netx's or SLAYER v1's)
+    identify.py      the ``identify`` capability: is this file a Loihi bundle, from which model
+    portability.py   what lava-dl netx runs as written (the rules bench/lava_netx_agreement.py measured)
+    self_contained.py  no HDF5 link may lead to another file (interim copy; see its docstring)
 """

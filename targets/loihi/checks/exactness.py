@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import InternalError
-from snncc.threads import one_thread
+from snncc.targets.kit import InternalError
+from snncc.targets.kit.compute import one_thread
 from snncc.ir.graph import Graph
 from snncc.targets.loihi.emulation.emulator import EmulationResult, emulate, lead_steps, pad, reference_run  # noqa: F401
 from snncc.targets.loihi.lowering.registers import ChainLayer, float_twin
@@ -35,7 +35,7 @@ def ir_spikes(graph: Graph, x: np.ndarray, names: list[str]) -> dict[str, np.nda
 
     with one_thread():
         res = simulate(graph, x, record="spikes")
-    return {n: res.spikes[n].numpy().astype(np.uint8) for n in names}
+    return {n: np.asarray(res.spikes[n]).astype(np.uint8) for n in names}
 
 
 def loihi_spikes(result: EmulationResult, network: LoihiNetwork, layers: list[ChainLayer], shifts: dict[str, int],
@@ -64,7 +64,7 @@ class ValidationRecord:
     emulator_vs_quantized_ir: dict[str, float] = field(default_factory=dict)
     emulator_vs_trained: dict[str, float] = field(default_factory=dict)
     prediction_agreement: float | None = None   # emulator vs float model as trained (None: undefined, outputs silent)
-    prediction: dict[str, Any] = field(default_factory=dict)   # snncc.measure.agreement.ArgmaxAgreement
+    prediction: dict[str, Any] = field(default_factory=dict)   # kit.agreement.ArgmaxAgreement
     overflow: dict[str, int] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
@@ -125,7 +125,7 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
     record.emulator_vs_quantized_ir = agreement(emu, ir_quant)
     record.emulator_vs_trained = agreement(emu, ir_trained)
     last = names[-1]
-    from snncc.measure.agreement import argmax_agreement
+    from snncc.targets.kit.agreement import argmax_agreement
 
     decisions = argmax_agreement(ir_trained[last].sum(axis=1), emu[last].sum(axis=1))
     record.prediction_agreement = decisions.share

@@ -23,9 +23,11 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.ir.graph import Graph
 from snncc.targets.loihi.network import LoihiNetwork
+from snncc.targets.loihi.options import STREAM_GAP
+from snncc.targets.loihi.options import recorded as recorded_options
 
 LAYER_FIELDS = ("kind", "n", "always_on", "weight", "weight_rec", "wgt_exp", "wgt_exp_rec", "delay", "delay_rec",
                 "bias", "bias_exp", "v_th_mant", "i_decay", "v_decay", "ref_delay")
@@ -59,7 +61,7 @@ class WrittenBundle:
     def lead(self) -> int:
         return max([self.output_shift, *self.shifts.values()])
 
-    def run(self, x: np.ndarray, *, mode: str = "batch", gap: int = 100):
+    def run(self, x: np.ndarray, *, mode: str = "batch", gap: int = STREAM_GAP):
         """(population spikes cut to the input's T, emulation result) of the file's network on ``x`` (B, T, C)."""
         from snncc.targets.loihi.emulation.emulator import emulate, pad
 
@@ -72,7 +74,7 @@ class WrittenBundle:
             out[name] = res.spikes[j][:, s:s + steps, :self.network.layers[j].model_n]
         return self.cut(out), res
 
-    def run_wide(self, x: np.ndarray, *, mode: str = "batch", gap: int = 100) -> np.ndarray:
+    def run_wide(self, x: np.ndarray, *, mode: str = "batch", gap: int = STREAM_GAP) -> np.ndarray:
         """The output population's spikes (B, T, n) with wide registers (no wrap, no clip): what overflow costs."""
         from snncc.targets.loihi.emulation.emulator import emulate, pad
 
@@ -116,7 +118,7 @@ def _names(network: LoihiNetwork, graph: Graph) -> tuple[list[str], dict[str, in
         pairs = [(str(names[j]), int(j)) for j in index[1:] if str(names[j]) != relay]
         if {p for p, _ in pairs} <= lifs:
             return [p for p, _ in pairs], dict(pairs)
-    from snncc.passes.fold_linear import fold_linear
+    from snncc.targets.kit.graphs import fold_linear
     from snncc.targets.loihi.lowering.registers import chain
 
     try:
@@ -132,7 +134,7 @@ def _names(network: LoihiNetwork, graph: Graph) -> tuple[list[str], dict[str, in
 def open_bundle(path: str | Path, graph: Graph) -> WrittenBundle:
     """The bundle at ``path`` read for measuring against ``graph``, with the lowering stages re-derived
     when the model lowers to exactly this bundle under the options compile recorded."""
-    from snncc.targets.loihi.bundle.hdf5 import read_bundle
+    from snncc.targets.loihi.bundle.read import read_bundle
 
     network = read_bundle(path)
     try:
@@ -162,10 +164,10 @@ def open_bundle(path: str | Path, graph: Graph) -> WrittenBundle:
 
 def relower(graph: Graph, recorded: dict[str, Any]):
     """(LoweredModel, relayed network or None) of ``graph`` under compile's recorded options."""
-    from snncc.targets.loihi.lowering.lower import COMPILE_OPTIONS, lower_model
+    from snncc.targets.loihi.lowering.lower import lower_model
     from snncc.targets.loihi.mapping.relays import needs_relays, relay_network
 
-    lowered = lower_model(graph, {k: recorded.get(k) for k in COMPILE_OPTIONS})
+    lowered = lower_model(graph, recorded_options(recorded))
     relayed = None
     if needs_relays(lowered.network):
         relayed = relay_network(lowered.network)[0]

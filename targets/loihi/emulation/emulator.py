@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from snncc.errors import SnnccError
-from snncc.limits import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, whole_number
+from snncc.targets.kit import SnnccError
+from snncc.targets.kit.compute import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, whole_number
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.emulation.result import EmulationResult, SparseBlock, _prediction  # noqa: F401  (re-exported)
 from snncc.targets.loihi.network import LoihiNetwork
@@ -61,7 +61,7 @@ def lead_steps(shifts: dict[str, int], output_shift: int) -> int:
 def check_inputs(inputs, width: int, source: str | None = None) -> np.ndarray:
     """(T, C) or (B, T, C) 0/1 data (bool, ints or floats) -> (B, T, C) uint8, or a one-line error
     (the rules of ``snncc.inputs.check_batch``, shared with ``snncc run``)."""
-    from snncc.inputs import check_batch
+    from snncc.targets.kit.inputs import check_batch
 
     x = np.asarray(inputs)
     if x.dtype.kind in "bu" and x.size and x.max() <= 1:   # unsigned and at most 1: binary (one pass)
@@ -194,7 +194,7 @@ def _result(network, hist, rec_u, rec_v, overflow, record, batch, steps) -> Emul
 
 # -- the fast kernel --------------------------------------------------------------------------------
 @dataclass
-class _Program:
+class Program:
     """A LoihiNetwork flattened into arrays the numba kernel reads (layers 1..L in order)."""
 
     n: np.ndarray            # (L+1,) neurons per layer, layer 0 = inputs
@@ -259,7 +259,7 @@ def _max_delay(w, d) -> int:
     return int(d.max(initial=0))
 
 
-def _program(network: LoihiNetwork) -> _Program:
+def program(network: LoihiNetwork) -> Program:
     layers = network.layers
     n = np.array([lay.n for lay in layers], np.int64)
     noff = np.concatenate([[0], np.cumsum(n)[:-1]]).astype(np.int64)
@@ -290,7 +290,7 @@ def _program(network: LoihiNetwork) -> _Program:
         params[i] = (keep_u[cells][0], keep_v[cells][0], vth[cells][0], lay.ref_delay, lay.vmin, lay.vmax, int(one))
         if lay.bias is not None:
             bias[noff[i]:noff[i] + lay.n] = np.asarray(lay.bias, np.int64) << lay.bias_exp
-    return _Program(n, noff, wt, dts, wr, dr, params, keep_u, keep_v, vth, bias, max_delay + 2)
+    return Program(n, noff, wt, dts, wr, dr, params, keep_u, keep_v, vth, bias, max_delay + 2)
 
 
 class PreparedNetwork:
@@ -300,10 +300,10 @@ class PreparedNetwork:
     """
 
     def __init__(self, network: LoihiNetwork):
-        from snncc.targets.loihi.emulation.kernel import Flat
+        from snncc.targets.loihi.emulation.flat import Flat
 
         self.network = network
-        self.flat = Flat(_program(network))
+        self.flat = Flat(program(network))
 
     def _check_size(self, total_steps: int, record: str) -> None:
         """What the run records must fit in memory: 1 byte per spike, 8 per recorded u and v."""
@@ -328,7 +328,7 @@ class PreparedNetwork:
     def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int | None = None,
             wide: bool = False, threads: int | None = None) -> EmulationResult:
         """``threads``: threads the samples of a batch are spread over (default: NUMBA_NUM_THREADS)."""
-        from snncc.targets.loihi.emulation.kernel import run_flat
+        from snncc.targets.loihi.emulation.flat import run_flat
 
         if record not in RECORD_CHOICES:
             raise SnnccError(f"record must be one of {RECORD_CHOICES}", field="record")

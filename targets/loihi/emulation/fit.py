@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 
 
 def fit_to_bundle(x: np.ndarray, network, source: str) -> tuple[np.ndarray, str]:

@@ -80,7 +80,7 @@ def emulate_bundle(network, inputs, *, record: str = "outputs", stream: bool = F
                    source: str | None = None, progress: Callable[[int], None] | None = None) -> BundleEmulation:
     """Check ``inputs`` against the bundle's width, pad for the output shift, emulate; ``progress(n)``
     after each chunk of n samples (batch mode)."""
-    from snncc.input_layout import InputLayout, to_artefact_layout
+    from snncc.targets.kit.inputs import InputLayout, to_artefact_layout
     from snncc.targets.loihi.emulation.emulator import PreparedNetwork, check_inputs, emulate, pad
 
     inputs, note = to_artefact_layout(inputs, InputLayout.from_record(network.input_width, network.metadata))

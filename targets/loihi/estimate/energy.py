@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import InternalError
+from snncc.targets.kit import InternalError
 from snncc.targets.loihi.mapping.coremap import CoreMap
 from snncc.targets.loihi.network import LoihiNetwork
 

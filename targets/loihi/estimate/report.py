@@ -1,5 +1,5 @@
-"""``snncc report --energy``'s work: a bundle (or model, lowered first) mapped, emulated on inputs fitted
-to it, and its energy and delay per sample ESTIMATED (``energy.py``)."""
+"""``snncc report --energy``'s work: a bundle mapped, emulated on inputs fitted to it, and its energy and delay
+per sample ESTIMATED (``energy.py``)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 
 
 @dataclass
@@ -35,13 +35,13 @@ def estimate_bundle(source: Path, inputs, *, data: str | None = None, note: str 
     """``inputs``: an array (T, C) or (B, T, C) read from ``data``, or ``snncc.inputs.RandomSpikes`` drawn
     at the bundle's tSample and input width. The first ``limit`` samples are used, fitted to the bundle
     (``fit.py``); ``progress(n)`` after every n samples emulated."""
-    from snncc.inputs import RandomSpikes
+    from snncc.targets.kit.inputs import RandomSpikes
     from snncc.targets.loihi.estimate.energy import emulate_and_estimate
     from snncc.targets.loihi.emulation.fit import fit_to_bundle
     from snncc.targets.loihi.mapping.partition import map_network
-    from snncc.targets.loihi.bundle.load import load_network
+    from snncc.targets.loihi.bundle.read import read_bundle
 
-    network = load_network(Path(source))
+    network = read_bundle(Path(source))
     if isinstance(inputs, RandomSpikes):
         x, data, note = inputs.draw(network.t_sample, network.input_width), "<random>", inputs.note()
     else:

@@ -8,14 +8,13 @@ a measurement -- and, optionally, ``snncc check``'s bit-exact emulated accuracy 
 
 from __future__ import annotations
 
-import time
-from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from snncc.targets.base import Figure, Given, Objective
+from snncc.targets.kit.search import SearchCosts, tiled_inputs, timed
 
 if TYPE_CHECKING:
     from snncc.ir.graph import Graph
@@ -85,17 +84,17 @@ def _published() -> dict[str, float | str]:
             "label": "paper: measured on Loihi (real data, th 1)"}
 
 
-class LoihiHardware:
-    """The ``hardware`` capability's answer: objectives, the paper's measurement, and per-trial figures."""
+class LoihiHardware(SearchCosts):
+    """The ``hardware`` capability's answer (``kit.search.SearchCosts``): objectives, the paper's measurement,
+    and per-trial figures."""
 
-    objectives: Mapping[str, Objective] = OBJECTIVES
-    columns: Mapping[str, Figure] = COLUMNS
-    front: tuple[str, ...] = FRONT
+    objectives = OBJECTIVES
+    columns = COLUMNS
+    front = FRONT
     label = ESTIMATE_LABEL
 
     def __init__(self, target: LoihiTarget) -> None:
-        self.target = target
-        self.published: Mapping[str, float | str] = _published()
+        super().__init__(target, _published())
 
     def figures(self, graph: Graph, inputs: np.ndarray, labels: np.ndarray, options: Given = None, *,
                 estimate_samples: int = 16, emulate_samples: int = 0) -> HardwareFigures:
@@ -107,28 +106,26 @@ class LoihiHardware:
         from snncc.targets.loihi.estimate.energy import emulate_and_estimate
         from snncc.targets.loihi.mapping.coremap import CoreMap
 
-        started = time.perf_counter()
-        artefact = self.target.lower(graph, options)
-        network = artefact.network
-        core_map = CoreMap.from_dict(network.core_map)
-        n = max(1, min(int(estimate_samples), int(inputs.shape[0])))
-        x = fit_inputs(inputs[:n], network)
-        est = emulate_and_estimate(network, core_map, x, f"{n} held-out samples")
-        figures = HardwareFigures(
-            cores=int(core_map.n_cores), chips=int(core_map.n_chips),
-            synaptic_ops_per_sample=float(est.counts["synaptic_ops"]), spikes_per_sample=float(est.counts["spikes"]),
-            energy_uj_per_sample=float(est.energy_uj["total"]), delay_ms_per_sample=float(est.delay_ms),
-            t_sample=int(network.t_sample), estimated_on=n,
-            notes=[f"scale rule {artefact.quantization.get('rule')}", *artefact.notes])
-        if emulate_samples > 0:
-            m = min(int(emulate_samples), int(inputs.shape[0]))
-            xe = inputs[:m]
-            k = int(graph.metadata.get("input_copies", 1) or 1)
-            if k > 1 and xe.shape[2] * k == network.input_width:
-                xe = np.tile(xe, (1, 1, k))
-            record = self.target.check(graph, np.asarray(xe, np.uint8), np.asarray(labels[:m]), options)
-            figures.emulated_accuracy = float(record.accuracy["emulator"])
-            figures.float_accuracy_same_samples = float(record.accuracy["float_trained"])
-            figures.emulated_on = m
-        figures.seconds = time.perf_counter() - started
+        with timed() as clock:
+            artefact = self.target.lower(graph, options)
+            network = artefact.network
+            core_map = CoreMap.from_dict(network.core_map)
+            n = max(1, min(int(estimate_samples), int(inputs.shape[0])))
+            x = fit_inputs(inputs[:n], network)
+            est = emulate_and_estimate(network, core_map, x, f"{n} held-out samples")
+            figures = HardwareFigures(
+                cores=int(core_map.n_cores), chips=int(core_map.n_chips),
+                synaptic_ops_per_sample=float(est.counts["synaptic_ops"]),
+                spikes_per_sample=float(est.counts["spikes"]), energy_uj_per_sample=float(est.energy_uj["total"]),
+                delay_ms_per_sample=float(est.delay_ms), t_sample=int(network.t_sample), estimated_on=n,
+                notes=[f"scale rule {artefact.quantization.get('rule')}", *artefact.notes])
+            if emulate_samples > 0:
+                m = min(int(emulate_samples), int(inputs.shape[0]))
+                xe = tiled_inputs(inputs[:m], graph, network.input_width)
+                record = self.target.check(graph, np.asarray(xe, np.uint8), np.asarray(labels[:m]), options)
+                assert record.accuracy is not None
+                figures.emulated_accuracy = float(record.accuracy["artefact"])
+                figures.float_accuracy_same_samples = float(record.accuracy["float"])
+                figures.emulated_on = m
+        figures.seconds = clock.seconds
         return figures

@@ -1,6 +1,6 @@
 """The Loihi artefact: the lowered network with its quantization, timing and validation records.
 
-``write(path)`` writes the HDF5 bundle; ``summary()`` is the record as plain data (what
+``write(path)`` writes the HDF5 bundle (a fine-tuned one with its ``finetune`` record); ``summary()`` is the record as plain data (what
 ``snncc compile --json`` prints); ``render_text(console)`` prints it for people (``report_text.py``).
 """
 
@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from snncc.targets.loihi.bundle.hdf5 import netx_compat, write_bundle
+from snncc.targets.loihi.bundle.write import netx_compat, write_bundle
 from snncc.targets.loihi.network import LoihiNetwork
 from snncc.targets.loihi.lowering.report_text import delay_text, exp_text, register_text
 
@@ -24,6 +24,8 @@ class LoihiArtefact:
     notes: list[str] = field(default_factory=list)
     liveness: dict[str, Any] = field(default_factory=dict)      # populations' activity on the calibration inputs
     portability: dict[str, Any] = field(default_factory=dict)   # netx runs it as written? (bundle/portability.py)
+    finetune: dict[str, Any] | None = None   # a fine-tuned bundle's record (kit.finetuned.finetune_entry)
+    model: dict[str, Any] | None = None      # kit.artefact.model_record of the graph as given (/snncc/model)
 
     def write(self, path: str | Path) -> None:
         extra = {"quantization": self.quantization, "timing": self.timing, "validation": self.validation}
@@ -31,6 +33,10 @@ class LoihiArtefact:
             extra["liveness"] = self.liveness
         if self.portability:
             extra["portability"] = self.portability
+        if self.finetune is not None:
+            extra["finetune"] = self.finetune
+        if self.model is not None:
+            extra["model"] = self.model
         write_bundle(self.network, path, extra=extra)
 
     def summary(self) -> dict[str, Any]:

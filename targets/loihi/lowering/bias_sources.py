@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.network import LoihiLayer
 

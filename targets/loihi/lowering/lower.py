@@ -1,10 +1,12 @@
 """Lowering a graph to Loihi 1: timing, quantization, a netx-layout HDF5 bundle checked by a bit-exact emulator.
 
-``lower_artefact(graph, settings)`` (behind ``target.lower``, ``capabilities.py``) returns a
+``lower_artefact(graph, options)`` (behind ``target.lower``, ``capabilities.py``) returns a
 ``LoihiArtefact`` that has already been checked against the IR reference (``checks/exactness.py``).
-Settings (``LoihiOptions.as_dict()``, plus ``t_sample`` for checks): timing ("exact" | "paper"), scale ("auto" | "global" |
-"per-layer" | "split" | "fine"), allow_reset_change (bool), source (model path), time_steps (tSample
-when the model states no recording length; --time-steps), replicas (K copies: ``replicate.py``; 1 or None: none).
+``options`` is the validated ``LoihiOptions`` record (``options.py``): timing ("exact" | "paper"), scale
+("auto" | "global" | "per-layer" | "split" | "fine"), allow_reset_change, source (model path), time_steps
+(tSample when the model states no recording length; --time-steps), replicas (K copies: ``replicate.py``;
+1 or None: none). ``lower_model``'s ``t_sample`` keyword fixes the sample's length instead (fine-tuning
+and the checks lower for the inputs' length).
 """
 
 from __future__ import annotations
@@ -15,12 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import SnnccError
 from snncc.ir.graph import Graph
-from snncc.input_layout import frame_shape
-from snncc.passes.fold_linear import fold_linear
-from snncc.ir.timebase import sample_steps
-from snncc.progress import Progress
+from snncc.targets.kit import Progress, SnnccError
+from snncc.targets.kit.graphs import fold_linear
+from snncc.targets.kit.inputs import frame_shape
+from snncc.targets.kit.timebase import sample_steps
 from snncc.targets.loihi.lowering.timing import lower_timing
 from snncc.targets.loihi.lowering.artefact import LoihiArtefact
 from snncc.targets.loihi.lowering.chip_units import in_chip_units
@@ -29,8 +30,8 @@ from snncc.targets.loihi.lowering.replicate import replicate, replication_note
 from snncc.targets.loihi.network import LoihiNetwork
 from snncc.targets.loihi.mapping.partition import map_network
 from snncc.targets.loihi.mapping.resources import LOIHI1
+from snncc.targets.loihi.options import COMPILE_OPTIONS, LoihiOptions
 
-COMPILE_OPTIONS = ("timing", "scale", "allow_reset_change", "time_steps", "replicas")   # recorded in the bundle: check re-lowers with them
 VALIDATION_BATCH = 4
 VALIDATING = "validating the bundle against the IR reference"
 
@@ -54,7 +55,7 @@ _RECENT: OrderedDict[str, LoweredModel] = OrderedDict()   # graph content + opti
 RECENT_KEPT = 2
 
 
-def content_key(graph: Graph, options: dict[str, Any]) -> str:
+def content_key(graph: Graph, options: LoihiOptions, t_sample: int | None = None) -> str:
     """SHA-256 of everything lowering reads: the graph (nodes, parameters, edges, dt, metadata) and the
     options it reads (``COMPILE_OPTIONS``, ``t_sample``; ``source`` for a graph that names no source file);
     equal keys lower to equal results (lowering is deterministic: seeded calibration)."""
@@ -62,11 +63,11 @@ def content_key(graph: Graph, options: dict[str, Any]) -> str:
     import json
 
     from snncc.ir.serialize import graph_to_record
-    from snncc.records import to_jsonable
+    from snncc.targets.kit.inputs import to_jsonable
 
-    read = {k: options.get(k) for k in (*COMPILE_OPTIONS, "t_sample")}
+    read: dict[str, Any] = {**options.compile_record(), "t_sample": t_sample}
     if "source_file" not in graph.metadata:
-        read["source"] = options.get("source")          # the bundle records it only then
+        read["source"] = options.source          # the bundle records it only then
     record, arrays = graph_to_record(graph)
     h = hashlib.sha256(json.dumps(to_jsonable([record, read]), sort_keys=True).encode())
     for key in sorted(arrays):
@@ -76,44 +77,46 @@ def content_key(graph: Graph, options: dict[str, Any]) -> str:
     return h.hexdigest()
 
 
-def lower_model(graph: Graph, options: dict[str, Any], progress: Progress | None = None) -> LoweredModel:
+def lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None = None, *,
+                t_sample: int | None = None) -> LoweredModel:
     """Timing, quantization and register values (no validation); ``progress(done, total, phase)`` as the
     scale rule's candidates are measured (``--scale auto``). The last ``RECENT_KEPT`` results are kept
     by content (``content_key``), so a check that lowers the model compile just lowered does not redo the
     calibration; the checks compare what they use with the written bundle anyway (``checks/written.py``)."""
     import copy
 
-    key = content_key(graph, options)
+    key = content_key(graph, options, t_sample)
     if key in _RECENT:
         _RECENT.move_to_end(key)
         return copy.deepcopy(_RECENT[key])      # a caller may change what it gets; the kept one stays as made
-    lowered = _lower_model(graph, options, progress)
+    lowered = _lower_model(graph, options, progress, t_sample)
     _RECENT[key] = copy.deepcopy(lowered)
     while len(_RECENT) > RECENT_KEPT:
         _RECENT.popitem(last=False)
     return lowered
 
 
-def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | None = None) -> LoweredModel:
+def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None = None,
+                 t_sample: int | None = None) -> LoweredModel:
     from snncc.ir.liveness import calibration_spikes, calibration_text
     from snncc.targets.loihi.lowering import scaling
     from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
 
-    timing_mode = options.get("timing") or "exact"
-    rule = options.get("scale") or "auto"
+    timing_mode = options.timing_mode
+    rule = options.scale_rule
     frame = frame_shape(graph)           # the input frame (C, H, W) before convolutions are folded
     graph, fold = fold_linear(graph)     # Conv -> connection matrix; linear chains -> one projection
-    copies = 1 if options.get("replicas") is None else int(options["replicas"])     # --replicas (replicate.py)
+    copies = 1 if options.replicas is None else int(options.replicas)     # --replicas (replicate.py)
     graph, replication = replicate(graph, copies)
     layers = chain(graph)
-    deployed, reset_changes = lif_params_check(graph, layers, bool(options.get("allow_reset_change", False)))
+    deployed, reset_changes = lif_params_check(graph, layers, bool(options.allow_reset_change))
     order, trec = lower_timing(deployed, timing_mode)   # exact timing returns ``deployed`` itself where it can
     trec.changes = reset_changes + trec.changes
-    steps = options.get("t_sample")
+    steps: int | None = t_sample
     if steps is not None:
         t_rule = "the input length"
-    else:   # --time-steps, else the recording length, else the default every target uses (snncc.ir.timebase)
-        steps, t_rule = sample_steps(graph, options.get("time_steps"))
+    else:   # --time-steps, else the recording length, else the default every target uses (kit.timebase)
+        steps, t_rule = sample_steps(graph, options.time_steps)
     steps = int(steps)
 
     names = [c.lif for c in layers]
@@ -123,7 +126,7 @@ def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | Non
     def measure(gq: Graph, rq) -> scaling.CandidateMeasure:
         """Mean over layers of ``count_error`` (per-neuron spike counts against the float model's), whether
         the outputs are silent, and what netx lacks to run the candidate as written."""
-        from snncc.measure.agreement import argmax_agreement
+        from snncc.targets.kit.agreement import argmax_agreement
         from snncc.targets.loihi.bundle.portability import netx_runnable
         from snncc.targets.loihi.emulation.emulator import emulate
 
@@ -142,7 +145,7 @@ def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | Non
     quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
     meta = {
         "source_sha256": graph.metadata.get("source_sha256", ""),
-        "source_file": graph.metadata.get("source_file", options.get("source", "")),
+        "source_file": graph.metadata.get("source_file", options.source),
         "model_name": graph.name,
         "layer_names": [layers[0].pre] + names,
         "dt": graph.dt,
@@ -156,7 +159,7 @@ def _lower_model(graph: Graph, options: dict[str, Any], progress: Progress | Non
         "steps": steps,
         "t_sample_rule": t_rule,
         "input_shape": frame,
-        "compile_options": {key: options.get(key) for key in COMPILE_OPTIONS},
+        "compile_options": options.compile_record(),
     }
     if replication is not None:
         meta["replication"] = replication
@@ -187,7 +190,7 @@ def attach_core_map(network: LoihiNetwork) -> None:
     network.core_map = core_map.to_dict()
 
 
-def lower_artefact(graph: Graph, options: dict[str, Any], progress: Progress | None = None) -> LoihiArtefact:
+def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | None = None) -> LoihiArtefact:
     """``target.lower``: lower (``lower_model``), place on cores (relays where fan-in needs them) and
     check the bundle against the IR reference (``checks/exactness.py``); ``progress(done, total,
     phase)`` through the scale candidates' measurements and the validation."""
@@ -232,9 +235,11 @@ def lower_artefact(graph: Graph, options: dict[str, Any], progress: Progress | N
     if network.metadata.get("output_shift"):
         notes.append(f"outputs appear {network.metadata['output_shift']} step(s) later than in the IR; tSample "
                      "includes them")
+    from snncc.targets.kit.artefact import model_record
+
     return LoihiArtefact(network=network, quantization=lowered.quant_record.as_dict(),
                          timing=lowered.timing_record.as_dict(), validation=validation, notes=notes,
-                         liveness=liveness, portability=portability)
+                         liveness=liveness, portability=portability, model=model_record(graph))
 
 
 def calibration_liveness(graph: Graph, lowered: LoweredModel) -> dict[str, Any]:

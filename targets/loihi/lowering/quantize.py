@@ -33,14 +33,14 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.timebase import recording_steps
 from snncc.ir.nodes import LIF, Dense
-from snncc.passes.current_bias import BiasTerm, current_biases, max_abs_bias, restore_biases
+from snncc.targets.kit.graphs import BiasTerm, current_biases, max_abs_bias, restore_biases
 from snncc.targets.loihi import chip
+from snncc.targets.loihi.options import SCALE_RULES
 
-SCALE_RULES = ("global", "per-layer", "split", "fine", "auto")
 FINE_V_TH_MANT = 256                 # the fine rule's threshold mantissa (chip threshold 2**14)
 FINE_STEPS = (1.0, 1.125, 1.25, 1.375, 1.5, 1.625, 1.75, 1.875)   # scale multipliers auto measures (one octave)
 OUTLIER_RATIO = 20.0                 # |W| above 20x the median |W != 0| is an outlier

@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import InternalError, SnnccError
+from snncc.targets.kit import InternalError, SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LSTM, Dense, Input, Output, Readout
-from snncc.passes.current_bias import current_biases
+from snncc.targets.kit.graphs import current_biases
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.lowering import bias_sources
 from snncc.targets.loihi.lowering.quantize import QuantizationRecord, quantize_weights
@@ -102,7 +102,7 @@ def chain(graph: Graph) -> list[ChainLayer]:
 
 def lif_params_check(graph: Graph, layers: list[ChainLayer], allow_reset_change: bool) -> tuple[Graph, list[str]]:
     """Refuse subtract reset unless allowed (then lower it as reset to zero and say so)."""
-    from snncc.passes.reset_change import change_reset
+    from snncc.targets.kit.graphs import change_reset
 
     return change_reset(graph, [c.lif for c in layers], from_="subtract", to="zero", allow=allow_reset_change,
                         refusal="Loihi 1 resets the voltage to zero and cannot reset by subtraction; pass "

@@ -16,7 +16,7 @@ In float, sum_{c'} W[i,j] / K * s_{c',j}[t] = W[i,j] s_j[t]: every copy's membra
 neuron's, so the replicated graph's spikes are the original's (tested on every graph the Loihi tests
 lower). On the chip each copy of W[i,j] rounds separately, so the sum reaches (K*127) levels of the row's
 largest weight once the per-neuron scales grow by K (fine-tuning's starting points,
-``targets/loihi/rescale.py``, do that; the lowering's own per-layer scale grows with max|W| / K).
+``targets/loihi/finetune/rescale.py``, do that; the lowering's own per-layer scale grows with max|W| / K).
 Costs: K * inputs relay neurons and K - 1 more copies of every hidden neuron, K^2 times the synapses
 between replicated populations, and one step of latency (the relay; the timing pass shifts the output
 and tSample grows by one, so counts over a sample are unchanged).
@@ -28,12 +28,13 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense
-from snncc.passes.current_bias import current_biases
+from snncc.targets.kit.graphs import current_biases
 
-MAX_REPLICAS = 16
+from snncc.targets.loihi.options import MAX_REPLICAS
+
 RELAY_THRESHOLD = 0.5      # a relay holds one input spike (1) for one step and fires on it; nothing else
 
 

@@ -44,7 +44,7 @@ def render_compile_report(s: dict[str, Any], console) -> None:
     v = s["validation"]
     console.print(f"  checked on {v['inputs']}: timing exact {v['timing_exact']}, quantized registers exact "
                   f"{v['quantized_params_exact']}, emulator kernel exact {v['kernel_exact']}")
-    from snncc.measure.agreement import ArgmaxAgreement
+    from snncc.targets.kit.agreement import ArgmaxAgreement
 
     decided = (ArgmaxAgreement(**v["prediction"]).text() if v.get("prediction")
                else f"{100 * v['prediction_agreement']:.1f}%")

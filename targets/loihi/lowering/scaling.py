@@ -29,9 +29,9 @@ from typing import Callable
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.ir.graph import Graph
-from snncc.progress import Progress
+from snncc.targets.kit import Progress
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.lowering.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
                                           quantize_graph)

@@ -29,13 +29,12 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, Dense, Input
-from snncc.passes.current_bias import current_biases
+from snncc.targets.kit.graphs import current_biases
 from snncc.targets.loihi import chip
-
-TIMINGS = ("exact", "paper")
+from snncc.targets.loihi.options import TIMINGS
 
 
 @dataclass

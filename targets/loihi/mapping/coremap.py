@@ -213,7 +213,7 @@ class CoreMap:
         import matplotlib.pyplot as plt
         import numpy as np
 
-        from snncc.atomic import atomic_path
+        from snncc.targets.kit.writing import atomic_path
 
         pct = np.array([[self.percent(c)[k] for k in SHOWN] for c in self.cores]).reshape(-1, len(SHOWN))
         ids = np.arange(len(self.cores))

@@ -30,7 +30,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.targets.loihi.chip import DECAY_ONE, WEIGHT_MAX
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 from snncc.targets.loihi.mapping.resources import LOIHI1, ChipSpec, axon_list_bits, delay_bits, list_bits

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from snncc.interrupts import sigint_deferred
+from snncc.targets.kit.compute import sigint_deferred
 
 with sigint_deferred():   # numba's C init would turn a Ctrl-C into an ImportError (snncc/interrupts.py)
     import numba

@@ -17,7 +17,7 @@ Method (one module per step):
 
 from __future__ import annotations
 
-from snncc.errors import InternalError, SnnccError
+from snncc.targets.kit import InternalError, SnnccError
 from snncc.targets.loihi.mapping.coremap import CoreMap, CoreRecord, CoreUsage, LayerSlice
 from snncc.targets.loihi.mapping.fanin import split_wide_fan_in
 from snncc.targets.loihi.network import LoihiNetwork
@@ -66,3 +66,28 @@ def map_network(network: LoihiNetwork, chip: ChipSpec = LOIHI1) -> CoreMap:
         transforms=transforms,
         network_layers=[{"index": j, "name": lay.name, "kind": lay.kind, "n": lay.n} for j, lay in enumerate(model.layers)],
         network=mapped)
+
+
+def map_bundle(source, options) -> CoreMap:
+    """The ``map`` capability: the core map of the written bundle at ``source`` (``snncc map MODEL`` compiles
+    the model first, with compile's options, then maps the written bundle). ``options`` (``LoihiOptions``): a
+    timing, weight scale or replicas other than the bundle was compiled with is refused in one line (compile
+    fixed them)."""
+    from pathlib import Path
+
+    from snncc.targets.loihi.bundle.read import read_bundle
+
+    source = Path(source)
+    network = read_bundle(source)
+    recorded = network.metadata.get("compile_options")
+    recorded = recorded if isinstance(recorded, dict) else {}
+    for key in ("timing", "scale", "replicas"):
+        value = getattr(options, key)
+        if value is not None and value != recorded.get(key):
+            raise SnnccError("does not apply to a Loihi bundle (its timing, weight scale and replicas are fixed); "
+                             "compile the model with it, then map the bundle", file=str(source),
+                             field="--" + key.replace("_", "-"))
+    try:
+        return map_network(network)
+    except SnnccError as err:
+        raise err.with_file(str(source)) from None

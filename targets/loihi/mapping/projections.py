@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.targets.loihi.mapping.kernels import transpose_indices
 from snncc.targets.loihi.network import LAYER_KINDS, LoihiNetwork
 from snncc.targets.loihi.mapping.resources import ChipSpec, check_delay, delay_bits

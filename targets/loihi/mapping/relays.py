@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from snncc.errors import InternalError
+from snncc.targets.kit import InternalError
 from snncc.targets.loihi.emulation.emulator import EmulationResult, _prediction, emulate
 from snncc.targets.loihi.mapping.fanin import row_fan_in
 from snncc.targets.loihi.network import LoihiNetwork

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from snncc.errors import SnnccError
+from snncc.targets.kit import SnnccError
 from snncc.targets.loihi.mapping.packing import assignment, in_network_order, make_slices, pack
 from snncc.targets.loihi.mapping.projections import NetworkModel
 from snncc.targets.loihi.mapping.resources import LIMIT_TITLES, min_bits_per_synapse

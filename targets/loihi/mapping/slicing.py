@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from snncc.errors import InternalError, SnnccError
+from snncc.targets.kit import InternalError, SnnccError
 from snncc.targets.loihi.mapping.kernels import distinct_per_source
 from snncc.targets.loihi.mapping.projections import NetworkModel
 from snncc.targets.loihi.mapping.resources import LIMIT_TITLES, list_bits, min_bits_per_synapse

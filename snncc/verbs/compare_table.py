@@ -1,0 +1,193 @@
+"""``snncc compare``'s record as text (rich tables), Markdown and a figure: four tables from the same rows.
+
+    agreement    each row's argmax agreement with the float graph, its 95 % interval, decided / tied / silent
+                 samples, accuracy where labels exist, the artefact's SHA-256 (or why the target cannot take it)
+    loss         the loss by cause in the same columns for every target ("—" where a cause cannot occur there)
+    hardware     resources against the chip's limits, the real-time verdict, energy and delay (ESTIMATE, with source)
+    NeuroBench   footprint, connection and activation sparsity, synaptic operations per sample (NeuroBench 2.3)
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from snncc.targets.kit.checks import CANNOT, CAUSE_TITLES, CAUSES
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from snncc.verbs.compare import Comparison, Row
+
+
+def _agreement(row: Row) -> str:
+    if row.error is not None:
+        return "cannot: " + row.error.removeprefix("snncc: error: ")
+    a = row.argmax or {}
+    if row.argmax_agreement is None:
+        return "undefined" + (" (outputs silent)" if a.get("silent") == a.get("samples") else "")
+    if row.kind == "float":
+        return "1 (the reference)"
+    return f"{row.argmax_agreement:.3f} [{a.get('low', 0):.3f}, {a.get('high', 0):.3f}]"
+
+
+def _counts(row: Row) -> str:
+    a = row.argmax or {}
+    return "" if not a else f"{a.get('decided', 0)} / {a.get('ties', 0)} / {a.get('silent', 0)}"
+
+
+def _cause(row: Row, cause: str) -> str:
+    if row.kind != "artefact" or row.error is not None:
+        return ""
+    if cause not in row.possible:
+        return CANNOT
+    value = row.causes.get(cause)
+    return "undefined" if value is None else f"{value:+.1f}"
+
+
+def _resources(row: Row) -> str:
+    out = []
+    for r in row.resources:
+        used = r["used"]
+        shown = f"{used:,.0f}" if float(used).is_integer() else f"{used:,.3g}"
+        limit = "" if r.get("limit") is None else f" / {r['limit']:,.0f}"
+        out.append(f"{r['what']} {shown}{limit}{' ' + r['unit'] if r.get('unit') else ''}")
+    return "; ".join(out)
+
+
+def _real_time(row: Row) -> str:
+    rt = row.real_time
+    if not rt:
+        return ""
+    worst = "" if rt.get("worst_margin") is None else f", worst {rt['worst_margin']:.2f}x"
+    return f"{'yes' if rt['real_time'] else 'NO'} ({rt['margin']:.2f}x{worst}; {rt['basis'].split(':')[0]})"
+
+
+def _energy(row: Row) -> str:
+    e = row.energy
+    if not e:
+        return ""
+    delay = "" if e.get("delay_ms_per_sample") is None else f", {e['delay_ms_per_sample']:.3g} ms"
+    return f"{e['uj_per_sample']:.3g} uJ{delay} ({e['label']}: {e['source']})"
+
+
+def _neurobench(row: Row) -> list[str]:
+    nb = row.neurobench
+    if not nb:
+        return ["", "", "", "", "", ""]
+    ops = nb["synaptic_operations"]
+    return [f"{nb['footprint']:,}", f"{nb['connection_sparsity']:.3f}", f"{nb['activation_sparsity']:.4f}",
+            f"{ops['Effective_ACs']:,.0f}", f"{ops['Effective_MACs']:,.0f}", f"{ops['Dense']:,.0f}"]
+
+
+def tables(result: Comparison) -> list[tuple[str, list[str], list[list[str]]]]:
+    """(title, header, rows) of the four tables."""
+    labelled = result.labelled
+    head = ["target", "agreement with the float graph [95 %]", "decided / tied / silent"]
+    head += ["accuracy"] if labelled else []
+    head += ["SHA-256"]
+    first = []
+    for r in result.rows:
+        cells = [r.target, _agreement(r), _counts(r)]
+        cells += ["" if r.accuracy is None else f"{100 * r.accuracy:.1f} %"] if labelled else []
+        cells += [(r.sha256 or "")[:16] + ("..." if r.sha256 else "")]
+        first.append(cells)
+    losses = [[r.target, *[_cause(r, c) for c in CAUSES], "" if r.total_points is None else f"{r.total_points:+.1f}"]
+              for r in result.rows if r.kind == "artefact"]
+    hardware = [[r.target, _resources(r), _real_time(r), _energy(r)] for r in result.rows
+                if r.kind == "artefact" and r.error is None]
+    bench = [[r.target, *_neurobench(r)] for r in result.rows if r.neurobench]
+    return [("agreement with the float graph on the same inputs", head, first),
+            ("loss by cause (agreement points lost against the stage before; successive, not independent)",
+             ["target", *[CAUSE_TITLES[c] for c in CAUSES], "total"], losses),
+            ("hardware (energy and delay only where a published cost model exists: ESTIMATES)",
+             ["target", "resources (used / limit)", "real time at the measured event rates", "energy, delay per sample"],
+             hardware),
+            ("NeuroBench 2.3 (per sample; footprint as deployed)",
+             ["target", "footprint B", "connection sparsity", "activation sparsity", "Effective_ACs", "Effective_MACs",
+              "Dense"], bench)]
+
+
+def header_lines(result: Comparison) -> list[str]:
+    return [f"{result.model} on {result.inputs}",
+            f"time base: {result.steps} steps per sample ({result.steps_rule}), the same for every row"]
+
+
+def render_text(result: Comparison, console: Console) -> None:
+    from rich.table import Table
+
+    for line in header_lines(result):
+        console.print(line, markup=False, soft_wrap=True)
+    for title, head, rows in tables(result):
+        if not rows:
+            continue
+        table = Table(title=title, title_justify="left", show_lines=False)
+        for name in head:
+            table.add_column(name, overflow="fold")
+        for cells in rows:
+            table.add_row(*cells)
+        console.print(table)
+    for r in result.rows:
+        if r.command:
+            console.print(f"{r.target}: rebuilt by `{r.command}`", markup=False, soft_wrap=True)
+    for note in result.notes:
+        console.print(f"note: {note}", markup=False, soft_wrap=True)
+    if result.markdown:
+        console.print(f"wrote {result.markdown}", markup=False)
+    if result.figure:
+        console.print(f"wrote {result.figure}", markup=False)
+
+
+def markdown(result: Comparison) -> str:
+    """The four tables as GitHub Markdown, with the header lines and the commands."""
+    out = [f"# snncc compare: {Path(result.model).name}", ""] + [f"{line}  " for line in header_lines(result)] + [""]
+    for title, head, rows in tables(result):
+        if not rows:
+            continue
+        out += [f"## {title}", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        out += ["| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |" for cells in rows]
+        out.append("")
+    commands = [f"- {r.target}: `{r.command}`" for r in result.rows if r.command]
+    if commands:
+        out += ["## rebuilding each artefact", ""] + commands + [""]
+    if result.notes:
+        out += ["## notes", ""] + [f"- {n}" for n in result.notes] + [""]
+    return "\n".join(out)
+
+
+def draw(result: Comparison, path: Path) -> None:
+    """Agreement with intervals per row (the ceiling as a band), and energy per sample where one is estimated."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from snncc.atomic import atomic_path
+
+    shown = [r for r in result.rows if r.argmax_agreement is not None and r.kind != "float"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), gridspec_kw={"width_ratios": [3, 2]})
+    ax = axes[0]
+    for i, r in enumerate(shown):
+        a: dict[str, Any] = r.argmax or {}
+        low, high = a.get("low", r.argmax_agreement), a.get("high", r.argmax_agreement)
+        colour = "0.6" if r.kind == "ceiling" else "C0"
+        ax.errorbar([i], [r.argmax_agreement], yerr=[[r.argmax_agreement - low], [high - r.argmax_agreement]],
+                    fmt="o", color=colour, capsize=4)
+    ax.set_xticks(range(len(shown)), [r.target.replace(", ", "\n") for r in shown], rotation=0)
+    ax.set_ylabel("agreement with the float graph (95 %)")
+    ax.set_ylim(0, 1.02)
+    ax.set_title(f"{Path(result.model).name}: {result.samples} samples x {result.steps} steps", fontsize=10)
+    ax.grid(axis="y", alpha=0.3)
+    energies = [(r.target, r.energy["uj_per_sample"]) for r in result.rows if r.energy]
+    ax = axes[1]
+    if energies:
+        ax.bar([t for t, _ in energies], [e for _, e in energies], color="C1")
+        ax.set_ylabel("energy per sample, uJ (ESTIMATE)")
+        ax.set_title("energy where a published cost model exists", fontsize=10)
+    else:
+        ax.axis("off")
+        ax.text(0.5, 0.5, "no target has a published\nenergy cost model for this network", ha="center", va="center")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=120)
+    plt.close(fig)
