@@ -12,6 +12,7 @@ record (``options.py``) and capabilities, each importing its work on use: this m
     map       -> CUsage      (estimate/report.py: flash and RAM against a part)
     estimate  -> CUsage      (the same plus instructions per step counted in QEMU; time, real time, energy ESTIMATE)
     hardware  -> CHardware   (estimate/search_figures.py: a search trial's flash, RAM, synaptic operations per step)
+    profile   -> Profile     (estimate/profile.py: resources, real time and energy ESTIMATE, NeuroBench; snncc compare)
     finetune  -> FinetunedArtefact (finetune/: the integer network trained through its own arithmetic)
 """
 
@@ -39,7 +40,7 @@ AGREEMENT_SEED = 0
 
 
 class CTarget:
-    """Capabilities: lower, identify, check, agree, emulate, run, map, estimate, hardware, finetune."""
+    """Capabilities: lower, identify, check, agree, emulate, run, map, estimate, hardware, profile, finetune."""
 
     name = "c"
     description = "C99 for microcontrollers (snn.c/snn.h, integer arithmetic), bit-exact with its emulator"
@@ -154,6 +155,15 @@ class CTarget:
         found: Record = estimate_artefact(source, x, what)
         if progress is not None:
             progress(int(x.shape[0]))
+        return found
+
+    def profile(self, graph: Graph, artefact: Path, inputs: np.ndarray, *,
+                progress: Progress | None = None) -> Record:
+        """Flash, RAM, neurons, synapses against the part; real time and energy from instructions counted in QEMU
+        (ESTIMATE); NeuroBench's metrics from the artefact's synapses and its emulation (``estimate/profile.py``)."""
+        from snncc.targets.c.estimate.profile import profile_artefact
+
+        found: Record = profile_artefact(graph, artefact, inputs, progress)
         return found
 
     def hardware(self) -> HardwareCosts:

@@ -19,7 +19,7 @@ from snncc.targets.c.lowering.network import CNetwork, CPopulation, CProjection
 from snncc.targets.c.options import COUNT_LIMIT, DECAY_BITS
 
 PER_LINE = 20
-GENERATOR = 2               # the text this module emits for a network; bumped whenever it changes
+GENERATOR = 3               # the text this module emits for a network; bumped whenever it changes
 UNROLL = 4                  # dense fan-out rows are added 4 weights per loop iteration
 
 
@@ -199,17 +199,19 @@ def _population(net: CNetwork, i: int, pop: CPopulation, consts: list[str]) -> l
         if q.target != i:
             continue
         body += _deliver(net, k, q)
-        ex, d = _constant(f"e{k}", "uint8_t", q.exponent)
-        consts += d
-        terms.append((k, ex))
+        if _uniform(q.exponent):
+            terms.append((k, f"((int64_t)1 << {int(q.exponent[0])})"))
+        else:                               # per-neuron scales as int32 multipliers 2**e: one multiply-accumulate
+            consts += _array("int32_t", f"m{k}", np.left_shift(1, q.exponent.astype(np.int64)))
+            terms.append((k, f"m{k}[j]"))
     for t, term in enumerate(pop.bias_i):
         consts += _array("int32_t", f"p{i}_bi{t}", term.values)
     if pop.bias_v is not None:
         consts += _array("int32_t", f"p{i}_bv", pop.bias_v)
     body += [f"    for (j = 0; j < {pop.n}u; j++) {{",
              f"        int64_t x = decay({al}, state->p{i}_i[j]);", "        int32_t v;"]
-    for k, ex in terms:
-        body += [f"        x += (int64_t)state->acc{k}[j] * ((int64_t)1 << {ex});", f"        state->acc{k}[j] = 0;"]
+    for k, scale in terms:
+        body += [f"        x += (int64_t)state->acc{k}[j] * {scale};", f"        state->acc{k}[j] = 0;"]
     for t, term in enumerate(pop.bias_i):
         body.append(f"        x += p{i}_bi{t}[j];" if term.start == 0 else
                     f"        if (state->t >= {term.start}u) x += p{i}_bi{t}[j];")

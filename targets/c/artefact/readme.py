@@ -75,8 +75,8 @@ where arm-none-eabi-gcc is installed).
 
 ```
 snncc emulate THIS_DIRECTORY --input spikes.npy -o emulated.npz
-snncc run THIS_DIRECTORY --target c --input spikes.npy --backend host -o host.npz
-snncc run THIS_DIRECTORY --target c --input spikes.npy --backend qemu -o qemu.npz
+snncc run THIS_DIRECTORY --input spikes.npy --backend host -o host.npz
+snncc run THIS_DIRECTORY --input spikes.npy --backend qemu -o qemu.npz
 ```
 
 The three .npz files hold the same `output_spikes`, `counts` and `prediction`, bit for bit.

@@ -70,7 +70,7 @@ def check_written(graph, written, x: np.ndarray, labels: np.ndarray | None, what
                     None if labels is None else float(np.mean(np.argmax(c[k], axis=1) == labels)))
               for k, cause in (("weights", "weights"), ("decays", "decays"), ("grid", "decays"),
                                ("artefact", "saturation"))]
-    ceiling = None if noise is None else ceiling_record(noise_ceiling(graph, x, c["float"], noise), noise)
+    ceiling = None if not noise else ceiling_record(noise_ceiling(graph, x, c["float"], noise), noise)
     refractory = {p.name: p.refractory for p in net.populations}
     f_act = float_tally.activity(refractory)
     c_act = c_tally.activity(refractory)
