@@ -43,7 +43,7 @@ def test_an_snnir_output_without_target_is_the_ir(tmp_path, capsys):
     ("ir", "x.net", "the suffix '.net' names the loihi target, not ir: name the output for ir (.snnir)"),
     ("loihi", "x.snnir", "the suffix '.snnir' names the ir target, not loihi: name the output for loihi (.net)"),
     ("jetson", "x.net", "the suffix '.net' names the loihi target, not jetson"),
-    (None, "out", "-o does not say which target to compile for: pass --target (ir, jetson, loihi, xylo)"),
+    (None, "out", "-o does not say which target to compile for: pass --target (c, ir, jetson, loihi, xylo)"),
     (None, "x.h5", "or name the output by its suffix (.snnir -> ir, .net -> loihi, .xylo -> xylo)"),
 ])
 def test_a_suffix_that_contradicts_or_names_no_target_is_one_line(tmp_path, capsys, target, name, says):

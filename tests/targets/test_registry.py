@@ -137,7 +137,7 @@ def test_capability_options_are_declared_once_and_refused_where_they_do_not_appl
         verb_options(loihi, {"noise": 0.1}, "check", ("check", "agree"))
     assert err.value.line() == "--noise: applies only to check without labels (agreement), not to check with labelled data"
     offers = {o.name: o for o in offered_options(["check", "agree"])}
-    assert offers["density"].targets == tuple(offering("agree")) == ("jetson", "loihi", "xylo")   # all measure agreement
+    assert offers["density"].targets == tuple(offering("agree")) == ("c", "jetson", "loihi", "xylo")   # all measure agreement
     assert offers["density"].default == 0.08 and "(default 0.08)" in offers["density"].help
 
 

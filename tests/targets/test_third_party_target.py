@@ -148,8 +148,8 @@ def test_the_toy_option_is_offered_with_help_naming_its_target(toy, capsys):
     offers = {o.name: o for o in offered_options(["lower"])}
     assert offers["toy_precision"].targets == ("toy",) and offers["toy_precision"].kind is int
     assert offers["toy_precision"].help == "Bits of the toy's weights (2..16). (--target toy)"
-    assert offers["time_steps"].targets == ("jetson", "loihi", "toy", "xylo")  # one flag, four targets
-    assert all(f"--target {t}:" in offers["time_steps"].help for t in ("jetson", "loihi", "toy", "xylo"))
+    assert offers["time_steps"].targets == ("c", "jetson", "loihi", "toy", "xylo")  # one flag, five targets
+    assert all(f"--target {t}:" in offers["time_steps"].help for t in ("c", "jetson", "loihi", "toy", "xylo"))
     assert offers["allow_reset_change"].targets == ("loihi", "xylo")          # Loihi's and Xylo's switch
     assert "toy_precision" in {o.name for o in offered_options(["check", "agree"])}
     assert "toy_precision" not in {o.name for o in offered_options(["map"])}

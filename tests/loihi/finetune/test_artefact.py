@@ -73,10 +73,10 @@ def test_finetune_out_is_the_adapted_float_graph_and_the_model_is_untouched(tune
 def test_offered_once_by_the_targets_that_have_the_capability():
     from snncc.targets import offered_options, offering
 
-    assert offering("finetune") == ["loihi", "xylo"]
+    assert offering("finetune") == ["c", "loihi", "xylo"]
     offers = {o.name: o for o in offered_options(["lower", "finetune"])}
     for name in ("finetune", "finetune_out", "data", "density", "device"):
-        assert offers[name].targets == ("loihi", "xylo")
+        assert offers[name].targets == ("c", "loihi", "xylo")
     assert offers["finetune_out"].path == "output" and offers["data"].path == "input"
     assert "finetune" not in {o.name for o in offered_options(["lower"])}
 

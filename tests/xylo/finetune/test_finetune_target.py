@@ -146,9 +146,9 @@ def test_refusals_are_one_line(model, tmp_path, capsys, flags, field, words):
 def test_offered_by_xylo_and_loihi():
     from snncc.targets import offered_options, offering
 
-    assert offering("finetune") == ["loihi", "xylo"]
+    assert offering("finetune") == ["c", "loihi", "xylo"]
     offers = {o.name: o for o in offered_options(["lower", "finetune"])}
-    assert offers["finetune_out"].targets == ("loihi", "xylo")
+    assert offers["finetune_out"].targets == ("c", "loihi", "xylo")
 
 
 # -- the student in the model's time --------------------------------------------------------------------
