@@ -18,20 +18,24 @@ for every row. A target that cannot take the model gives a row with its one-line
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.measure.agreement import ArgmaxAgreement
+from snncc.measure.neurobench import NeuroBenchFigures
+from snncc.targets.kit.profile import EnergyEstimate, RealTime, Resource
 
 if TYPE_CHECKING:
     from rich.console import Console
 
     from snncc.ir.graph import Graph
     from snncc.progress import Progress
+    from snncc.targets.base import Target
 
 CEILING = "float, 1 % weight noise"
 
@@ -43,15 +47,15 @@ class Row:
     target: str
     kind: str                                    # "float" | "ceiling" | "artefact"
     argmax_agreement: float | None = None
-    argmax: dict[str, Any] | None = None
+    argmax: ArgmaxAgreement | None = None
     accuracy: float | None = None
     causes: dict[str, float | None] = field(default_factory=dict)
     possible: list[str] = field(default_factory=list)
     total_points: float | None = None
-    resources: list[dict[str, Any]] = field(default_factory=list)
-    real_time: dict[str, Any] | None = None
-    energy: dict[str, Any] | None = None
-    neurobench: dict[str, Any] | None = None
+    resources: list[Resource] = field(default_factory=list)
+    real_time: RealTime | None = None
+    energy: EnergyEstimate | None = None
+    neurobench: NeuroBenchFigures | None = None
     sha256: str | None = None
     artefact: str | None = None                  # the path measured (the user's), or None: compiled here
     command: str | None = None                   # what rebuilds it
@@ -73,7 +77,7 @@ class Comparison:
     figure: str | None = None
     markdown: str | None = None
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> dict[str, object]:
         return asdict(self)
 
     def render_text(self, console: Console) -> None:
@@ -82,7 +86,7 @@ class Comparison:
         render_text(self, console)
 
 
-def _options_for(target: Any, given: Mapping[str, object]) -> dict[str, object]:
+def _options_for(target: Target, given: Mapping[str, object]) -> dict[str, object]:
     """The compile options among ``given`` that ``target`` declares for ``lower`` (the others are another target's)."""
     from snncc.targets.base import declared_options
 
@@ -90,7 +94,7 @@ def _options_for(target: Any, given: Mapping[str, object]) -> dict[str, object]:
     return {k: v for k, v in given.items() if k in declared and v not in (None, False)}
 
 
-def _command(model: str, target: Any, options: Mapping[str, object], model_options: Mapping[str, object]) -> str:
+def _command(model: str, target: Target, options: Mapping[str, object], model_options: Mapping[str, object]) -> str:
     parts = ["snncc compile", model, f"--target {target.name}"]
     for name, value in {**model_options, **options}.items():
         if value in (None, False):
@@ -103,7 +107,7 @@ def _command(model: str, target: Any, options: Mapping[str, object], model_optio
 
 
 @contextlib.contextmanager
-def _artefact(target: Any, graph: Graph, options: Mapping[str, object], given: Path | None) -> Iterator[Path]:
+def _artefact(target: Target, graph: Graph, options: Mapping[str, object], given: Path | None) -> Iterator[Path]:
     from snncc.targets import verb_options
     from snncc.targets.kit.measured import artefact_to_measure
 
@@ -112,11 +116,14 @@ def _artefact(target: Any, graph: Graph, options: Mapping[str, object], given: P
         yield path
 
 
-def _row(target: Any, graph: Graph, model: Path, x: np.ndarray, labels: np.ndarray | None, options: Mapping[str, object],
-         model_options: Mapping[str, object], given: Path | None, data: str | None, report: Any) -> Row:
+def _row(target: Target, graph: Graph, model: Path, x: np.ndarray, labels: np.ndarray | None,
+         options: Mapping[str, object], model_options: Mapping[str, object], given: Path | None, data: str | None,
+         report: Callable[[str], None]) -> Row:
     from snncc.artefacts import artefact_sha256, check_source, identify_own
     from snncc.targets import AgreementOptions, capability
     from snncc.targets.base import capability_options
+    from snncc.targets.kit.checks import CheckReport
+    from snncc.targets.kit.profile import Profile
 
     name = target.name
     mine = _options_for(target, options)
@@ -136,19 +143,22 @@ def _row(target: Any, graph: Graph, model: Path, x: np.ndarray, labels: np.ndarr
             else:
                 record = capability(target, "agree")(graph, x, {}, capability_options(AgreementOptions, {"noise": 0.0}),
                                                      artefact=path, data=data)
-            found = record.as_dict()
-            row.argmax_agreement, row.argmax = found.get("argmax_agreement"), found.get("argmax")
-            row.causes, row.possible = dict(found.get("causes") or {}), list(found.get("possible") or [])
-            row.total_points = found.get("total_points")
-            acc = found.get("accuracy")
-            row.accuracy = None if not isinstance(acc, dict) else acc.get("artefact")
-            row.notes += list(found.get("notes") or [])[:2]
+            if not isinstance(record, CheckReport):
+                raise SnnccError(f"target '{name}' returns no kit.checks.CheckReport from its check: it cannot be "
+                                 "compared", field="--targets")
+            row.argmax_agreement, row.argmax = record.argmax_agreement, ArgmaxAgreement(**record.argmax)
+            row.causes, row.possible = dict(record.causes), list(record.possible)
+            row.total_points = record.total_points
+            row.accuracy = None if record.accuracy is None else record.accuracy.get("artefact")
+            row.notes += list(record.notes)[:2]
             if callable(getattr(target, "profile", None)):
                 report(f"{name}: profiling")
-                profile = capability(target, "profile")(graph, path, x).as_dict()
-                row.resources, row.neurobench = list(profile.get("resources") or []), profile.get("neurobench")
-                row.real_time, row.energy = profile.get("real_time"), profile.get("energy")
-                row.notes += list(profile.get("notes") or [])
+                profile = capability(target, "profile")(graph, path, x)
+                if not isinstance(profile, Profile):
+                    raise SnnccError(f"target '{name}' returns no kit.profile.Profile from its profile", field="--targets")
+                row.resources, row.neurobench = list(profile.resources), profile.neurobench
+                row.real_time, row.energy = profile.real_time, profile.energy
+                row.notes += list(profile.notes)
             else:
                 row.notes.append(f"target {name} has no profile capability: no resources, real time or NeuroBench "
                                  "figures")
@@ -179,8 +189,8 @@ def _inputs(graph: Graph, data: Path | None, limit: int | None, samples: int | N
         synthetic = " (SYNTHETIC)" if isinstance(meta, dict) and meta.get("synthetic") else ""
         what = f"{len(x)} samples of {data}{synthetic}" + (" with labels" if labels is not None else " (no labels)")
         return np.asarray(x), None if labels is None else np.asarray(labels), what, int(np.shape(x)[1]), "the data's"
-    width = int(graph.node(graph.of_kind(Input)[0]).width)
-    neurons = sum(int(graph.node(p).n) for p in graph.of_kind(LIF))
+    width = int(getattr(graph.node(graph.of_kind(Input)[0]), "width"))
+    neurons = int(sum(int(getattr(graph.node(p), "n")) for p in graph.of_kind(LIF)))
     n = samples if samples is not None else (limit if limit is not None else default_samples(neurons, steps))
     x = random_inputs(int(n), steps, width, density, seed=0)
     note = default_samples_note(int(n)) if samples is None and limit is None else f"{n} samples"
@@ -255,15 +265,15 @@ def compare_model(model: str | Path, *, targets: str | Sequence[str] | None = No
     report("the float graph")
     counts = float_counts(graph, x)
     ceiling = noise_ceiling(graph, x, counts, noise) if noise > 0 else None
-    float_row = Row("float", "float", argmax_agreement=1.0 if argmax_agreement(counts, counts).defined else None,
-                    argmax=argmax_agreement(counts, counts).as_dict(),
+    itself = argmax_agreement(counts, counts)
+    float_row = Row("float", "float", argmax_agreement=1.0 if itself.defined else None, argmax=itself,
                     accuracy=None if labels is None else float(np.mean(np.argmax(counts, 1) == labels)),
-                    neurobench=float_figures(graph, x).as_dict(), notes=["the reference every row is measured against"])
+                    neurobench=float_figures(graph, x), notes=["the reference every row is measured against"])
     rows = [float_row]
     if ceiling is not None:
         rows.append(Row(CEILING.replace("1 %", f"{100 * noise:g} %"), "ceiling", argmax_agreement=ceiling.share,
-                        argmax=ceiling.as_dict(), notes=["the float graph against itself, every weight times "
-                                                         f"1 + {noise:g} N(0, 1) (seed 9)"]))
+                        argmax=ceiling, notes=["the float graph against itself, every weight times "
+                                               f"1 + {noise:g} N(0, 1) (seed 9)"]))
     report("the weight-noise ceiling")
     for tgt in chosen:
         rows.append(_row(tgt, graph, model, x, labels, options, model_options, given_paths.get(tgt.name),

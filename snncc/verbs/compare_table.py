@@ -10,7 +10,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from snncc.targets.kit.checks import CANNOT, CAUSE_TITLES, CAUSES
 
@@ -23,17 +23,17 @@ if TYPE_CHECKING:
 def _agreement(row: Row) -> str:
     if row.error is not None:
         return "cannot: " + row.error.removeprefix("snncc: error: ")
-    a = row.argmax or {}
-    if row.argmax_agreement is None:
-        return "undefined" + (" (outputs silent)" if a.get("silent") == a.get("samples") else "")
+    a = row.argmax
+    if row.argmax_agreement is None or a is None or a.low is None or a.high is None:
+        return "undefined" + (" (outputs silent)" if a is not None and a.silent == a.samples else "")
     if row.kind == "float":
         return "1 (the reference)"
-    return f"{row.argmax_agreement:.3f} [{a.get('low', 0):.3f}, {a.get('high', 0):.3f}]"
+    return f"{row.argmax_agreement:.3f} [{a.low:.3f}, {a.high:.3f}]"
 
 
 def _counts(row: Row) -> str:
-    a = row.argmax or {}
-    return "" if not a else f"{a.get('decided', 0)} / {a.get('ties', 0)} / {a.get('silent', 0)}"
+    a = row.argmax
+    return "" if a is None else f"{a.decided} / {a.ties} / {a.silent}"
 
 
 def _cause(row: Row, cause: str) -> str:
@@ -46,37 +46,27 @@ def _cause(row: Row, cause: str) -> str:
 
 
 def _resources(row: Row) -> str:
-    out = []
-    for r in row.resources:
-        used = r["used"]
-        shown = f"{used:,.0f}" if float(used).is_integer() else f"{used:,.3g}"
-        limit = "" if r.get("limit") is None else f" / {r['limit']:,.0f}"
-        out.append(f"{r['what']} {shown}{limit}{' ' + r['unit'] if r.get('unit') else ''}")
-    return "; ".join(out)
+    return "; ".join(r.text() for r in row.resources)
 
 
 def _real_time(row: Row) -> str:
     rt = row.real_time
-    if not rt:
+    if rt is None:
         return ""
-    worst = "" if rt.get("worst_margin") is None else f", worst {rt['worst_margin']:.2f}x"
-    return f"{'yes' if rt['real_time'] else 'NO'} ({rt['margin']:.2f}x{worst}; {rt['basis'].split(':')[0]})"
+    worst = "" if rt.worst_margin is None else f", worst {rt.worst_margin:.2f}x"
+    return f"{'yes' if rt.real_time else 'NO'} ({rt.margin:.2f}x{worst}; {rt.basis.split(':')[0]})"
 
 
 def _energy(row: Row) -> str:
-    e = row.energy
-    if not e:
-        return ""
-    delay = "" if e.get("delay_ms_per_sample") is None else f", {e['delay_ms_per_sample']:.3g} ms"
-    return f"{e['uj_per_sample']:.3g} uJ{delay} ({e['label']}: {e['source']})"
+    return "" if row.energy is None else row.energy.text()
 
 
 def _neurobench(row: Row) -> list[str]:
     nb = row.neurobench
-    if not nb:
+    if nb is None:
         return ["", "", "", "", "", ""]
-    ops = nb["synaptic_operations"]
-    return [f"{nb['footprint']:,}", f"{nb['connection_sparsity']:.3f}", f"{nb['activation_sparsity']:.4f}",
+    ops = nb.synaptic_operations
+    return [f"{nb.footprint:,}", f"{nb.connection_sparsity:.3f}", f"{nb.activation_sparsity:.4f}",
             f"{ops['Effective_ACs']:,.0f}", f"{ops['Effective_MACs']:,.0f}", f"{ops['Dense']:,.0f}"]
 
 
@@ -96,7 +86,7 @@ def tables(result: Comparison) -> list[tuple[str, list[str], list[list[str]]]]:
               for r in result.rows if r.kind == "artefact"]
     hardware = [[r.target, _resources(r), _real_time(r), _energy(r)] for r in result.rows
                 if r.kind == "artefact" and r.error is None]
-    bench = [[r.target, *_neurobench(r)] for r in result.rows if r.neurobench]
+    bench = [[r.target, *_neurobench(r)] for r in result.rows if r.neurobench is not None]
     return [("agreement with the float graph on the same inputs", head, first),
             ("loss by cause (agreement points lost against the stage before; successive, not independent)",
              ["target", *[CAUSE_TITLES[c] for c in CAUSES], "total"], losses),
@@ -168,17 +158,17 @@ def draw(result: Comparison, path: Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), gridspec_kw={"width_ratios": [3, 2]})
     ax = axes[0]
     for i, r in enumerate(shown):
-        a: dict[str, Any] = r.argmax or {}
-        low, high = a.get("low", r.argmax_agreement), a.get("high", r.argmax_agreement)
+        share = float(r.argmax_agreement or 0.0)
+        low = share if r.argmax is None or r.argmax.low is None else r.argmax.low
+        high = share if r.argmax is None or r.argmax.high is None else r.argmax.high
         colour = "0.6" if r.kind == "ceiling" else "C0"
-        ax.errorbar([i], [r.argmax_agreement], yerr=[[r.argmax_agreement - low], [high - r.argmax_agreement]],
-                    fmt="o", color=colour, capsize=4)
+        ax.errorbar([i], [share], yerr=[[share - low], [high - share]], fmt="o", color=colour, capsize=4)
     ax.set_xticks(range(len(shown)), [r.target.replace(", ", "\n") for r in shown], rotation=0)
     ax.set_ylabel("agreement with the float graph (95 %)")
     ax.set_ylim(0, 1.02)
     ax.set_title(f"{Path(result.model).name}: {result.samples} samples x {result.steps} steps", fontsize=10)
     ax.grid(axis="y", alpha=0.3)
-    energies = [(r.target, r.energy["uj_per_sample"]) for r in result.rows if r.energy]
+    energies = [(r.target, r.energy.uj_per_sample) for r in result.rows if r.energy is not None]
     ax = axes[1]
     if energies:
         ax.bar([t for t, _ in energies], [e for _, e in energies], color="C1")

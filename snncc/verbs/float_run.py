@@ -11,6 +11,7 @@ model as loaded with the model options (dt, reset, params): what every artefact 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -65,7 +66,7 @@ class FloatEmulation:
 
 
 def run_float(graph: Graph, inputs: np.ndarray, *, record: str = "outputs", source: str | None = None,
-              progress=None) -> FloatEmulation:
+              progress: Callable[[int], None] | None = None) -> FloatEmulation:
     """The float graph on ``inputs`` (T, C), (B, T, C) or the model's own shape (input copies, CNN frames)."""
     from snncc.input_layout import graph_layout, to_artefact_layout
     from snncc.inputs import check_batch
@@ -80,7 +81,8 @@ def run_float(graph: Graph, inputs: np.ndarray, *, record: str = "outputs", sour
     lifs = [n for n, op in graph.items() if isinstance(op, LIF)]
     readout = next((n for n, op in graph.items() if isinstance(op, Readout)), None)
     spiking_out = bool(lifs) and readout is None
-    step = chunk_size(max(1, sum(int(graph.node(p).n) for p in lifs)), int(x.shape[1]), 64)
+    neurons = int(sum(int(getattr(graph.node(p), "n")) for p in lifs))
+    step = chunk_size(max(1, neurons), int(x.shape[1]), 64)
     spikes, scores = [], []
     states: dict[str, list[np.ndarray]] = {}
     with one_thread():

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -32,6 +33,13 @@ class MapRecord:
 def map_cores(source: str | Path, *, target: str | None = None, plot: str | Path | None = None,
               params: str | Path | None = None, dt: float | None = None, reset: str | None = None,
               **options: object) -> MapRecord:
+    """``map_source`` with the target's compile options as keywords (``scale="global"``, ...)."""
+    return map_source(source, target=target, plot=plot, params=params, dt=dt, reset=reset, options=options)
+
+
+def map_source(source: str | Path, *, target: str | None = None, plot: str | Path | None = None,
+               params: str | Path | None = None, dt: float | None = None, reset: str | None = None,
+               options: Mapping[str, object] | None = None) -> MapRecord:
     """The core map (or the chip usage) of ``source``: a written artefact, mapped as it is, or a model file,
     compiled first exactly as ``snncc compile`` would (the model options ``params``, ``dt``, ``reset`` and the
     target's compile options among ``options``; target ``target``, else ``snncc.targets.DEFAULT_TARGET``) into a
@@ -39,13 +47,14 @@ def map_cores(source: str | Path, *, target: str | None = None, plot: str | Path
     from snncc.artefacts import recognised, target_for
     from snncc.targets import DEFAULT_TARGET, capability, get_target, verb_options
 
+    options = dict(options or {})
     path = Path(source)
     if plot is not None and Path(plot).suffix.lower() != ".png":
         raise SnnccError("the map is drawn as a PNG: name the file .png", file=str(plot), field="--plot")
     if target is not None and not recognised(path) or not recognised(path) and path.is_file():
         return _map_model(path, target or DEFAULT_TARGET, plot, params, dt, reset, options)
     tgt = target_for(path, target, "map")
-    given = {"--params": params, "--dt": dt, "--reset": reset}
+    given: dict[str, object] = {"--params": params, "--dt": dt, "--reset": reset}
     given.update({"--" + k.replace("_", "-"): v for k, v in options.items() if v not in (None, False)})
     extra = next((flag for flag, value in given.items() if value is not None), None)
     if extra is not None:

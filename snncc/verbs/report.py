@@ -37,9 +37,10 @@ def report_energy(bundle: str | Path, *, target: str | None = None, energy: bool
             if value is not None:
                 raise SnnccError("applies to --energy (the estimate runs inputs); the resource report runs none",
                                  field=flag)
-        from snncc.verbs.map import map_cores
+        from snncc.verbs.map import map_source
 
-        return map_cores(bundle, target=target, params=params, dt=dt, reset=reset, **options)
+        found: Record = map_source(bundle, target=target, params=params, dt=dt, reset=reset, options=options)
+        return found
     for flag, value in (("--params", params), ("--dt", dt), ("--reset", reset)):
         if value is not None:
             raise SnnccError("applies to a model file's resource report; --energy estimates a written artefact "
