@@ -88,13 +88,22 @@ def real_time(spec: dict, dt: float, rates: dict[str, float] | None = None,
                     float(clock_hz), float(dt), r)
 
 
+RATE_CHUNK = 64     # samples emulated at once while counting event rates (their recorded states stay small)
+
+
 def event_rates(spec: dict, chip_x: np.ndarray) -> dict[str, float]:
     """The share of channel- and neuron-steps with an event, ``spec`` run on the chip inputs ``chip_x`` (every
     hidden neuron: relays and copies too); several events of one neuron in one step count once, as the cycle
-    model states its rates (``cycles_per_step``)."""
+    model states its rates (``cycles_per_step``). The samples run ``RATE_CHUNK`` at a time (exact counts)."""
     from snncc.targets.xylo.emulation.emulator import emulate
     from snncc.targets.xylo.spec import XyloSpec
 
-    run = emulate(spec if isinstance(spec, XyloSpec) else XyloSpec(**spec), chip_x, record=True)
-    return {"input": float(np.mean(chip_x > 0)), "hidden": float(np.mean(run.spikes > 0)),
-            "output": float(np.mean(run.output_spikes > 0))}
+    spec = spec if isinstance(spec, XyloSpec) else XyloSpec(**spec)
+    hidden = output = 0
+    for s0 in range(0, chip_x.shape[0], RATE_CHUNK):
+        run = emulate(spec, chip_x[s0:s0 + RATE_CHUNK], record=True)
+        hidden += int(np.count_nonzero(run.spikes))
+        output += int(np.count_nonzero(run.output_spikes))
+    b, t = chip_x.shape[:2]
+    return {"input": float(np.mean(chip_x > 0)), "hidden": hidden / (b * t * spec.n_hidden),
+            "output": output / (b * t * spec.n_out)}

@@ -47,6 +47,7 @@ from snncc.targets.xylo.lowering.calibration import (Source, calibrate, calibrat
                                                      sources)
 from snncc.targets.xylo.lowering.candidates import build_candidate, candidate_rules
 from snncc.targets.xylo.lowering.integers import PopulationRecord
+from snncc.targets.xylo.lowering.regression import remembered
 from snncc.targets.xylo.lowering.replicas import describe_replicas, replica_room, replica_sources
 from snncc.targets.xylo.lowering.structure import Population, populations
 from snncc.targets.xylo.lowering.timing import XyloTiming, solve_timing
@@ -151,8 +152,16 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
     """Lower ``graph`` for a Xylo chip: ``options`` the validated option record (``XyloOptions``: chip, rule,
     replicas, relays, allow_reset_change, time_steps, calibration_samples, seed); ``knobs`` what only studies
     set (``XyloStudyKnobs``: given calibration inputs, their density, another emulator for the candidates, an
-    unrounded spec)."""
-    options = options or XyloOptions()
+    unrounded spec). The numerical libraries' thread pools run on one thread meanwhile (``kit.compute.one_thread``:
+    the lowering's products are many and medium-sized, and idle pool threads would spin); the emulator spreads
+    large batches over its own threads, each doing a share of the samples."""
+    from snncc.targets.kit.compute import one_thread
+
+    with one_thread():
+        return _lower(graph, options or XyloOptions(), knobs)
+
+
+def _lower(graph: Graph, options: XyloOptions, knobs: XyloStudyKnobs) -> XyloLowered:
     chip = _checked(options, knobs)
     rule, replicas, both = options.placement_rule, options.copies, options.both_relays
     unrounded = knobs.rounding == "none"
@@ -185,17 +194,18 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
         agr = argmax_agreement(float_sel, counts)
         return agr, {**agr.as_dict(), "count_correlation": count_correlation(counts, float_sel)}
 
-    for cand in candidate_rules(srcs, rule, chip, replicas, both):
-        if knobs.readout is not None and cand.readout != knobs.readout:
-            continue
-        ctiming = readout_timing[cand.readout]
-        spec, records = build_candidate(srcs, n_in, cand.method, cand.pairs, cand.identified, chip, ctiming,
-                                        cand.relayed, cand.readout, rounding=knobs.rounding,
-                                        both_dashes=cand.both_dashes)
-        spec["dt"] = float(ref.dt)
-        agr, candidates[cand.name] = selection_agreement(spec, ctiming)
-        if best is None or _better(agr, best[0]):
-            best = (agr, cand, spec, records)
+    with remembered():                  # candidates that fit the same regression share it
+        for cand in candidate_rules(srcs, rule, chip, replicas, both):
+            if knobs.readout is not None and cand.readout != knobs.readout:
+                continue
+            ctiming = readout_timing[cand.readout]
+            spec, records = build_candidate(srcs, n_in, cand.method, cand.pairs, cand.identified, chip, ctiming,
+                                            cand.relayed, cand.readout, rounding=knobs.rounding,
+                                            both_dashes=cand.both_dashes)
+            spec["dt"] = float(ref.dt)
+            agr, candidates[cand.name] = selection_agreement(spec, ctiming)
+            if best is None or _better(agr, best[0]):
+                best = (agr, cand, spec, records)
     agr, chosen, spec, records = best
     name, timing = chosen.name, readout_timing[chosen.readout]
     if replicas > 1 or (x.shape[0] > 1 and knobs.refit):
