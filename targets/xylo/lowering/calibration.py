@@ -20,8 +20,7 @@ from snncc.targets.xylo.lowering.regression import delayed
 from snncc.targets.xylo.lowering.structure import Population
 from snncc.targets.xylo.lowering.timing import XyloTiming, projection_delay
 from snncc.targets.xylo.options import (
-    BOTH_CALIBRATION_SAMPLES, CALIBRATION_STEPS, DEFAULT_CALIBRATION_SAMPLES, DEFAULT_DENSITY, XyloOptions,
-    XyloStudyKnobs,
+    BOTH_CALIBRATION_SAMPLES, DEFAULT_CALIBRATION_SAMPLES, DEFAULT_DENSITY, XyloOptions, XyloStudyKnobs,
 )
 
 
@@ -119,9 +118,10 @@ def sample_count(options: XyloOptions) -> int:
                or (BOTH_CALIBRATION_SAMPLES if options.both_relays else DEFAULT_CALIBRATION_SAMPLES))
 
 
-def calibration_inputs(options: XyloOptions, knobs: XyloStudyKnobs, width: int, seed: int | None = None) -> np.ndarray:
-    """The calibration inputs: the study's (``knobs.calibration``, as 0/1 spikes) or seeded random spikes
-    (``seed``, default the options' seed)."""
+def calibration_inputs(options: XyloOptions, knobs: XyloStudyKnobs, width: int, steps: int,
+                       seed: int | None = None) -> np.ndarray:
+    """The calibration inputs: the study's (``knobs.calibration``, as 0/1 spikes) or seeded random spikes of
+    ``steps`` steps (the model's time base, ``kit.timebase.sample_steps``; ``seed``, default the options' seed)."""
     given = knobs.calibration
     if given is not None:
         x = np.asarray(given)
@@ -129,7 +129,6 @@ def calibration_inputs(options: XyloOptions, knobs: XyloStudyKnobs, width: int, 
             raise SnnccError(f"calibration inputs must be (samples, steps, {width})", field="calibration")
         return (x > 0).astype(np.uint8)
     samples = sample_count(options)
-    steps = int(options.time_steps or CALIBRATION_STEPS)
     density = float(knobs.density or DEFAULT_DENSITY)
     seed = int(options.seed if seed is None else seed)
     if not 0 < density <= 1:

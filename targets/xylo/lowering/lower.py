@@ -39,6 +39,7 @@ import numpy as np
 from snncc.ir.graph import Graph
 from snncc.targets.kit import SnnccError
 from snncc.targets.kit.graphs import change_reset, fold_linear
+from snncc.targets.kit.timebase import sample_steps
 from snncc.targets.xylo.chip import CHIPS, get_chip
 from snncc.targets.kit.agreement import ArgmaxAgreement, argmax_agreement, count_correlation
 from snncc.targets.xylo.feed import chip_window, read_window
@@ -73,6 +74,8 @@ class XyloLowered:
     notes: list[str] = field(default_factory=list)
     calibration: dict[str, Any] = field(default_factory=dict)
     real_time: dict[str, Any] = field(default_factory=dict)
+    steps: int = 0                       # steps of a sample (the time base), the calibration's
+    steps_rule: str = ""                 # the rule that gave them (kit.timebase.sample_steps)
 
     @property
     def xylo_spec(self):
@@ -175,7 +178,8 @@ def _lower(graph: Graph, options: XyloOptions, knobs: XyloStudyKnobs) -> XyloLow
     timing = solve_timing(ref, pops)
     srcs = sources(ref, pops, timing)
     n_in = ref.node(pops[0].pre).width
-    x = calibration_inputs(options, knobs, n_in)
+    steps, steps_rule = sample_steps(graph, options.time_steps)       # the one time base (kit.timebase)
+    x = calibration_inputs(options, knobs, n_in, steps)
     half = max(1, x.shape[0] // 2)
     fit_x, sel_x = x[:half], x[half:] if x.shape[0] > 1 else x
     calibrate(ref, srcs, fit_x)
@@ -233,7 +237,7 @@ def _lower(graph: Graph, options: XyloOptions, knobs: XyloStudyKnobs) -> XyloLow
         design_rules.check_spec(spec, chip)
         rates = event_rates(spec, chip_window(x, timing.input_pad, timing.output_lag))
         rt = estimate_real_time(spec, float(ref.dt), rates)
-        notes.append(rt.line())
+        notes.append("real time " + rt.line("the calibration inputs"))
         real_time = rt.as_dict()
     notes += bias_notes(srcs, records, timing)
     if any(r.method == "direct" for r in records):
@@ -241,6 +245,7 @@ def _lower(graph: Graph, options: XyloOptions, knobs: XyloStudyKnobs) -> XyloLow
                      "(the deployed graph states it: max_spikes 31, fire_test '>=')")
     return XyloLowered(spec=spec, chip=chip.key, dt=float(ref.dt), rule=name, timing=timing, populations=records,
                        trained=trained, reference=ref, twin=twin, candidates=candidates, changes=changes, notes=notes,
+                       steps=int(x.shape[1]), steps_rule=steps_rule if knobs.calibration is None else "the given inputs",
                        calibration={"inputs": describe(options, knobs, x), "fit_samples": int(fit_x.shape[0]),
                                     "selection_samples": int(sel_x.shape[0]), "metric": "argmax agreement with the "
                                     "float graph over its decided samples (kit.agreement), of the network spec run in "

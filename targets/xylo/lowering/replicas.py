@@ -133,7 +133,7 @@ def replica_sources(ref: Graph, srcs: list[Source], options: XyloOptions, knobs:
                 rng = np.random.default_rng(replica_seed(options, k))
                 xk = x[rng.integers(0, x.shape[0], x.shape[0])]
             else:
-                xk = calibration_inputs(options, knobs, x.shape[2], seed=replica_seed(options, k))
+                xk = calibration_inputs(options, knobs, x.shape[2], x.shape[1], seed=replica_seed(options, k))
             out = [replace(s, trains={}, raw={}, v_pre=None) for s in srcs]
             calibrate(ref, out, xk)
             return out
