@@ -10,7 +10,11 @@ Two networks, each run on the same seeded inputs by both:
 * ``large``: Xylo Audio 2 at its limits, 16 -> 1000 -> 8 with two synapses, each hidden neuron
   with 64 random recurrent targets (the chip's fan-out), every hidden neuron reached by the inputs
   and feeding the outputs; SYNTHETIC zero-mean weights, thresholds set so that about 5 % of the
-  hidden neurons fire per step.
+  hidden neurons fire per step;
+* ``replicated``: the spec.npz of ``snncc compile braille_noDelay_noBias_subtract.nir --dt 1e-4 --reset subtract
+  --target xylo --replicas 4 --relays both`` (12 -> 576 -> 7: four copies of the relayed network, each a block
+  of the recurrent matrix), compiled here unless ``--replicated DIR`` names such an artefact (not with
+  ``--quick``).
 
 Inputs: Bernoulli spikes, p = 0.08 per channel and step (SYNTHETIC), seeded.
 
@@ -103,6 +107,18 @@ def large_spec(seed: int = 0) -> XyloSpec:
         weight_shift_out=2, aliases=[[] for _ in range(n)], dt=1e-3)
 
 
+def replicated_spec() -> XyloSpec:
+    """The spec.npz of the Braille graph compiled with ``--replicas 4 --relays both`` (about a minute)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="snncc-xylo-bench-") as tmp:
+        out = Path(tmp) / "replicated.xylo"
+        subprocess.run([sys.executable, "-m", "snncc.cli.main", "compile", str(BRAILLE_NIR), "--dt", "1e-4", "--reset",
+                        "subtract", "--target", "xylo", "--replicas", "4", "--relays", "both", "-o", str(out)],
+                       check=True, stdout=subprocess.DEVNULL)
+        return XyloSpec.load_npz(out / "spec.npz")
+
+
 def best_of(repeat: int, fn) -> tuple[float, float]:
     """(best wall seconds, best CPU seconds of this process) over ``repeat`` calls of ``fn``."""
     walls, cpus = [], []
@@ -176,6 +192,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--quick", action="store_true", help="batch 256, 16 XyloSim samples, 2 repeats")
+    ap.add_argument("--replicated", default=None, help="an artefact of --replicas 4 --relays both (default: compiled)")
     ap.add_argument("--out", type=Path, default=REPO / "bench" / "results" / "xylo_emulator.json")
     args = ap.parse_args(argv)
     if args.quick:
@@ -187,7 +204,12 @@ def main(argv=None) -> int:
         "goal": "at batch 1,024, >= 20x XyloSim's time per sample (XyloSim built once, recording off)",
         "workloads": {},
     }
-    for name, spec in (("braille", braille_spec()), ("large", large_spec())):
+    workloads = [("braille", braille_spec()), ("large", large_spec())]
+    if args.replicated is not None:
+        workloads.append(("replicated", XyloSpec.load_npz(Path(args.replicated) / "spec.npz")))
+    elif not args.quick:
+        workloads.append(("replicated", replicated_spec()))
+    for name, spec in workloads:
         result["workloads"][name] = measure(name, spec, args.batch, args.xylosim_samples, args.repeat, args.threads)
     result["machine"] = {"cores": os.cpu_count(), "platform": platform.platform(), "processor": platform.processor(),
                          "load_1min_before": load_before, "load_1min_after": os.getloadavg()[0],

@@ -26,7 +26,7 @@ from snncc.targets.base import (
 )
 from snncc.targets.kit import SnnccError
 from snncc.targets.kit import Progress as PhaseProgress
-from snncc.targets.xylo.options import RANDOM_STEPS, XyloOptions
+from snncc.targets.xylo.options import XyloOptions
 
 if TYPE_CHECKING:
     import numpy as np
@@ -104,6 +104,7 @@ class XyloTarget:
         from snncc.targets.kit.agreement import default_samples, default_samples_note
         from snncc.targets.kit.measured import artefact_to_measure, described
         from snncc.targets.kit.reference import spiking_neurons
+        from snncc.targets.kit.timebase import sample_steps
         from snncc.targets.xylo.artefact.read import read_artefact
         from snncc.targets.xylo.checks.stages import check_written
 
@@ -113,7 +114,7 @@ class XyloTarget:
             written = read_artefact(path)
             random = None
             if inputs is None:
-                steps = RANDOM_STEPS
+                steps = written.sample_steps or sample_steps(graph, opts.time_steps)[0]
                 samples = how.samples or default_samples(spiking_neurons(graph), steps)
                 random = (samples, steps, how.density, 0)
                 shown = f"{samples} samples" if how.samples else default_samples_note(samples)
@@ -152,11 +153,13 @@ class XyloTarget:
         import numpy as np
 
         from snncc.targets.kit.inputs import RandomSpikes
+        from snncc.targets.kit.timebase import DEFAULT_TIME_STEPS
         from snncc.targets.xylo.artefact.read import read_artefact
         from snncc.targets.xylo.estimate.usage import usage_on_inputs
 
         if isinstance(inputs, RandomSpikes):
-            x = inputs.draw(RANDOM_STEPS, read_artefact(source).spec.n_in)
+            written = read_artefact(source)
+            x = inputs.draw(written.sample_steps or DEFAULT_TIME_STEPS, written.spec.n_in)
             note = note or inputs.note()
         else:
             x = np.asarray(inputs)

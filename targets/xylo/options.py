@@ -24,10 +24,8 @@ MODEL_VERBS = ("lower", "check", "agree", "map")
 DEFAULT_CALIBRATION_SAMPLES = 256
 BOTH_CALIBRATION_SAMPLES = 1024  # --relays both: twice the relay columns to fit (Braille RSNN, 4 replicas: 256 samples
                                  # 0.849, 1024 samples 0.856 pooled over 7,272 held-out samples; docs/xylo_lowering.md)
-CALIBRATION_STEPS = 256          # steps of each seeded calibration sample when --time-steps is not given
 DEFAULT_DENSITY = 0.08           # spike density of the seeded calibration inputs
 DEFAULT_SEED = 1                 # seed of the calibration inputs (a setting no flag offers)
-RANDOM_STEPS = 256               # steps of report's and agree's seeded random samples
 
 
 @dataclass(frozen=True)
@@ -59,7 +57,9 @@ class XyloOptions(TargetOptions):
     allow_reset_change: bool = option(
         "Accept a model that resets to zero, deployed with reset by subtraction (Xylo's; snncc check measures the "
         "cost).", default=False, capabilities=("lower", "check", "agree"))
-    time_steps: int | None = option("Steps of each seeded calibration sample (default 256).", minimum=1,
+    time_steps: int | None = option("Steps of a sample: each seeded calibration sample's (the artefact records them; "
+                                    "check and report draw their random samples that long). Default: the model's "
+                                    "recording length / dt, else snncc's default.", minimum=1,
                                     rule="time steps must be a whole number >= 1", capabilities=("lower",))
     calibration_samples: int | None = option(
         "Seeded random calibration samples the rule is fitted and chosen on (default 256, 1024 with --relays both; "
@@ -110,5 +110,5 @@ class XyloStudyKnobs:
 NO_KNOBS = XyloStudyKnobs()
 
 __all__ = ["XyloOptions", "XyloStudyKnobs", "NO_KNOBS", "CHIP_KEYS", "RULES", "MAX_REPLICAS", "RELAY_SETS",
-           "MODEL_VERBS", "DEFAULT_CALIBRATION_SAMPLES", "BOTH_CALIBRATION_SAMPLES", "CALIBRATION_STEPS",
-           "DEFAULT_DENSITY", "DEFAULT_SEED", "RANDOM_STEPS"]
+           "MODEL_VERBS", "DEFAULT_CALIBRATION_SAMPLES", "BOTH_CALIBRATION_SAMPLES", "DEFAULT_DENSITY",
+           "DEFAULT_SEED"]

@@ -89,8 +89,12 @@ class XyloArtefact:
         for line in s["changes"]:
             console.print(f"  change: {line}", markup=False)
         rt = s["real_time"]
-        console.print(f"  real time: {'yes' if rt['real_time'] else 'NO'}, at most {rt['cycles_worst']:,.0f} core cycles "
-                      f"per step, margin {rt['margin']:.1f}x against dt (ESTIMATE)", markup=False)
+        if "cycles_worst" in rt:
+            from snncc.targets.xylo.estimate.real_time import verdict
+
+            console.print(f"  real time {verdict(rt, 'the calibration inputs')}", markup=False, soft_wrap=True)
+        else:
+            console.print(f"  real time: {rt.get('note', 'not estimated')}", markup=False, soft_wrap=True)
         v = s["validation"]
         console.print(f"  validation: {v['spec_file']}; {v['emulator']}", markup=False)
         for note in s["notes"]:

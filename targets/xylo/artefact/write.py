@@ -63,7 +63,8 @@ def build_manifest(low, spec, files: dict[str, bytes], source: str | None) -> di
         "aliases": [list(a) for a in spec.aliases],
         "feed": {"input_pad": int(low.timing.input_pad), "output_lag": int(low.timing.output_lag),
                  "rule": ("feed input_pad zero steps before a sample's T steps (and zeros after, to T + output_lag "
-                          "steps in all); the model's output step t is the chip's output step t + output_lag")},
+                          "steps in all); the model's output step t is the chip's output step t + output_lag"),
+                 "sample_steps": int(low.steps), "sample_steps_rule": low.steps_rule},
         "quantization": record,
         "real_time": dict(low.real_time),
         "source": source_identity(meta, source),

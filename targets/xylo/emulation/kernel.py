@@ -22,9 +22,12 @@ for every int16 V and every threshold 1 .. 32767). The fast-math flags allowed (
 reassociation and approximate division. float32 lets each pass run as 8- or 16-lane vectors.
 
 Layout: the currents of hidden neuron k sit at k (synapse 1) and NP + k (synapse 2), NP = N
-rounded up to ``LANES``; every weight row spans whole vectors (zero padding: padded currents
-only ever receive zeros). A matrix that is mostly zeros is also kept as its non-zero synapses
-(index, weight) per row, so a spike then costs its fan-out rather than a whole row.
+rounded up to ``LANES``; padded currents only ever receive zeros. Each weight row of the input and
+recurrent matrices is kept as *spans*: runs of columns holding its non-zero weights, two runs merged
+where fewer than ``SPAN_GAP`` zeros separate them (``_spans``), each span's weights stored densely. A
+spike adds its row span by span, each a contiguous vector loop (adding a zero changes nothing, the
+saturation included), so it costs its fan-out in vector lanes: a dense row is one span, the rows of a
+replicated or relayed network a few, a scattered random row one span per synapse.
 
 Samples are independent: a batch is cut into chunks run on a few Python threads (the kernel
 releases the GIL).
@@ -44,7 +47,10 @@ with sigint_deferred():   # numba's C init would turn a Ctrl-C into an ImportErr
 
 from snncc.targets.xylo.chip import CORE
 
-SPARSE_BELOW = 0.25          # a matrix with fewer non-zero weights than this fraction is run sparse
+DENSE_FROM = 0.25            # a matrix with at least this fraction of non-zero weights is added row by whole row
+SPAN_GAP = 2                 # two runs of non-zero weights of a row this close (zeros between) are one span
+SPAN_MIN = 4.0               # a matrix whose spans average fewer columns is added synapse by synapse instead
+DENSE, SPANS, SYNAPSES = 0, 1, 2     # how a matrix's rows are added (``_spans``)
 CHUNK = 16                   # samples per task handed to a thread
 LANES = 16                   # rows are padded to whole vectors of this many float32
 
@@ -59,15 +65,9 @@ class Prepared:
     n_oen: int
     np_: int                  # NP: N rounded up to LANES (synapse 2's currents start there)
     w_in: np.ndarray          # (Nin, 2 NP) float32
-    in_ptr: np.ndarray        # the non-zeros of w_in per row: (Nin + 1,) int64, in_idx, in_w
-    in_idx: np.ndarray
-    in_w: np.ndarray
-    in_dense: bool
+    in_spans: tuple           # w_in's rows as spans: (ptr (Nin + 1,), start, length, offset, weights, mode)
     w_rec: np.ndarray         # (N, 2 NP) float32
-    rec_ptr: np.ndarray
-    rec_idx: np.ndarray
-    rec_w: np.ndarray
-    rec_dense: bool
+    rec_spans: tuple          # the same for w_rec's (N) rows
     w_out: np.ndarray         # (N_oen, NOP) float32, NOP: Nout rounded up to LANES
     scale_syn: np.ndarray     # (2 NP,) float32 2**-dash_syn, 2**-dash_syn_2
     scale_mem: np.ndarray     # (NP,) float32 2**-dash_mem
@@ -95,13 +95,43 @@ def _block_rows(w: np.ndarray, np_: int) -> np.ndarray:
     return out
 
 
-def _sparse(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Row-wise non-zeros of a 2-D matrix: (ptr, column index, value)."""
-    nz = rows != 0
-    ptr = np.zeros(rows.shape[0] + 1, np.int64)
-    np.cumsum(nz.sum(axis=1), out=ptr[1:])
-    r, c = np.nonzero(nz)
-    return ptr, c.astype(np.int64), rows[r, c].astype(np.float32)
+def _spans(rows: np.ndarray, used: int, gap: int | None = None) -> tuple:
+    """How the kernel adds the rows of ``rows`` (``used``: the columns that can hold weights): (ptr (rows + 1,),
+    start, length, offset into weights, weights, mode). ``DENSE`` where at least ``DENSE_FROM`` of the weights are
+    non-zero (the whole rows, vector loops; the spans left empty); else ``SPANS``: runs of non-zeros, merged where
+    at most ``gap`` zeros lie between, each span's weights (zeros inside) stored contiguously from its offset,
+    indices unsigned (no wraparound checks: vector loops); where those spans average fewer than ``SPAN_MIN``
+    columns (scattered synapses), ``SYNAPSES``: every non-zero its own span, added one by one."""
+    gap = SPAN_GAP if gap is None else gap
+    if np.count_nonzero(rows) >= DENSE_FROM * rows.shape[0] * used:
+        return _runs(np.zeros((rows.shape[0], 0), rows.dtype), gap) + (DENSE,)
+    runs = _runs(rows, gap)
+    if runs[1].size and float(np.mean(runs[2])) < SPAN_MIN:
+        return _runs(rows, -1) + (SYNAPSES,)
+    return runs + (SPANS,)
+
+
+def _runs(rows: np.ndarray, gap: int) -> tuple[np.ndarray, ...]:
+    """(ptr, start, length, offset, weights) of the rows' runs of non-zeros merged across at most ``gap`` zeros
+    (``gap`` -1: every non-zero alone)."""
+    ptr = [0]
+    start, length, offset, weights = [], [], [], []
+    at = 0
+    for row in rows:
+        idx = np.flatnonzero(row)
+        if idx.size:
+            cut = np.flatnonzero(np.diff(idx) > gap + 1) + 1
+            for first, last in zip(np.concatenate([[0], cut]), np.concatenate([cut, [idx.size]])):
+                lo, hi = int(idx[first]), int(idx[last - 1]) + 1
+                start.append(lo)
+                length.append(hi - lo)
+                offset.append(at)
+                weights.append(row[lo:hi])
+                at += hi - lo
+        ptr.append(len(start))
+    as64 = lambda v: np.asarray(v, np.uint64)   # noqa: E731
+    flat = np.concatenate(weights).astype(np.float32) if weights else np.zeros(0, np.float32)
+    return as64(ptr), as64(start), as64(length), as64(offset), flat
 
 
 def _padded(values, width: int, fill: float = 0.0) -> np.ndarray:
@@ -121,20 +151,13 @@ def prepare(spec) -> Prepared:
     w_in, w_rec = _block_rows(w_in, np_), _block_rows(w_rec, np_)
     w_out_p = np.zeros((spec.n_oen, nop), np.float32)
     w_out_p[:, :n_out] = w_out
-    in_ptr, in_idx, in_w = _sparse(w_in)
-    rec_ptr, rec_idx, rec_w = _sparse(w_rec)
     alias_ptr = np.zeros(n + 1, np.int64)
     np.cumsum([len(a) for a in spec.aliases], out=alias_ptr[1:])
     alias_idx = np.array([t for a in spec.aliases for t in a], np.int64)
     scale = lambda dash, width: _padded(np.ldexp(1.0, -np.asarray(dash, np.int64)), width)   # noqa: E731
     scale_syn = np.concatenate([scale(spec.dash_syn, np_), scale(spec.dash_syn_2, np_)])
-    nonzero_in = np.count_nonzero(w_in[:, :n]) + np.count_nonzero(w_in[:, np_:np_ + n])
-    nonzero_rec = np.count_nonzero(w_rec[:, :n]) + np.count_nonzero(w_rec[:, np_:np_ + n])
     return Prepared(
-        spec.n_in, n, n_out, spec.n_oen, np_,
-        w_in, in_ptr, in_idx, in_w, bool(nonzero_in >= SPARSE_BELOW * 2 * n * spec.n_in),
-        w_rec, rec_ptr, rec_idx, rec_w, bool(nonzero_rec >= SPARSE_BELOW * 2 * n * n),
-        w_out_p, scale_syn, scale(spec.dash_mem, np_), _padded(spec.threshold, np_, 1.0), _padded(spec.bias, np_),
+        spec.n_in, n, n_out, spec.n_oen, np_, w_in, _spans(w_in, 2 * n), w_rec, _spans(w_rec, 2 * n), w_out_p, scale_syn, scale(spec.dash_mem, np_), _padded(spec.threshold, np_, 1.0), _padded(spec.bias, np_),
         scale(spec.dash_syn_out, nop), scale(spec.dash_mem_out, nop), _padded(spec.threshold_out, nop, 1.0),
         _padded(spec.bias_out, nop), alias_ptr, alias_idx,
         bool(alias_idx.size == 0 and np.all(spec.threshold > 0)), bool(np.all(spec.threshold_out > 0)))
@@ -208,15 +231,43 @@ def _add_dense(cur, w, j, c):
 
 
 @njit(inline="always", fastmath=FAST)
-def _add_sparse(cur, idx, w, lo, hi, c):
-    for p in range(lo, hi):
-        q = idx[p]
-        cur[q] = min(max(cur[q] + c * w[p], LO), HI)
+def _add_spans(cur, ptr, start, length, offset, w, j, c):
+    """cur[q] = sat(cur[q] + c * w_row[q]) over row j's spans, each a contiguous vector loop (unsigned indices)."""
+    r = np.uint64(j)
+    for sp in range(ptr[r], ptr[r + 1]):
+        q0 = start[sp]
+        o = offset[sp]
+        for u in range(length[sp]):
+            cur[q0 + u] = min(max(cur[q0 + u] + c * w[o + u], LO), HI)
 
 
-@njit(nogil=True, cache=True, fastmath=FAST)
+@njit(inline="always", fastmath=FAST)
+def _add_synapses(cur, ptr, start, offset, w, j, c):
+    """The same, synapse by synapse (each span one synapse)."""
+    r = np.uint64(j)
+    for sp in range(ptr[r], ptr[r + 1]):
+        q = start[sp]
+        cur[q] = min(max(cur[q] + c * w[offset[sp]], LO), HI)
+
+
+def _signature():
+    """``run_chunk``'s one signature (compiled once, cached on disk: a warm install compiles nothing)."""
+    from numba import types as nt
+
+    def arr(dtype, dims):
+        return nt.Array(dtype, dims, "C")
+
+    i64, u64, f32, u8, i16 = nt.int64, nt.uint64, nt.float32, nt.uint8, nt.int16
+    spans = [arr(u64, 1)] * 4 + [arr(f32, 1), i64]
+    return nt.void(arr(u8, 3), *[i64] * 6, arr(f32, 2), *spans, arr(f32, 2), *spans, arr(f32, 2),
+                   *[arr(f32, 1)] * 10, arr(i64, 1), arr(i64, 1), nt.boolean, nt.boolean, arr(u8, 3), nt.boolean,
+                   arr(i16, 3), arr(i16, 3), arr(i16, 3), arr(u8, 3), arr(i16, 3), arr(i16, 3))
+
+
+@njit([_signature()], nogil=True, cache=True, fastmath=FAST)
 def run_chunk(x, first, last, n, n_out, n_oen, np_,
-              w_in, in_ptr, in_idx, in_w, in_dense, w_rec, rec_ptr, rec_idx, rec_w, rec_dense, w_out,
+              w_in, in_ptr, in_start, in_len, in_off, in_w, in_mode, w_rec, rec_ptr, rec_start, rec_len, rec_off, rec_w,
+              rec_mode, w_out,
               scale_syn, scale_mem, threshold, inv_threshold, bias, scale_syn_out, scale_mem_out, threshold_out,
               inv_threshold_out, bias_out, alias_ptr, alias_idx, plain_fire, plain_fire_out, out, record,
               r_vmem, r_isyn, r_isyn2, r_spikes, r_vmem_out, r_isyn_out):
@@ -243,18 +294,22 @@ def run_chunk(x, first, last, n, n_out, n_oen, np_,
             for j in range(n_in):
                 if x[b, t, j] != 0:
                     c = np.float32(x[b, t, j])
-                    if in_dense:
+                    if in_mode == DENSE:
                         _add_dense(cur, w_in, j, c)
+                    elif in_mode == SPANS:
+                        _add_spans(cur, in_ptr, in_start, in_len, in_off, in_w, j, c)
                     else:
-                        _add_sparse(cur, in_idx, in_w, in_ptr[j], in_ptr[j + 1], c)
+                        _add_synapses(cur, in_ptr, in_start, in_off, in_w, j, c)
             # 2. last step's hidden events, in neuron order
             for a in range(n_active):
                 j = active[a]
                 c = ev[j]
-                if rec_dense:
+                if rec_mode == DENSE:
                     _add_dense(cur, w_rec, j, c)
+                elif rec_mode == SPANS:
+                    _add_spans(cur, rec_ptr, rec_start, rec_len, rec_off, rec_w, j, c)
                 else:
-                    _add_sparse(cur, rec_idx, rec_w, rec_ptr[j], rec_ptr[j + 1], c)
+                    _add_synapses(cur, rec_ptr, rec_start, rec_off, rec_w, j, c)
                 if j >= off:
                     _add_dense(cur_o, w_out, j - off, c)
             # 3. hidden neurons: the currents decay, V integrates them and the bias
@@ -328,8 +383,7 @@ def run_prepared(p: Prepared, x: np.ndarray, *, record: bool = False, threads: i
     shape_o = (batch, t_steps, p.n_out) if record else (0, 0, 0)
     rec = (np.zeros(shape_h, np.int16), np.zeros(shape_h, np.int16), np.zeros(shape_h, np.int16),
            np.zeros(shape_h, np.uint8), np.zeros(shape_o, np.int16), np.zeros(shape_o, np.int16))
-    args = (p.n, p.n_out, p.n_oen, p.np_, p.w_in, p.in_ptr, p.in_idx, p.in_w, p.in_dense,
-            p.w_rec, p.rec_ptr, p.rec_idx, p.rec_w, p.rec_dense, p.w_out,
+    args = (p.n, p.n_out, p.n_oen, p.np_, p.w_in, *p.in_spans, p.w_rec, *p.rec_spans, p.w_out,
             p.scale_syn, p.scale_mem, p.threshold, _reciprocal(p.threshold), p.bias, p.scale_syn_out, p.scale_mem_out,
             p.threshold_out, _reciprocal(p.threshold_out), p.bias_out, p.alias_ptr, p.alias_idx, p.plain_fire, p.plain_fire_out, out, record, *rec)
     workers = max(1, min(-(-batch // CHUNK), config.NUMBA_NUM_THREADS if threads is None else int(threads)))

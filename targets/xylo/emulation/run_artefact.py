@@ -85,7 +85,7 @@ def emulate_written(written: WrittenXylo, x: np.ndarray, *, record: bool = False
                     gap: int | None = None, source: str | None = None) -> XyloEmulation:
     from snncc.targets.xylo.emulation.emulator import emulate
 
-    spec = written.spec
+    spec = written.runnable().spec
     x = artefact_inputs(x, spec.n_in, source)
     b, t, c = x.shape
     pad, lag = written.input_pad, written.output_lag

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from snncc.targets.xylo.chip import CHIPS, XyloChip
+from snncc.targets.xylo.estimate.real_time import verdict
 
 NO_ENERGY = ("no energy or power figure: snncc gives one only from a published measurement of the network, and none "
              "exists for this one (Xylo's energy per event was not measured here: no board)")
@@ -113,39 +114,49 @@ class XyloUsage:
         table.add_row("fits", *["yes" if self.fits(k) else "NO" for k in self.usage])
         console.print(table)
         console.print(f"synapses (non-zero weights): {self.synapses}", markup=False)
-        rt = self.real_time
-        console.print(f"real time: {'yes' if rt['real_time'] else 'NO'}: at most {rt['cycles_worst']:,.0f} core cycles "
-                      f"per step ({rt['step_time_worst_s'] * 1e6:.1f} us at {rt['clock_hz'] / 1e6:g} MHz) against dt "
-                      f"{self.dt * 1e6:g} us, margin {rt['margin']:.2f}x; {rt['cycles_expected']:,.0f} cycles (margin "
-                      f"{rt['margin_expected']:.2f}x) at the event rates of {self.rates_from} (ESTIMATE, not measured)", markup=False, soft_wrap=True)
+        console.print(f"real time {verdict(self.real_time, self.rates_from)}", markup=False, soft_wrap=True)
         console.print(self.energy, markup=False, soft_wrap=True)
         for note in self.notes:
             console.print(f"note: {note}", markup=False, soft_wrap=True)
 
     def plot(self, path: str | Path) -> None:
-        """Each chip's usage in % of its limits as a PNG, written atomically."""
+        """Each chip's usage in % of its limits as a PNG, written atomically: one horizontal bar per limit and chip
+        (the limits' names readable on the left), the artefact and the chip it was compiled for in the title."""
+        import matplotlib.pyplot as plt
+
+        from snncc.targets.kit.writing import atomic_path
+
+        fig = self.figure()
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format="png")
+        plt.close(fig)
+
+    def figure(self):   # noqa: ANN201 (a matplotlib Figure)
+        """The usage plot (``plot``) as a matplotlib figure."""
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from snncc.targets.kit.writing import atomic_path
-
         names = list(next(iter(self.usage.values())))
-        fig, ax = plt.subplots(figsize=(9.0, 4.0), dpi=100)
-        width = 0.8 / len(self.usage)
-        for j, key in enumerate(self.usage):
+        chips = list(self.usage)
+        height = 0.8 / len(chips)
+        fig, ax = plt.subplots(figsize=(9.0, 1.0 + 0.55 * len(names)), dpi=100)
+        rows = np.arange(len(names))
+        for j, key in enumerate(chips):
             pct = [100.0 * self.usage[key][n]["used"] / max(1, self.usage[key][n]["limit"]) for n in names]
-            ax.bar(np.arange(len(names)) + (j - (len(self.usage) - 1) / 2) * width, pct, width, label=CHIPS[key].name)
-        ax.axhline(100.0, color="k", lw=1, ls="--")
-        ax.set_xticks(np.arange(len(names)))
-        ax.set_xticklabels(names, rotation=30, ha="right", fontsize=7)
-        ax.set_ylabel("% of the chip's limit")
-        ax.legend(fontsize=7)
+            ax.barh(rows + (j - (len(chips) - 1) / 2) * height, pct, height,
+                    label=f"{CHIPS[key].name} ({key})" + (" - compiled for" if key == self.chip else ""))
+        ax.axvline(100.0, color="k", lw=1, ls="--")
+        ax.set_yticks(rows)
+        ax.set_yticklabels(names, fontsize=9)
+        ax.invert_yaxis()
+        ax.set_xlabel("% of the chip's limit (dashed: the limit)")
+        ax.set_title(f"Xylo usage of {Path(self.source).name} (compiled for {CHIPS[self.chip].name}, {self.chip})",
+                     fontsize=10)
+        ax.legend(fontsize=8, loc="lower right")
         fig.tight_layout()
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, format="png")
-        plt.close(fig)
+        return fig
 
 
 def usage_of(spec, *, source: str, chip: str, rates: dict[str, float], rates_from: str) -> XyloUsage:
@@ -170,7 +181,7 @@ def usage_on_inputs(path: Path, x: np.ndarray, note: str = "") -> XyloUsage:
     from snncc.targets.xylo.emulation.run_artefact import artefact_inputs
     from snncc.targets.xylo.artefact.read import read_artefact
 
-    written = read_artefact(path)
+    written = read_artefact(path).runnable()
     x = artefact_inputs(x, written.spec.n_in, None)
     rates = event_rates(written.spec, x, written.input_pad, written.output_lag)
     return usage_of(written.spec, source=str(path), chip=written.chip, rates=rates,

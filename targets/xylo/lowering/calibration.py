@@ -20,8 +20,7 @@ from snncc.targets.xylo.lowering.regression import delayed
 from snncc.targets.xylo.lowering.structure import Population
 from snncc.targets.xylo.lowering.timing import XyloTiming, projection_delay
 from snncc.targets.xylo.options import (
-    BOTH_CALIBRATION_SAMPLES, CALIBRATION_STEPS, DEFAULT_CALIBRATION_SAMPLES, DEFAULT_DENSITY, XyloOptions,
-    XyloStudyKnobs,
+    BOTH_CALIBRATION_SAMPLES, DEFAULT_CALIBRATION_SAMPLES, DEFAULT_DENSITY, XyloOptions, XyloStudyKnobs,
 )
 
 
@@ -61,23 +60,47 @@ def sources(g: Graph, pops: list[Population], timing: XyloTiming) -> list[Source
     return out
 
 
+CALIBRATION_CHUNK = 32       # samples the float graph runs at once while calibrating
+
+
+def spike_trains(z) -> np.ndarray:
+    """0/1 spikes (or small whole event counts) held as uint8: every consumer reads them as float64, unchanged."""
+    z = np.asarray(z)
+    if z.dtype == np.uint8:
+        return z
+    out = z.astype(np.uint8)
+    if not np.array_equal(out, z):
+        raise SnnccError("internal check failed: calibration spike trains that are not whole counts 0 .. 255",
+                         field="calibration")
+    return out
+
+
 def calibrate(ref: Graph, srcs: list[Source], x: np.ndarray) -> None:
-    """Teacher-forcing traces: each population's delayed presynaptic and own spike trains, pre-reset voltages."""
+    """Teacher-forcing traces: each population's delayed presynaptic and own spike trains (uint8), pre-reset
+    voltages (float64); the float graph runs ``CALIBRATION_CHUNK`` samples at a time."""
     from snncc.ir.simulate import simulate
     from snncc.targets.kit.compute import one_thread
 
+    b, steps = np.shape(x)[:2]
+    spikes = {s.pop.lif: np.zeros((b, steps, s.theta.size), np.uint8) for s in srcs}
+    voltage = {s.pop.lif: np.zeros((b, steps, s.theta.size), np.float64) for s in srcs}
     with one_thread():
-        res = simulate(ref, x, record="all")
-    trains = {srcs[0].pop.pre: np.asarray(x, np.float64)}
-    for s in srcs:
-        trains[s.pop.lif] = np.asarray(res.spikes[s.pop.lif])
-    ones = np.ones(np.shape(x)[:2] + (1,))
+        for s0 in range(0, b, CALIBRATION_CHUNK):
+            res = simulate(ref, x[s0:s0 + CALIBRATION_CHUNK], record="all")
+            for name in spikes:
+                spikes[name][s0:s0 + CALIBRATION_CHUNK] = spike_trains(res.spikes[name])
+                voltage[name][s0:s0 + CALIBRATION_CHUNK] = np.asarray(res.voltage[name])
+            del res
+    trains = {srcs[0].pop.pre: spike_trains(x), **spikes}
+    ones = np.ones(np.shape(x)[:2] + (1,), np.uint8)
     for s in srcs:
         s.trains = {s.pop.pre: delayed(trains[s.pop.pre], s.d_ff), s.pop.lif: delayed(trains[s.pop.lif], 1)}
         s.raw = {s.pop.pre: trains[s.pop.pre], s.pop.lif: trains[s.pop.lif]}
         if s.bias_lag is not None:
             s.trains[BIAS_SOURCE] = delayed(ones, s.bias_lag)
-        s.v_pre = np.asarray(res.voltage[s.pop.lif]) + s.theta * trains[s.pop.lif]
+        v = voltage[s.pop.lif]
+        v += s.theta * trains[s.pop.lif]
+        s.v_pre = v
 
 
 def float_counts(ref: Graph, x: np.ndarray, last: str) -> np.ndarray:
@@ -95,9 +118,10 @@ def sample_count(options: XyloOptions) -> int:
                or (BOTH_CALIBRATION_SAMPLES if options.both_relays else DEFAULT_CALIBRATION_SAMPLES))
 
 
-def calibration_inputs(options: XyloOptions, knobs: XyloStudyKnobs, width: int, seed: int | None = None) -> np.ndarray:
-    """The calibration inputs: the study's (``knobs.calibration``, as 0/1 spikes) or seeded random spikes
-    (``seed``, default the options' seed)."""
+def calibration_inputs(options: XyloOptions, knobs: XyloStudyKnobs, width: int, steps: int,
+                       seed: int | None = None) -> np.ndarray:
+    """The calibration inputs: the study's (``knobs.calibration``, as 0/1 spikes) or seeded random spikes of
+    ``steps`` steps (the model's time base, ``kit.timebase.sample_steps``; ``seed``, default the options' seed)."""
     given = knobs.calibration
     if given is not None:
         x = np.asarray(given)
@@ -105,7 +129,6 @@ def calibration_inputs(options: XyloOptions, knobs: XyloStudyKnobs, width: int, 
             raise SnnccError(f"calibration inputs must be (samples, steps, {width})", field="calibration")
         return (x > 0).astype(np.uint8)
     samples = sample_count(options)
-    steps = int(options.time_steps or CALIBRATION_STEPS)
     density = float(knobs.density or DEFAULT_DENSITY)
     seed = int(options.seed if seed is None else seed)
     if not 0 < density <= 1:

@@ -7,6 +7,7 @@ neurons copied to them. ``lower.py`` measures each in snncc's emulator and keeps
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,7 +99,7 @@ def relay_room(hidden: list[Source], pairs: list[tuple[int, int]], chip: XyloChi
 def build_candidate(srcs: list[Source], n_inputs: int, method: str, pairs: list[tuple[int, int]] | None,
                     identified: bool, chip: XyloChip, timing: XyloTiming | None = None,
                     relayed: bool = False, readout: str = "output",
-                    replicas: list[list[Source]] = (),
+                    replicas: list[Callable[[], list[Source]]] = (),
                     rounding: str | None = None, both_dashes: bool = False) -> tuple[dict, list[PopulationRecord]]:
     """A spec for one rule: hidden populations ``method`` (single: dash pair per population, kernel or
     identified weights, rounding with error feedback), the readout population on the output neurons
@@ -110,24 +111,29 @@ def build_candidate(srcs: list[Source], n_inputs: int, method: str, pairs: list[
     Relayed fits are pulled
     towards zero, not towards the two-exponential kernel: its cancelling coefficients (about 7 thresholds
     per unit weight on the Braille RSNN) cost more in int8 rounding than they gain (docs/xylo_lowering.md).
-    ``replicas``: more copies of ``srcs``, each calibrated on its own inputs (``replicas.replica_sources``): every
+    ``replicas``: more copies of ``srcs``, each calibrated on its own inputs when called (``replicas.replica_sources``;
+    fitted one at a time, its traces let go after its fit, calibrated again if the shifts change): every
     hidden population is placed once per copy, fitted and rounded on that copy's inputs (copy k's relays a step
     coarser, ``replica_events_max``), and the readout takes each copy's spikes with 1/K of its weights
     (``readout`` "output" only; ``merge_replica_records`` folds the copies' records into one per population).
     ``rounding``: "none" leaves the weights unrounded (``integer_spec``); else the method's own rounding.
     ``both_dashes``: every relayed source gets relays at both synapse dashes (``relay_plan``)."""
-    copies = [srcs] + list(replicas)
-    k_all = len(copies)
+    k_all = 1 + len(replicas)
     if k_all > 1 and readout != "output":
         raise SnnccError("internal check failed: replicas need the readout on the output neurons", field="rule")
-    on_hidden = [c if readout == "hidden" else c[:-1] for c in copies]
-    plans = [relay_plan(h, pairs, replica_events_max(k), both_dashes) if relayed else []
-             for k, h in enumerate(on_hidden)]
+
+    def on_hidden(copy: list[Source]) -> list[Source]:
+        return copy if readout == "hidden" else copy[:-1]
+
+    plans = [relay_plan(on_hidden(srcs), pairs, replica_events_max(k), both_dashes) if relayed else []
+             for k in range(k_all)]                   # a plan reads only the populations' widths: copy 0's do
     shifts: tuple[int, int] | None = None
     ridge = RELAYED_RIDGE if relayed else IDENTIFY_RIDGE
     for _ in range(2 if plans[0] else 1):
         per_copy, plan, limits = [], [], {}
-        for k, (hid, copy_plan) in enumerate(zip(on_hidden, plans)):
+        for k, copy_plan in enumerate(plans):
+            copy = srcs if k == 0 else replicas[k - 1]()
+            hid = on_hidden(copy)
             if copy_plan:
                 if timing is None:
                     raise SnnccError("internal check failed: a relayed candidate needs the lowering's timing",
@@ -141,6 +147,9 @@ def build_candidate(srcs: list[Source], n_inputs: int, method: str, pairs: list[
             limits.update({p.name: lim for p, lim in zip(pops, lims)})
             per_copy.append(pops)
             plan += copy_plan
+            if k > 0:                              # only copy 0's traces are read again (the readout's fit)
+                for s in copy:
+                    s.trains, s.raw, s.v_pre = {}, {}, None
         hidden = [pops[i] for i in range(len(per_copy[0])) for pops in per_copy]     # a population's copies adjoin
         if readout == "hidden":
             out, out_limit = None, None

@@ -23,7 +23,7 @@ from snncc.targets.xylo.lowering import decays, sigma_delta as relay_rules
 from snncc.targets.xylo.lowering.chip_form import (BIAS_SOURCE, SAFE_WEIGHT_SHIFT, SINGLE_THRESHOLD, STATE_MARGIN,
                                                    STATE_MAX, MIN_GAIN, WEIGHT_MAX, WEIGHT_MIN, HiddenFloat,
                                                    OutputFloat)
-from snncc.targets.xylo.lowering.regression import chip_filter
+from snncc.targets.xylo.lowering.filters import synaptic
 
 
 @dataclass
@@ -49,27 +49,37 @@ class PopulationRecord:
         return np.arange(self.neurons[0], self.neurons[1]).reshape(self.copies, -1)
 
 
-def _currents(pop: HiddenFloat, trains: dict[str, np.ndarray]) -> np.ndarray:
-    """(2, B, T, n) chip-form currents of ``pop`` driven by ``trains`` (IR units, float)."""
+STATE_SAMPLES = 32           # samples whose currents are held at once (``hidden_state_limit``)
+
+
+def _currents(pop: HiddenFloat, trains: dict[str, np.ndarray], s0: int, s1: int) -> np.ndarray:
+    """(2, s1 - s0, T, n) chip-form currents of ``pop`` driven by samples s0 .. s1 - 1 of ``trains`` (IR units)."""
+    first = trains[next(iter(trains))]
+    shape = (s1 - s0, first.shape[1])
     out = []
     for k in range(2):
         a = float(decays.grid(pop.dash_syn[0, k]))
         total = 0.0
         for src, w in pop.weights.items():
             if np.any(w[k]):
-                total = total + chip_filter(trains[src].astype(np.float64), a) @ w[k].T
-        out.append(np.broadcast_to(total, trains[next(iter(trains))].shape[:2] + (pop.n,)) if np.isscalar(total)
-                   else total)
+                part = trains[src][s0:s1]
+                total = total + synaptic(part, a).reshape(shape + (part.shape[2],)) @ w[k].T
+        out.append(np.broadcast_to(total, shape + (pop.n,)) if np.isscalar(total) else total)
     return np.stack(out)
 
 
 def hidden_state_limit(pop: HiddenFloat, trains: dict[str, np.ndarray], v_pre: np.ndarray) -> np.ndarray:
-    """The largest gain (chip units per IR unit) each neuron's calibration states allow."""
-    cur = _currents(pop, trains)
-    i_max = np.abs(cur).max(axis=(0, 1, 2))
+    """The largest gain (chip units per IR unit) each neuron's calibration states allow (the currents computed
+    ``STATE_SAMPLES`` samples at a time)."""
+    i_max = np.full(pop.n, -np.inf)
+    v_min = np.full(pop.n, np.inf)
+    for s0 in range(0, v_pre.shape[0], STATE_SAMPLES):
+        cur = _currents(pop, trains, s0, min(v_pre.shape[0], s0 + STATE_SAMPLES))
+        i_max = np.maximum(i_max, np.abs(cur).max(axis=(0, 1, 2)))
+        if pop.method == "single":
+            v_min = np.minimum(v_min, (cur.sum(0) + pop.bias).min(axis=(0, 1)))
     if pop.method == "single":
-        v = cur.sum(0) + pop.bias
-        v_min = np.minimum(v.min(axis=(0, 1)), 0.0)
+        v_min = np.minimum(v_min, 0.0)
         # V_c = G V + off with off = 16385 - G theta must stay above -32768 (with margin); currents in int16
         lim_v = (SINGLE_THRESHOLD + (STATE_MAX + 1) / STATE_MARGIN) / np.maximum(pop.theta - v_min, 1e-12)
         lim_i = STATE_MAX / (STATE_MARGIN * np.maximum(i_max, 1e-12))
@@ -79,12 +89,18 @@ def hidden_state_limit(pop: HiddenFloat, trains: dict[str, np.ndarray], v_pre: n
 
 
 def output_state_limit(out: OutputFloat, pre: np.ndarray, v_pre: np.ndarray) -> np.ndarray:
-    cur = np.zeros(v_pre.shape)
-    for d in np.unique(out.dash_syn):
-        sel = out.dash_syn == d
-        cur[..., sel] = chip_filter(pre.astype(np.float64), float(decays.grid(d))) @ out.weight[sel].T
+    """The largest gain each output neuron's calibration states allow (``STATE_SAMPLES`` samples at a time)."""
+    i_max = np.zeros(out.n)
+    steps = pre.shape[1]
+    for s0 in range(0, pre.shape[0], STATE_SAMPLES):
+        part = pre[s0:s0 + STATE_SAMPLES]
+        for d in np.unique(out.dash_syn):
+            sel = out.dash_syn == d
+            cur = synaptic(part, float(decays.grid(d))).reshape((part.shape[0], steps, part.shape[2])) \
+                @ out.weight[sel].T
+            i_max[sel] = np.maximum(i_max[sel], np.abs(cur).max(axis=(0, 1)))
     v_abs = np.maximum(np.abs(v_pre).max(axis=(0, 1)), out.theta)
-    return STATE_MAX / (STATE_MARGIN * np.maximum(np.maximum(np.abs(cur).max(axis=(0, 1)), v_abs), 1e-12))
+    return STATE_MAX / (STATE_MARGIN * np.maximum(np.maximum(i_max, v_abs), 1e-12))
 
 
 def integer_spec(hidden: list[HiddenFloat], output: OutputFloat | None, n_inputs: int, input_source: str,

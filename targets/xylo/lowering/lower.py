@@ -39,6 +39,7 @@ import numpy as np
 from snncc.ir.graph import Graph
 from snncc.targets.kit import SnnccError
 from snncc.targets.kit.graphs import change_reset, fold_linear
+from snncc.targets.kit.timebase import sample_steps
 from snncc.targets.xylo.chip import CHIPS, get_chip
 from snncc.targets.kit.agreement import ArgmaxAgreement, argmax_agreement, count_correlation
 from snncc.targets.xylo.feed import chip_window, read_window
@@ -47,6 +48,7 @@ from snncc.targets.xylo.lowering.calibration import (Source, calibrate, calibrat
                                                      sources)
 from snncc.targets.xylo.lowering.candidates import build_candidate, candidate_rules
 from snncc.targets.xylo.lowering.integers import PopulationRecord
+from snncc.targets.xylo.lowering.regression import remembered
 from snncc.targets.xylo.lowering.replicas import describe_replicas, replica_room, replica_sources
 from snncc.targets.xylo.lowering.structure import Population, populations
 from snncc.targets.xylo.lowering.timing import XyloTiming, solve_timing
@@ -72,6 +74,8 @@ class XyloLowered:
     notes: list[str] = field(default_factory=list)
     calibration: dict[str, Any] = field(default_factory=dict)
     real_time: dict[str, Any] = field(default_factory=dict)
+    steps: int = 0                       # steps of a sample (the time base), the calibration's
+    steps_rule: str = ""                 # the rule that gave them (kit.timebase.sample_steps)
 
     @property
     def xylo_spec(self):
@@ -151,8 +155,16 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
     """Lower ``graph`` for a Xylo chip: ``options`` the validated option record (``XyloOptions``: chip, rule,
     replicas, relays, allow_reset_change, time_steps, calibration_samples, seed); ``knobs`` what only studies
     set (``XyloStudyKnobs``: given calibration inputs, their density, another emulator for the candidates, an
-    unrounded spec)."""
-    options = options or XyloOptions()
+    unrounded spec). The numerical libraries' thread pools run on one thread meanwhile (``kit.compute.one_thread``:
+    the lowering's products are many and medium-sized, and idle pool threads would spin); the emulator spreads
+    large batches over its own threads, each doing a share of the samples."""
+    from snncc.targets.kit.compute import one_thread
+
+    with one_thread():
+        return _lower(graph, options or XyloOptions(), knobs)
+
+
+def _lower(graph: Graph, options: XyloOptions, knobs: XyloStudyKnobs) -> XyloLowered:
     chip = _checked(options, knobs)
     rule, replicas, both = options.placement_rule, options.copies, options.both_relays
     unrounded = knobs.rounding == "none"
@@ -166,7 +178,8 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
     timing = solve_timing(ref, pops)
     srcs = sources(ref, pops, timing)
     n_in = ref.node(pops[0].pre).width
-    x = calibration_inputs(options, knobs, n_in)
+    steps, steps_rule = sample_steps(graph, options.time_steps)       # the one time base (kit.timebase)
+    x = calibration_inputs(options, knobs, n_in, steps)
     half = max(1, x.shape[0] // 2)
     fit_x, sel_x = x[:half], x[half:] if x.shape[0] > 1 else x
     calibrate(ref, srcs, fit_x)
@@ -185,17 +198,18 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
         agr = argmax_agreement(float_sel, counts)
         return agr, {**agr.as_dict(), "count_correlation": count_correlation(counts, float_sel)}
 
-    for cand in candidate_rules(srcs, rule, chip, replicas, both):
-        if knobs.readout is not None and cand.readout != knobs.readout:
-            continue
-        ctiming = readout_timing[cand.readout]
-        spec, records = build_candidate(srcs, n_in, cand.method, cand.pairs, cand.identified, chip, ctiming,
-                                        cand.relayed, cand.readout, rounding=knobs.rounding,
-                                        both_dashes=cand.both_dashes)
-        spec["dt"] = float(ref.dt)
-        agr, candidates[cand.name] = selection_agreement(spec, ctiming)
-        if best is None or _better(agr, best[0]):
-            best = (agr, cand, spec, records)
+    with remembered():                  # candidates that fit the same regression share it
+        for cand in candidate_rules(srcs, rule, chip, replicas, both):
+            if knobs.readout is not None and cand.readout != knobs.readout:
+                continue
+            ctiming = readout_timing[cand.readout]
+            spec, records = build_candidate(srcs, n_in, cand.method, cand.pairs, cand.identified, chip, ctiming,
+                                            cand.relayed, cand.readout, rounding=knobs.rounding,
+                                            both_dashes=cand.both_dashes)
+            spec["dt"] = float(ref.dt)
+            agr, candidates[cand.name] = selection_agreement(spec, ctiming)
+            if best is None or _better(agr, best[0]):
+                best = (agr, cand, spec, records)
     agr, chosen, spec, records = best
     name, timing = chosen.name, readout_timing[chosen.readout]
     if replicas > 1 or (x.shape[0] > 1 and knobs.refit):
@@ -223,7 +237,7 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
         design_rules.check_spec(spec, chip)
         rates = event_rates(spec, chip_window(x, timing.input_pad, timing.output_lag))
         rt = estimate_real_time(spec, float(ref.dt), rates)
-        notes.append(rt.line())
+        notes.append("real time " + rt.line("the calibration inputs"))
         real_time = rt.as_dict()
     notes += bias_notes(srcs, records, timing)
     if any(r.method == "direct" for r in records):
@@ -231,6 +245,7 @@ def lower(graph: Graph, options: XyloOptions | None = None, knobs: XyloStudyKnob
                      "(the deployed graph states it: max_spikes 31, fire_test '>=')")
     return XyloLowered(spec=spec, chip=chip.key, dt=float(ref.dt), rule=name, timing=timing, populations=records,
                        trained=trained, reference=ref, twin=twin, candidates=candidates, changes=changes, notes=notes,
+                       steps=int(x.shape[1]), steps_rule=steps_rule if knobs.calibration is None else "the given inputs",
                        calibration={"inputs": describe(options, knobs, x), "fit_samples": int(fit_x.shape[0]),
                                     "selection_samples": int(sel_x.shape[0]), "metric": "argmax agreement with the "
                                     "float graph over its decided samples (kit.agreement), of the network spec run in "

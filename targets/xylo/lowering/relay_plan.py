@@ -58,7 +58,7 @@ def relay_trains(hidden: list[Source], plan: list[sigma_delta.Relay], timing: Xy
             if r.name not in events:
                 shift = (shifts or PROVISIONAL_SHIFTS)[0 if is_input else 1]
                 w8, theta = r.registers(shift)
-                events[r.name] = sigma_delta.relay_events(s.raw[r.source], r.dash, w8, shift, theta).astype(np.float64)
+                events[r.name] = sigma_delta.relay_events(s.raw[r.source], r.dash, w8, shift, theta).astype(np.uint8)
             lag = (CHIP_DELAY_INPUT if is_input else CHIP_DELAY_HIDDEN) + CHIP_DELAY_HIDDEN \
                 + timing.shifts[r.source] - timing.shifts[s.pop.lif]
             s.trains[r.name] = delayed(events[r.name], lag)

@@ -10,6 +10,7 @@ by the output neurons with 1/K of the weights (docs/xylo_lowering.md, "Replicas"
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
@@ -121,21 +122,25 @@ def replica_seed(options: XyloOptions, k: int) -> int:
 
 
 def replica_sources(ref: Graph, srcs: list[Source], options: XyloOptions, knobs: XyloStudyKnobs, x: np.ndarray,
-                    replicas: int) -> list[list[Source]]:
-    """Copies 1 .. replicas-1 of ``srcs``, each calibrated on its own inputs: seeded random inputs of seed
-    ``seed + k * REPLICA_SEED_STRIDE`` (as the calibration inputs), or, for given inputs, a seeded resample of
-    them with replacement."""
-    out = []
-    for k in range(1, replicas):
-        if knobs.calibration is not None:
-            rng = np.random.default_rng(replica_seed(options, k))
-            xk = x[rng.integers(0, x.shape[0], x.shape[0])]
-        else:
-            xk = calibration_inputs(options, knobs, x.shape[2], seed=replica_seed(options, k))
-        copy = [replace(s, trains={}, raw={}, v_pre=None) for s in srcs]
-        calibrate(ref, copy, xk)
-        out.append(copy)
-    return out
+                    replicas: int) -> list[Callable[[], list[Source]]]:
+    """Copies 1 .. replicas-1 of ``srcs``, each calibrated on its own inputs when asked for (a call each: the
+    lowering fits one copy at a time and lets its traces go, so memory holds one copy's calibration beside copy
+    0's): seeded random inputs of seed ``seed + k * REPLICA_SEED_STRIDE`` (as the calibration inputs), or, for
+    given inputs, a seeded resample of them with replacement. A copy calibrated again is the same copy."""
+    def copy(k: int) -> Callable[[], list[Source]]:
+        def calibrated() -> list[Source]:
+            if knobs.calibration is not None:
+                rng = np.random.default_rng(replica_seed(options, k))
+                xk = x[rng.integers(0, x.shape[0], x.shape[0])]
+            else:
+                xk = calibration_inputs(options, knobs, x.shape[2], x.shape[1], seed=replica_seed(options, k))
+            out = [replace(s, trains={}, raw={}, v_pre=None) for s in srcs]
+            calibrate(ref, out, xk)
+            return out
+
+        return calibrated
+
+    return [copy(k) for k in range(1, replicas)]
 
 
 def describe_replicas(options: XyloOptions, knobs: XyloStudyKnobs) -> str:

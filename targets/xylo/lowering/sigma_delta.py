@@ -38,6 +38,7 @@ CURRENT_BUDGET = 3360        # largest chip weight: a channel firing on every st
 EVENTS_MAX = 30              # at most 30 events from the current (+1 from the remainder): never the cap of 31, so the
                              # membrane never winds up (a capped relay keeps the excess and fires on long after)
 PREFIX = "relay of "
+EVENT_CHUNK = 128            # samples whose relay events are computed at once (``relay_events``)
 
 
 def relay_name(source: str) -> str:
@@ -90,7 +91,7 @@ def current_bound(chip_w: int, dash: int) -> int:
 
 
 def relay_events(z: np.ndarray, dash: int, w8: int, shift: int, theta: int) -> np.ndarray:
-    """Events (B, T, n) of relays fed ``z`` (B, T, n) 0/1 events, one channel each, delivered in the step they
+    """Events (B, T, n) uint8 of relays fed ``z`` (B, T, n) 0/1 events, one channel each, delivered in the step they
     are given: the relays alone, as input-expansion neurons, run by ``emulator.emulate``."""
     from snncc.targets.xylo.emulation.emulator import emulate
     from snncc.targets.xylo.spec import XyloSpec
@@ -106,4 +107,7 @@ def relay_events(z: np.ndarray, dash: int, w8: int, shift: int, theta: int) -> n
                     threshold=np.full(n, theta, np.int16), threshold_out=np.ones(1, np.int16),
                     bias=np.zeros(n, np.int16), bias_out=np.zeros(1, np.int16), weight_shift_in=int(shift),
                     weight_shift_rec=0, weight_shift_out=0, aliases=[[] for _ in range(n)], dt=1.0)
-    return emulate(spec, z.astype(np.uint8), record=True).spikes.astype(np.int64)
+    out = np.zeros(z.shape, np.uint8)
+    for s0 in range(0, z.shape[0], EVENT_CHUNK):           # the recorded states of a chunk of samples at a time
+        out[s0:s0 + EVENT_CHUNK] = emulate(spec, z[s0:s0 + EVENT_CHUNK].astype(np.uint8), record=True).spikes
+    return out

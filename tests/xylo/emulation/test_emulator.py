@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from snncc.errors import SnnccError
+from snncc.targets.xylo.spec import XyloSpec
 from snncc.targets.xylo.emulation import kernel as _kernel
 from snncc.targets.xylo.chip import CORE
 from snncc.targets.xylo.emulation.emulator import (
@@ -114,18 +115,29 @@ def test_samples_are_independent_and_start_from_zero_state():
     assert np.array_equal(spread.output_spikes, np.concatenate([batch.output_spikes] * 8))
 
 
-def test_sparse_and_dense_rows_give_the_same_run(monkeypatch):
-    spec = spec_for_tests(n_hidden=60, density=0.1, alias_fraction=0.0)
-    x = random_inputs(4, 2, 40, spec.n_in, 0.3, 20)
-    as_prepared = _kernel.prepare(spec)
-    monkeypatch.setattr(_kernel, "SPARSE_BELOW", 0.0)
-    dense = _kernel.prepare(spec)
-    assert not as_prepared.rec_dense and dense.rec_dense
-    a = _kernel.run_prepared(as_prepared, check_inputs(x, spec.n_in), record=True)
-    b = _kernel.run_prepared(dense, check_inputs(x, spec.n_in), record=True)
-    for name in ("output_spikes", *STATE_NAMES):
-        assert np.array_equal(getattr(a, name), getattr(b, name))
-    assert np.array_equal(a.vmem, reference_run(spec, x, record=True).vmem)
+def test_dense_rows_spans_and_single_synapses_give_the_same_run(monkeypatch):
+    """The kernel adds a row whole, span by span or synapse by synapse (``kernel._spans``): the same run each way,
+    on a sparse random network and on a block-structured one (the copies of a replicated spec)."""
+    block = spec_for_tests(n_hidden=60, density=0.1, alias_fraction=0.0)
+    rec = np.zeros((120, 120, 2), np.int64)
+    rec[:60, :60], rec[60:, 60:] = block.weights_rec, block.weights_rec        # two copies, side by side
+    two = XyloSpec(**{**block.kwargs(), "weights_rec": rec, "aliases": [[] for _ in range(120)],
+                      **{k: np.concatenate([getattr(block, k)] * 2) for k in ("dash_mem", "dash_syn", "dash_syn_2",
+                                                                               "threshold", "bias")}})
+    for spec in (block, two):
+        xs = check_inputs(random_inputs(4, 2, 40, spec.n_in, 0.3, 20), spec.n_in)
+        runs = {}
+        for mode, dense_from, span_min in (("dense", 0.0, 4.0), ("spans", 2.0, 0.0), ("synapses", 2.0, 1e9)):
+            monkeypatch.setattr(_kernel, "DENSE_FROM", dense_from)
+            monkeypatch.setattr(_kernel, "SPAN_MIN", span_min)
+            prepared = _kernel.prepare(spec)
+            assert prepared.rec_spans[-1] == {"dense": _kernel.DENSE, "spans": _kernel.SPANS,
+                                              "synapses": _kernel.SYNAPSES}[mode]
+            runs[mode] = _kernel.run_prepared(prepared, xs, record=True)
+        for name in ("output_spikes", *STATE_NAMES):
+            assert np.array_equal(getattr(runs["dense"], name), getattr(runs["spans"], name)), name
+            assert np.array_equal(getattr(runs["dense"], name), getattr(runs["synapses"], name)), name
+        assert np.array_equal(runs["spans"].vmem, reference_run(spec, xs, record=True).vmem)
 
 
 def test_recording_more_than_the_memory_cap_is_refused_before_running(monkeypatch):

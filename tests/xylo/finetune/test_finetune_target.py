@@ -59,6 +59,7 @@ def test_the_artefact_directory_records_its_finetuning(tuned, model):
     assert ft["finetuned"] is True and ft["seed"] == 0
     assert ft["inputs"]["source"] == "synthetic" and ft["inputs"]["train"] == 48 and ft["inputs"]["steps"] == 40
     assert ft["inputs"]["density"] == 0.25
+    assert m["feed"]["sample_steps"] == ft["inputs"]["steps"] == 40        # one time base: calibration and tuning
     assert ft["steps"] == 2 * 1 and ft["kept_epoch"] in (0, 1, 2)      # 48 samples = 1 batch of 64, 2 epochs
     for key in ("agreement_before", "agreement_after"):
         a = ft[key]

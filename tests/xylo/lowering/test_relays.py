@@ -239,11 +239,9 @@ def test_relays_at_both_dashes_default_to_more_calibration_and_bad_values_are_re
     from snncc.targets.xylo.options import (BOTH_CALIBRATION_SAMPLES, DEFAULT_CALIBRATION_SAMPLES, NO_KNOBS,
                                             XyloOptions)
 
-    assert calibration_inputs(XyloOptions(relays="both", time_steps=3), NO_KNOBS, 2).shape == (
-        BOTH_CALIBRATION_SAMPLES, 3, 2)
-    assert calibration_inputs(XyloOptions(time_steps=3), NO_KNOBS, 2).shape[0] == DEFAULT_CALIBRATION_SAMPLES
-    assert calibration_inputs(XyloOptions(relays="both", time_steps=3, calibration_samples=8), NO_KNOBS,
-                              2).shape[0] == 8
+    assert calibration_inputs(XyloOptions(relays="both"), NO_KNOBS, 2, 3).shape == (BOTH_CALIBRATION_SAMPLES, 3, 2)
+    assert calibration_inputs(XyloOptions(), NO_KNOBS, 2, 3).shape[0] == DEFAULT_CALIBRATION_SAMPLES
+    assert calibration_inputs(XyloOptions(relays="both", calibration_samples=8), NO_KNOBS, 2, 3).shape[0] == 8
     with pytest.raises(SnnccError, match="relays must be one of fast, both") as err:
         lower_with(model, dict(QUICK, relays="slow"))
     assert err.value.field == "--relays"
