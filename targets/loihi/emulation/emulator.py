@@ -99,13 +99,29 @@ def _matrix_t(w: np.ndarray):
     return w.astype(np.float64).T.copy()
 
 
+def _spikes_times(spikes: np.ndarray, w_t) -> np.ndarray:
+    """(B, n) = spikes (B, n_pre) 0/1 @ w_t (n_pre, n), as float64: over the spikes only (a sparse product:
+    spikes are few, so the work follows them, not n_pre x n), else a dense product for dense spike rows."""
+    rows, cols = np.nonzero(spikes)
+    if rows.size == 0:
+        return np.zeros((spikes.shape[0], w_t.shape[1]))
+    if rows.size > SPARSE_MAX_DENSITY * spikes.size:
+        return np.asarray(spikes.astype(np.float64) @ w_t)
+    import scipy.sparse as sp
+
+    indptr = np.searchsorted(rows, np.arange(spikes.shape[0] + 1))
+    s = sp.csr_matrix((np.ones(rows.size), cols, indptr), shape=spikes.shape)
+    out = s @ w_t
+    return out.toarray() if sp.issparse(out) else np.asarray(out)
+
+
 def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndarray]], zero: np.ndarray) -> np.ndarray:
     """sum_i w[j, i] * s_i[t - 1 - delay[j, i]] for every post neuron j (spikes before t = 0 are 0)."""
     total = zero.copy()
     for d, w_t in parts:
         src = t - 1 - d
         if src >= 0:
-            part = np.asarray(history[src].astype(np.float64) @ w_t)
+            part = _spikes_times(history[src], w_t)
             total = total + (part if zero.dtype.kind == "f" else np.rint(part).astype(np.int64))
     return total
 
@@ -114,7 +130,8 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
     """Batched run of the chip's rules written out plainly (slow; the statement the kernel must match).
 
     ``arithmetic="float"``: the same pipeline in float64 with no truncation, wrap or clip (the
-    network's fields may then hold float weights, thresholds and decays).
+    network's fields may then hold float weights, thresholds and decays). ``record``: "outputs", "all"
+    (every layer's spikes, u and v) or "spikes" (every layer's spikes only).
     """
     x = network.drive(check_inputs(inputs, network.input_width))
     as_float = arithmetic == "float"
@@ -182,10 +199,10 @@ def _result(network, hist, rec_u, rec_v, overflow, record, batch, steps) -> Emul
     out = stack(hist[last], network.n_outputs, np.uint8)
     counts = out.sum(axis=1, dtype=np.int64)
     res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts), overflow=overflow)
-    if record == "all":
+    if record in ("all", "spikes"):
         for i, layer in enumerate(network.layers):
             res.spikes[i] = stack(hist[i], layer.n, np.uint8)
-            if i:
+            if i and record == "all":
                 kind = np.float64 if rec_u[i] and rec_u[i][0].dtype.kind == "f" else np.int64
                 res.current[i] = stack(rec_u[i], layer.n, kind)
                 res.voltage[i] = stack(rec_v[i], layer.n, kind)

@@ -49,6 +49,7 @@ class LoweredModel:
     timing_record: Any
     deployed: Graph | None = None   # ``trained`` with only the reset change (None: same as ``trained``)
     notes: list[str] = field(default_factory=list)
+    calibration_float: dict | None = None   # ``order``'s float spikes on the calibration inputs (None: not run)
 
 
 _RECENT: OrderedDict[str, LoweredModel] = OrderedDict()   # graph content + options -> lowering (this process)
@@ -100,7 +101,7 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
                  t_sample: int | None = None) -> LoweredModel:
     from snncc.ir.liveness import calibration_spikes, calibration_text
     from snncc.targets.loihi.lowering import scaling
-    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
+    from snncc.targets.loihi.checks.exactness import lead_steps, loihi_spikes, pad, twin_spikes
 
     timing_mode = options.timing_mode
     rule = options.scale_rule
@@ -130,10 +131,10 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         from snncc.targets.loihi.bundle.portability import netx_runnable
         from snncc.targets.loihi.emulation.emulator import emulate
 
-        if "spikes" not in reference:
-            reference["spikes"] = ir_spikes(order, calib, names)
         net = build_network(order, layers, rq, trec, steps + trec.output_shift, {})
         xp = pad(calib, lead_steps(trec.shifts, trec.output_shift))
+        if "spikes" not in reference:   # the float model in Loihi's order: its float twin (every rule's structure)
+            reference["spikes"] = twin_spikes(net, order, layers, xp, trec.shifts, steps)
         emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
         float_silent = not reference["spikes"][names[-1]].any()
         error = None if float_silent else float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
@@ -165,7 +166,8 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         meta["replication"] = replication
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
     return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
-                        deployed=None if deployed is graph else deployed, notes=fold.notes())
+                        deployed=None if deployed is graph else deployed, notes=fold.notes(),
+                        calibration_float=reference.get("spikes"))
 
 
 def count_error(emulated, reference) -> float:
@@ -247,16 +249,23 @@ def calibration_liveness(graph: Graph, lowered: LoweredModel) -> dict[str, Any]:
     in float (the model as given) and on Loihi (the lowered network, bit-exact), the silent or saturated
     ones named. (The one-line warning for a model silent in float is compile's: ``calibration_warning``.)"""
     from snncc.ir import liveness
-    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
+    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad, twin_spikes
     from snncc.targets.loihi.emulation.emulator import emulate
 
     steps = int(lowered.network.metadata["steps"])
     x = liveness.calibration_spikes(lowered.network.input_width, steps)
     names = [c.lif for c in lowered.layers]
     trec, net = lowered.timing_record, lowered.network
-    floats = ir_spikes(graph, x, names)
-    chip_run = loihi_spikes(emulate(net, pad(x, lead_steps(trec.shifts, trec.output_shift)), record="all"), net,
-                            lowered.layers, trec.shifts, steps)
+    xp = pad(x, lead_steps(trec.shifts, trec.output_shift))
+    if lowered.order is lowered.trained and "replication" not in net.metadata:
+        # Loihi runs the model's own order: its float spikes are its float twin's (the IR's, as the validation
+        # checks spike for spike on every compile), measured with the scale candidates or run here
+        floats = lowered.calibration_float
+        if floats is None:
+            floats = twin_spikes(net, lowered.order, lowered.layers, xp, trec.shifts, steps)
+    else:
+        floats = ir_spikes(graph, x, names)
+    chip_run = loihi_spikes(emulate(net, xp, record="all"), net, lowered.layers, trec.shifts, steps)
     f_act = liveness.activity(floats, liveness.graph_refractory(graph))
     l_act = liveness.activity(chip_run, {c.lif: int(net.layers[i].ref_delay) for i, c in enumerate(lowered.layers, 1)})
     return {"inputs": liveness.calibration_text(steps), "float": liveness.as_dicts(f_act),

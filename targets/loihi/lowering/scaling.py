@@ -127,7 +127,8 @@ class CandidateMeasure:
         return not any(g.by_rule for g in self.gaps)
 
 
-ErrorFn = Callable[[Graph, QuantizationRecord], CandidateMeasure]
+ErrorFn = Callable[[Graph | None, QuantizationRecord], CandidateMeasure]
+Make = Callable[[bool], tuple[Graph | None, QuantizationRecord]]   # quantize a candidate (True: its graph too)
 
 
 def split_projections(record: QuantizationRecord) -> list[str]:
@@ -171,15 +172,17 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
                     f"(max|W| > {OUTLIER_RATIO:.0f}x its median): per-layer scales")
         return g, r
     refused: dict[str, str] = {}
-    candidates: list[tuple[str, Graph, QuantizationRecord, CandidateMeasure]] = []
+    candidates: list[tuple[str, Make, QuantizationRecord, CandidateMeasure]] = []
     planned = [int(sc.global_possible) + 1]          # the portable rules; more when the rest are measured
     considered = [0]
 
-    def consider(name: str, make: Callable[[], tuple[Graph, QuantizationRecord]]) -> None:
-        """Quantize and measure a candidate; one that cannot be lowered (a register out of range) is left out."""
+    def consider(name: str, make: Make) -> None:
+        """Quantize and measure a candidate; one that cannot be lowered (a register out of range) is left out.
+        Only its record is kept (its quantized graph is made again for the one chosen)."""
         try:
-            g, r = make()
-            candidates.append((name, g, r, measure(g, r)))
+            _, r = make(False)
+            candidates.append((name, make, r, measure(None, r)))
+            r.forget()
         except SnnccError as ex:
             refused[name] = ex.line()
         considered[0] += 1
@@ -190,12 +193,12 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
         progress(0, planned[0], MEASURING)
 
     if sc.global_possible:
-        consider("global", lambda: quantize_graph(graph, "global"))
+        consider("global", lambda out: quantize_graph(graph, "global", graph_out=out))
         if "global" in refused:
             sc.flagged["graph"] = Flag(FlagKind.GLOBAL_REFUSED, "the paper's global rule cannot be lowered")
     clean = not sc.flagged and candidates and candidates[0][3].live and candidates[0][3].portable
     if not clean and not (candidates and candidates[0][3].float_silent):
-        consider("per-layer", lambda: quantize_graph(graph, "per-layer"))
+        consider("per-layer", lambda out: quantize_graph(graph, "per-layer", graph_out=out))
     float_silent = any(m.float_silent for *_, m in candidates)
     portable = [c for c in candidates if c[3].live and c[3].portable]
     extended = not portable and not float_silent
@@ -203,15 +206,17 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
         planned[0] = considered[0] + int(bool(outliers)) + len(FINE_STEPS)
         if outliers:
             try:
-                split = quantize_graph(graph, "per-layer", split=outliers)
+                split = quantize_graph(graph, "per-layer", split=outliers, graph_out=False)[1]
             except SnnccError as ex:
                 refused["split"] = ex.line()
             else:
-                if split_projections(split[1]):
-                    consider(f"per-layer, split exponents on {split_projections(split[1])}", lambda: split)
+                split.forget()
+                if split_projections(split):
+                    consider(f"per-layer, split exponents on {split_projections(split)}",
+                             lambda out: quantize_graph(graph, "per-layer", split=outliers, graph_out=out))
         for step in FINE_STEPS:
             consider("fine" if step == 1.0 else f"fine x{step:g}",
-                     lambda step=step: quantize_graph(graph, "fine", fine_step=step))
+                     lambda out, step=step: quantize_graph(graph, "fine", fine_step=step, graph_out=out))
     if not candidates:
         raise SnnccError(f"no scale rule can be lowered: {'; '.join(f'{k}: {v}' for k, v in refused.items())}",
                          field="--scale")
@@ -224,11 +229,11 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
     live = [c for c in candidates if c[3].live]
     best_rule_portable = min((c for c in live if c[3].rule_portable), key=lambda c: c[3].error, default=None)
     if float_silent:
-        name, g, r, m = candidates[0]        # the simplest rule that lowers: nothing to measure
+        name, make, r, m = candidates[0]        # the simplest rule that lowers: nothing to measure
         why = (f"auto: the float model's outputs are silent on the calibration inputs, so no rule can be measured; "
                f"kept '{name}', the simplest rule that lowers")
     elif clean:
-        name, g, r, m = candidates[0]
+        name, make, r, m = candidates[0]
         why = (f"auto: the paper's global rule; no outlier weights (every max|W| <= {OUTLIER_RATIO:.0f}x its median, "
                "every projection uses >= 1/8 of the 8-bit range); outputs spike on the calibration inputs "
                f"(spike-count error {m.error:.4f})")
@@ -238,7 +243,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
             raise SnnccError("every scale rule leaves the outputs silent on the calibration inputs, where the float "
                              f"model's spike ({', '.join(f'{k}: {_error_text(v)}' for k, v in measures.items())}); "
                              "a bundle that never answers is not written", field="--scale")
-        name, g, r, m = min(pool, key=lambda c: c[3].error)   # min keeps the first of equal errors
+        name, make, r, m = min(pool, key=lambda c: c[3].error)   # min keeps the first of equal errors
         paper = errors.get("global")
         versus = (f" vs {paper:.4f} under the paper's global rule" if paper is not None else
                   " (the global rule cannot be lowered)" if "global" in refused else
@@ -249,6 +254,7 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
                                     or {"none lowers with live outputs"})) + ")")
         why = (f"auto: {', '.join(f'{k}: {v}' for k, v in sc.flagged.items()) or 'no flags'}; chose '{name}' by "
                f"measured spike-count error {m.error:.4f}{versus}, {scope}")
+    g, r = make(True)          # the chosen candidate's quantized graph (the same record, made again)
     if silent:
         why += "; left out (outputs silent on the calibration inputs): " + ", ".join(silent)
     if refused:
