@@ -77,3 +77,32 @@ def test_check_without_labels_prints_agreement_and_the_noise_ceiling(tmp_path, c
                               "--agreement"],
                              capsys)
     assert code == 0 and "argmax agreement" in out and "3 given spike trains of 40 steps" in out, err
+
+
+def test_compile_and_check_read_the_float_reference_as_numpy_arrays_too(monkeypatch, tmp_path):
+    """The lead makes ``snncc.ir.simulate`` torch-free: the Loihi code reads its spikes with ``np.asarray``, so a
+    reference that returns numpy arrays gives the same bundle and the same figures."""
+    import importlib
+
+    from snncc.targets.loihi.lowering import lower
+    from tests.loihi.helpers import small_graph
+
+    graph = small_graph(seed=3)
+    x = (np.random.default_rng(0).random((6, 40, 8)) < 0.1).astype(np.uint8)
+    labels = np.arange(6) % 5
+    lower._RECENT.clear()
+    target.lower(graph, {"scale": "global"}).write(tmp_path / "torch.net")
+    before = target.check(graph, x, labels, {"scale": "global"}).as_dict()
+    sim = importlib.import_module("snncc.ir.simulate")
+    real = sim.simulate
+
+    def as_numpy(*args, **kwargs):
+        res = real(*args, **kwargs)
+        res.spikes = {k: np.asarray(v) for k, v in res.spikes.items()}
+        return res
+
+    monkeypatch.setattr(sim, "simulate", as_numpy)
+    lower._RECENT.clear()
+    target.lower(graph, {"scale": "global"}).write(tmp_path / "numpy.net")
+    after = target.check(graph, x, labels, {"scale": "global"}).as_dict()
+    assert (tmp_path / "torch.net").read_bytes() == (tmp_path / "numpy.net").read_bytes() and before == after
