@@ -100,7 +100,9 @@ def _check_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer], x
 
 def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: LoihiNetwork, layers: list[ChainLayer],
                       shifts: dict[str, int], output_shift: int, *, batch: int = 4, steps: int | None = None,
-                      rate: float = 0.05, seed: int = 0) -> ValidationRecord:
+                      rate: float = 0.05, seed: int = 0, prepared=None) -> ValidationRecord:
+    """The three exact checks (module docstring) on ``batch`` seeded random inputs; ``prepared``: ``network``
+    already flattened for the kernel (``emulator.PreparedNetwork``), else it is flattened here."""
     steps = int(steps or network.t_sample - output_shift)
     x = random_spikes(batch, steps, network.input_width, rate, seed)
     xp = pad(x, lead_steps(shifts, output_shift))
@@ -118,7 +120,7 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
                 "quantized registers do not reproduce the quantized IR")
     record.quantized_params_exact = True
 
-    fast = emulate(network, xp, record="all")
+    fast = emulate(network, xp, record="all") if prepared is None else prepared.run(xp, record="all")
     with one_thread():
         slow = reference_run(network, xp, record="all")
     for i in fast.spikes:

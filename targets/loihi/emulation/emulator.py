@@ -96,7 +96,7 @@ def _matrix_t(w: np.ndarray):
         import scipy.sparse as sp
 
         return sp.csr_matrix(w.T.astype(np.float64))
-    return w.astype(np.float64).T.copy()
+    return np.ascontiguousarray(w.T, dtype=np.float64)
 
 
 def _spikes_times(spikes: np.ndarray, w_t) -> np.ndarray:
@@ -262,12 +262,19 @@ def _sparse_block(weight, exp, delay, where: str) -> SparseBlock:
 
 
 def _block(weight, exp, delay, where: str):
-    """(weights, delays) of one projection for the kernel: dense transposed, or a SparseBlock and None."""
+    """(weights, delays) of one projection for the kernel: dense transposed, or a SparseBlock and None. One delay
+    for the whole projection stays one value, broadcast (no array of equal entries)."""
     if _sparse_eligible(weight):
         return _sparse_block(weight, exp, delay, where), None
-    w = _chip_weights(weight, exp, where)
-    d = _as_delay(delay, w.shape)
-    return np.ascontiguousarray(w.T), np.ascontiguousarray(d.T)
+    e = np.asarray(exp, np.int64)
+    if e.size and e.min() < chip.WGT_EXP_MIN:
+        raise SnnccError(f"wgtExp below {chip.WGT_EXP_MIN} gives fractional chip weights", field=where)
+    w_t = np.ascontiguousarray(np.asarray(weight).T, dtype=np.int64)       # transposed once, shifted in place
+    w_t <<= (chip.WEIGHT_SHIFT + (e.T if e.ndim else e))
+    d = np.asarray(delay, np.int64)
+    if d.size <= 1:
+        return w_t, np.broadcast_to(d.reshape(-1)[:1].reshape(()) if d.size else np.int64(0), w_t.shape)
+    return w_t, np.ascontiguousarray(_as_delay(delay, np.asarray(weight).shape).T)
 
 
 def _max_delay(w, d) -> int:

@@ -23,6 +23,9 @@ LANES = 16      # the kernel layout's unit: every layer starts at, and spans, a 
 
 
 def _uniform(d: np.ndarray) -> int:
+    """The one delay of a block (a broadcast single value is read without a scan), -1 when per synapse."""
+    if d.size and not any(d.strides):
+        return int(d.flat[0])
     return int(d.flat[0]) if d.size and np.all(d == d.flat[0]) else (-1 if d.size else 0)
 
 
@@ -184,13 +187,13 @@ class Flat:
                 scaled_w.append(w.w >> shift[i])
             else:
                 scaled_w.append((w >> shift[i]).ravel())
-            blocks_d.append(np.ravel(delays))
+            blocks_d.append(delays)                     # flattened below only when some block has per-synapse delays
             size += scaled_w[-1].size
         flat_w = np.concatenate(scaled_w) if scaled_w else np.zeros(0, np.int64)
         self.acc_dtype, w_type = kernel_types(bound, int(flat_w.min(initial=0)), int(flat_w.max(initial=0)))
         self.wflat = np.ascontiguousarray(flat_w, dtype=w_type)
         per_synapse = np.any(duni[1:] < 0) or np.any(druni[1:] < 0)
-        flat_d = np.concatenate(blocks_d) if blocks_d and per_synapse else np.zeros(0, np.int64)
+        flat_d = np.concatenate([np.ravel(d) for d in blocks_d]) if blocks_d and per_synapse else np.zeros(0, np.int64)
         self.dflat = np.ascontiguousarray(flat_d, dtype=np.int64)
         self.sptr = np.ascontiguousarray(np.concatenate(ptrs) if ptrs else np.zeros(0, np.int64), np.int64)
         self.spost = np.ascontiguousarray(np.concatenate(posts) if posts else np.zeros(0, np.int32), np.int32)

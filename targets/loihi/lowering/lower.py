@@ -211,9 +211,12 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
         attach_core_map(lowered.network)
     if progress is not None:
         progress(0, 1, VALIDATING)
+    from snncc.targets.loihi.emulation.emulator import PreparedNetwork
+
+    prepared = PreparedNetwork(lowered.network)          # flattened once: the validation's and liveness' runs
     record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
                                lowered.timing_record.shifts, lowered.timing_record.output_shift,
-                               batch=VALIDATION_BATCH)
+                               batch=VALIDATION_BATCH, prepared=prepared)
     validation = record.as_dict()
     if plan is not None:
         trec = lowered.timing_record
@@ -228,7 +231,7 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
                      + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
                      + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
     # a replicated graph's relays and copies are populations of their own
-    liveness = calibration_liveness(lowered.trained if replication is not None else graph, lowered)
+    liveness = calibration_liveness(lowered.trained if replication is not None else graph, lowered, prepared)
     portability = portability_record(network, lowered.quant_record)
     if progress is not None:
         progress(1, 1, VALIDATING)
@@ -244,7 +247,7 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
                          liveness=liveness, portability=portability, model=model_record(graph))
 
 
-def calibration_liveness(graph: Graph, lowered: LoweredModel) -> dict[str, Any]:
+def calibration_liveness(graph: Graph, lowered: LoweredModel, prepared=None) -> dict[str, Any]:
     """Every population's activity on the calibration inputs (``snncc.ir.liveness.calibration_spikes``),
     in float (the model as given) and on Loihi (the lowered network, bit-exact), the silent or saturated
     ones named. (The one-line warning for a model silent in float is compile's: ``calibration_warning``.)"""
@@ -265,7 +268,8 @@ def calibration_liveness(graph: Graph, lowered: LoweredModel) -> dict[str, Any]:
             floats = twin_spikes(net, lowered.order, lowered.layers, xp, trec.shifts, steps)
     else:
         floats = ir_spikes(graph, x, names)
-    chip_run = loihi_spikes(emulate(net, xp, record="all"), net, lowered.layers, trec.shifts, steps)
+    run = emulate(net, xp, record="all") if prepared is None else prepared.run(xp, record="all")
+    chip_run = loihi_spikes(run, net, lowered.layers, trec.shifts, steps)
     f_act = liveness.activity(floats, liveness.graph_refractory(graph))
     l_act = liveness.activity(chip_run, {c.lif: int(net.layers[i].ref_delay) for i, c in enumerate(lowered.layers, 1)})
     return {"inputs": liveness.calibration_text(steps), "float": liveness.as_dicts(f_act),
