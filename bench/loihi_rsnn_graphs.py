@@ -1,4 +1,4 @@
-"""NIR test graphs for the Loihi scaling goals (issue 41): an RSNN 48 -> N dense-recurrent -> 28, seeded.
+"""NIR test graphs for the Loihi scaling goals: an RSNN 48 -> N dense-recurrent -> 28, seeded.
 
     nir.NIRGraph: Input(48) -> Affine(48 -> N) -> CubaLIF(N) <-> Affine(N -> N) (recurrent)
                   CubaLIF(N) -> Affine(N -> 28) -> CubaLIF(28) -> Output(28)

@@ -33,6 +33,13 @@ from snncc.targets.loihi.mapping.resources import LOIHI1
 from snncc.targets.loihi.options import COMPILE_OPTIONS, LoihiOptions
 
 VALIDATION_BATCH = 4
+# auto's second look (``scaling.choose``): the paper's rule and its best alternative in argmax agreement with the float
+# model on seeded random inputs; as many samples as fit SIGNIFICANCE_WORK synapse-steps of the float reference (the
+# float twin), at most SIGNIFICANCE_SAMPLES; fewer than SIGNIFICANCE_MIN cannot tell rules apart (a 95 % interval
+# of +-0.12 or more), so a network that large keeps the cheaper rule without the second look (the record says so)
+SIGNIFICANCE_SAMPLES, SIGNIFICANCE_MIN = 256, 64
+SIGNIFICANCE_WORK = 2.5e10
+SIGNIFICANCE_DENSITY, SIGNIFICANCE_SEED = 0.08, 2
 VALIDATING = "validating the bundle against the IR reference"
 
 
@@ -142,7 +149,38 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         return scaling.CandidateMeasure(error, outputs_silent=not emu[names[-1]].any(), float_silent=float_silent,
                                         gaps=netx_runnable(net), agreement=agreement.as_dict())
 
-    quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps), progress=progress)
+    def compare(records: dict) -> dict:
+        """Argmax agreement of each candidate (records by name) with the float model on the significance set, and
+        its cores (the mapper's lower bound)."""
+        from snncc.targets.kit.agreement import argmax_agreement, random_inputs
+        from snncc.targets.loihi.emulation.emulator import emulate
+        from snncc.targets.loihi.mapping.partition import core_lower_bound
+
+        nets = {name: build_network(order, layers, rq, trec, steps + trec.output_shift, {})
+                for name, rq in records.items()}
+        first = next(iter(nets.values()))
+        synapses = sum(int(np.count_nonzero(lay.weight)) + (0 if lay.weight_rec is None else
+                                                            int(np.count_nonzero(lay.weight_rec)))
+                       for lay in first.layers[1:])
+        samples = int(min(SIGNIFICANCE_SAMPLES, SIGNIFICANCE_WORK // max(1, synapses * steps)))
+        if samples < SIGNIFICANCE_MIN:
+            return {"samples": 0, "inputs": f"not measured: {synapses:,} synapses x {steps} steps would allow "
+                    f"{samples} sample(s) of the float reference within the compile budget (at least "
+                    f"{SIGNIFICANCE_MIN} are needed to tell rules apart); `snncc check` measures a bundle on as many "
+                    "as it is given", "agreement": {}, "cores": {}}
+        x = random_inputs(samples, steps, first.input_width, SIGNIFICANCE_DENSITY, SIGNIFICANCE_SEED)
+        xp = pad(x, lead_steps(trec.shifts, trec.output_shift))
+        last, s = names[-1], trec.shifts.get(names[-1], 0)
+        ref = twin_spikes(first, order, layers, xp, trec.shifts, steps)[last].sum(axis=1, dtype=np.int64)
+        agreement, cores = {}, {}
+        for name, net in nets.items():
+            out = emulate(net, xp).output_spikes[:, s:s + steps, :net.layers[-1].model_n]
+            agreement[name] = argmax_agreement(ref, out.sum(axis=1, dtype=np.int64)).as_dict()
+            cores[name] = core_lower_bound(net)
+        return {"samples": samples, "inputs": f"{samples} seeded random spike trains (density {SIGNIFICANCE_DENSITY}, "
+                f"seed {SIGNIFICANCE_SEED}), {steps} steps (SYNTHETIC)", "agreement": agreement, "cores": cores}
+
+    quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps), progress=progress, compare=compare)
     quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
     meta = {
         "source_sha256": graph.metadata.get("source_sha256", ""),

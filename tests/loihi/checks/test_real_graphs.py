@@ -25,18 +25,19 @@ def _agree(graph, options, **how):
 
 
 def test_trained_braille_zero_needs_what_netx_lacks_and_agrees_with_its_float_graph():
-    """braille_zero_2023 has current biases (always-on sources, which netx lacks): auto measures every rule and
-    takes the best (a fine candidate), says the bundle is not runnable by netx as written, and records the best
-    rule netx runs beside it. Measured at 20 samples x 256 steps, density 0.08, seed 0: fine 1.000 / 0.983,
-    the paper's global rule 0.85 / 0.885."""
+    """braille_zero_2023 has current biases (always-on sources, which netx lacks): auto measures every rule, and the
+    fine rule measures better than the paper's beyond the 95 % interval on its second look, so it is chosen; the
+    report says the bundle is not runnable by netx as written, and records the best rule netx runs beside it.
+    Measured at 20 samples x 256 steps, density 0.08, seed 0: fine 1.000 / 0.983, the paper's global rule
+    0.85 / 0.885."""
     g = load_model(DATA / "braille_zero_2023.nir", LoadOptions(dt=1e-4))
     kw = dict(samples=20, density=0.08)
     rec = _agree(g, {"scale": "auto", "time_steps": 256}, **kw)
     details = rec.details
     errors = details["candidates"]
-    assert {"global", "per-layer", "fine", "fine x1.5"} <= set(errors), errors
-    best = min(errors, key=errors.get)            # auto: never worse than a rule it tried
-    assert details["scale_rule"] == "fine" and best.startswith("fine") and f"chose '{best}'" in details["scale_reason"]
+    assert {"global", "per-layer", "fine"} <= set(errors), errors
+    best = min(errors, key=errors.get)
+    assert details["scale_rule"] == "fine" and best == "fine" and "chose 'fine' over 'global'" in details["scale_reason"]
     assert "no netx-runnable rule is: /layer/0/alwaysOn: always-on input axons" in details["scale_reason"]
     assert rec.steps == 256 and rec.argmax_agreement >= 0.95 and rec.count_correlation >= 0.94, rec.lines()
     assert not any(details["overflow"].values()), details["overflow"]

@@ -90,7 +90,7 @@ def test_accumulator_type_at_its_limit_is_exact(n_in, first, rest, acc):
 
 def test_every_network_runs_one_of_the_kernel_signatures_a_warm_cache_holds():
     """The accumulator is int16 at least and weights are int8 or the accumulator's type, so that the numba cache
-    of a warm install holds the signature any network needs (issue 41: a 1-neuron graph compiled a new one)."""
+    of a warm install holds the signature any network needs (a 1-neuron graph used to compile one of its own)."""
     from snncc.targets.loihi.emulation.flat import KERNEL_SIGNATURES, kernel_types
 
     tiny = LoihiNetwork([LoihiLayer("input", "input", 1),
