@@ -66,6 +66,7 @@ class ValidationRecord:
     prediction_agreement: float | None = None   # emulator vs float model as trained (None: undefined, outputs silent)
     prediction: dict[str, Any] = field(default_factory=dict)   # kit.agreement.ArgmaxAgreement
     overflow: dict[str, int] = field(default_factory=dict)
+    spike_counts: dict[str, dict[str, int]] = field(default_factory=dict)   # "emulator" / "float": population -> spikes
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -141,4 +142,6 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
     record.prediction_agreement = decisions.share
     record.prediction = decisions.as_dict()
     record.overflow = dict(fast.overflow)
+    record.spike_counts = {"emulator": {k: int(v.sum()) for k, v in emu.items()},
+                           "float": {k: int(v.sum()) for k, v in ir_trained.items()}}
     return record
