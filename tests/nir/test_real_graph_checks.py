@@ -75,7 +75,7 @@ def test_a_jetson_artefact_of_a_trained_graph_checks_like_compile(tmp_path, caps
     _never_over_silence(rec, False)
 
 
-@pytest.mark.parametrize("target, flags", [("loihi", []), ("jetson", ["--time-steps", "12"])])
+@pytest.mark.parametrize("target, flags", [("loihi", ["--time-steps", "12"]), ("jetson", ["--time-steps", "12"])])
 def test_cnn_sinabs_checks_on_both_targets(target, flags, tmp_path, capsys):
     out = tmp_path / ("cnn.net" if target == "loihi" else "cnn_jetson")
     report, rec = _same_as_compile(capsys, "cnn_sinabs.nir", target, out, flags)

@@ -100,10 +100,21 @@ def _weights(group: h5py.Group, key: str, path: str, where: str, shape: tuple[in
     if ds.shape != shape:
         _fail(path, f"{where}/{key}", f"shape {ds.shape} does not chain: expected {shape} (out, in)")
     _declared(ds, path, f"{where}/{key}")
-    w = np.asarray(ds[()], np.float64)
+    raw = ds[()]
+    if np.asarray(raw).dtype.kind in "iu":          # as snncc writes them (int16): checked as integers, one pass each
+        w = np.asarray(raw)
+        if np.any(w & 1):
+            _fail(path, f"{where}/{key}", "weights must be even integers (8-bit mantissas, step 2)")
+        lo, hi = (int(w.min()), int(w.max())) if w.size else (0, 0)
+        if lo < chip.WEIGHT_MIN or hi > chip.WEIGHT_MAX:
+            _fail(path, f"{where}/{key}", f"weights must lie in [{chip.WEIGHT_MIN}, {chip.WEIGHT_MAX}], "
+                  f"found [{lo:g}, {hi:g}]")
+        return w.astype(np.int16, copy=w.dtype != np.int16)
+    w = np.asarray(raw, np.float64)                 # float-typed even weights (SLAYER v1)
     if not np.all(np.isfinite(w)):
         _fail(path, f"{where}/{key}", "contains NaN or Inf")
-    if np.any(w != np.round(w)) or np.any(np.round(w) % 2 != 0):
+    r = np.round(w)
+    if np.any(w != r) or np.any(r % 2 != 0):
         _fail(path, f"{where}/{key}", "weights must be even integers (8-bit mantissas, step 2)")
     if w.size and (w.min() < chip.WEIGHT_MIN or w.max() > chip.WEIGHT_MAX):
         _fail(path, f"{where}/{key}", f"weights must lie in [{chip.WEIGHT_MIN}, {chip.WEIGHT_MAX}], "

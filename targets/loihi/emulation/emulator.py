@@ -91,11 +91,14 @@ SPARSE_MAX_DENSITY = 0.25      # multiplied as sparse matrices (the same exact i
 
 
 def _matrix_t(w: np.ndarray):
-    """w.T as float64: dense, or scipy CSR for a large, mostly-zero matrix (a folded convolution)."""
-    if w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size:
-        import scipy.sparse as sp
+    """w.T as float64: dense, or scipy CSR for a large, mostly-zero matrix (a folded convolution), built from its
+    nonzero entries (one scan; no dense float copy)."""
+    if w.size >= SPARSE_MIN_SIZE:
+        rows, cols = np.nonzero(w)
+        if rows.size <= SPARSE_MAX_DENSITY * w.size:
+            import scipy.sparse as sp
 
-        return sp.csr_matrix(w.T.astype(np.float64))
+            return sp.csr_matrix((np.asarray(w[rows, cols], np.float64), (cols, rows)), shape=(w.shape[1], w.shape[0]))
     return np.ascontiguousarray(w.T, dtype=np.float64)
 
 
