@@ -98,7 +98,7 @@ def test_text_output_is_whole_when_piped(piped, name):
         _line_with(out, "w_in", "shape=[32, 48], parameters=1536, max_abs_weight=", "bias=False")
         _line_with(out, "hidden", "tau_syn=0.006", "discretisation=exp, bias=None")
     if name == "map":
-        _line_with(out, "hidden[0:32], out[0:28]", "82,560 (7.9%)")
+        _line_with(out, "hidden[0:32], out[0:28]", "37,888 (3.6%)")
     if name == "report":
         _line_with(out, "energy per sample (uJ)", "71.0")
         _line_with(out, "power (mW)", "(dynamic only)", "31.0 (total)")

@@ -1,4 +1,4 @@
-"""The Loihi target imports from snncc only the interface, the kit, the IR and itself (issue 37): every import in
+"""The Loihi target imports from snncc only the interface, the kit, the IR and itself: every import in
 ``targets/loihi/``, at module level or inside a function, is checked."""
 
 from __future__ import annotations

@@ -75,7 +75,7 @@ def test_a_jetson_artefact_of_a_trained_graph_checks_like_compile(tmp_path, caps
     _never_over_silence(rec, False)
 
 
-@pytest.mark.parametrize("target, flags", [("loihi", ["--time-steps", "24"]), ("jetson", ["--time-steps", "12"])])
+@pytest.mark.parametrize("target, flags", [("loihi", ["--time-steps", "12"]), ("jetson", ["--time-steps", "12"])])
 def test_cnn_sinabs_checks_on_both_targets(target, flags, tmp_path, capsys):
     out = tmp_path / ("cnn.net" if target == "loihi" else "cnn_jetson")
     report, rec = _same_as_compile(capsys, "cnn_sinabs.nir", target, out, flags)
@@ -117,4 +117,6 @@ def test_a_graph_that_needs_what_netx_lacks_names_it_and_the_best_netx_bundles_a
     code, stdout, err = run_cli(["compile", src, "-o", tmp_path / "again.net", *_load_flags("braille_zero_2023.nir")],
                                 capsys)
     assert code == 0, err
-    assert f"argmax agreement with the float model on the calibration inputs: '{best['rule']}' " in stdout
+    # printed: the rule and its calibration error; its 8-sample agreement stays in the record (no near-empty interval)
+    assert f"best bundle under a rule netx can run (the model's own needs aside): '{best['rule']}'" in stdout
+    assert "argmax agreement with the float model on the calibration inputs" not in stdout

@@ -76,8 +76,8 @@ def netx_runnable(network: LoihiNetwork) -> list[NetxGap]:
     for i, lay in enumerate(network.layers[1:], start=1):
         for key, exp, w in (("wgtExp", lay.wgt_exp, lay.weight), ("wgtExpRec", lay.wgt_exp_rec, lay.weight_rec)):
             if w is not None and np.any(np.asarray(exp) != 0):
-                per = "per-synapse weight exponents" if np.ndim(exp) and np.unique(np.asarray(exp)).size > 1 \
-                    else "a weight exponent other than 0"
+                e = np.asarray(exp)
+                per = "per-synapse weight exponents" if e.ndim and e.min() != e.max() else "a weight exponent other than 0"
                 gaps.append(NetxGap(f"{per} (netx runs every weight at wgtExp 0)", f"/layer/{i}/neuron/{key}",
                                     by_rule=True))
         if lay.bias is not None and np.any(np.asarray(lay.bias) != 0) and lay.bias_exp != chip.NETX_BIAS_EXP:

@@ -100,10 +100,21 @@ def _weights(group: h5py.Group, key: str, path: str, where: str, shape: tuple[in
     if ds.shape != shape:
         _fail(path, f"{where}/{key}", f"shape {ds.shape} does not chain: expected {shape} (out, in)")
     _declared(ds, path, f"{where}/{key}")
-    w = np.asarray(ds[()], np.float64)
+    raw = ds[()]
+    if np.asarray(raw).dtype.kind in "iu":          # as snncc writes them (int16): checked as integers, one pass each
+        w = np.asarray(raw)
+        if np.any(w & 1):
+            _fail(path, f"{where}/{key}", "weights must be even integers (8-bit mantissas, step 2)")
+        lo, hi = (int(w.min()), int(w.max())) if w.size else (0, 0)
+        if lo < chip.WEIGHT_MIN or hi > chip.WEIGHT_MAX:
+            _fail(path, f"{where}/{key}", f"weights must lie in [{chip.WEIGHT_MIN}, {chip.WEIGHT_MAX}], "
+                  f"found [{lo:g}, {hi:g}]")
+        return w.astype(np.int16, copy=w.dtype != np.int16)
+    w = np.asarray(raw, np.float64)                 # float-typed even weights (SLAYER v1)
     if not np.all(np.isfinite(w)):
         _fail(path, f"{where}/{key}", "contains NaN or Inf")
-    if np.any(w != np.round(w)) or np.any(np.round(w) % 2 != 0):
+    r = np.round(w)
+    if np.any(w != r) or np.any(r % 2 != 0):
         _fail(path, f"{where}/{key}", "weights must be even integers (8-bit mantissas, step 2)")
     if w.size and (w.min() < chip.WEIGHT_MIN or w.max() > chip.WEIGHT_MAX):
         _fail(path, f"{where}/{key}", f"weights must lie in [{chip.WEIGHT_MIN}, {chip.WEIGHT_MAX}], "
@@ -344,8 +355,76 @@ def _read(f: h5py.File, path: str) -> LoihiNetwork:
         shift = meta.get("output_shift", 0)
         if not isinstance(shift, int) or isinstance(shift, bool) or not 0 <= shift < t_sample:
             _fail(path, "/snncc/metadata", f"output_shift must be an integer in 0..{t_sample - 1}, got {shift!r}")
+        check_metadata(meta, layers, int(t_sample), path)
         names = meta.get("layer_names")
         if isinstance(names, list) and len(names) == len(layers):
             for lay, name in zip(layers, names):
                 lay.name = str(name)
     return LoihiNetwork(layers=layers, t_sample=int(t_sample), metadata=meta, core_map=core_map)
+
+
+def _whole(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def check_metadata(meta: dict[str, Any], layers: list[LoihiLayer], t_sample: int, path: str) -> None:
+    """What snncc's own records say of the network must match the layers the file holds (an edited or damaged
+    bundle is refused in one line, naming ``/snncc/metadata`` and the field, before anything runs):
+
+        layer_names            one name (text) per layer under /layer
+        relayed_layer_index    increasing layer indices, starting at 0, within the layers
+        population_shifts      population -> steps in 0..tSample-1
+        replication            replicas 1..16, the relay layer's name, and per population [model size, size], the
+                               size its layer holds, the model size K-fold or 1-fold
+        compile_options        a mapping
+    """
+    from snncc.targets.loihi.options import MAX_REPLICAS
+
+    where = "/snncc/metadata"
+
+    def refuse(rule: str) -> None:
+        _fail(path, where, rule)
+
+    names = meta.get("layer_names")
+    if names is not None:
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            refuse("layer_names must be a list of layer names")
+        if len(names) != len(layers):
+            refuse(f"layer_names lists {len(names)} layers but /layer holds {len(layers)} (a layer was removed or "
+                   "added after compile)")
+    index = meta.get("relayed_layer_index")
+    if index is not None:
+        if (not isinstance(index, list) or not index or not all(_whole(i) for i in index) or index[0] != 0
+                or any(b <= a for a, b in zip(index, index[1:])) or index[-1] >= len(layers)):
+            refuse(f"relayed_layer_index must be increasing layer indices from 0 below {len(layers)}")
+    shifts = meta.get("population_shifts")
+    if shifts is not None and (not isinstance(shifts, dict) or not all(
+            isinstance(k, str) and _whole(v) and 0 <= v < t_sample for k, v in shifts.items())):
+        refuse(f"population_shifts must map population names to steps in 0..{t_sample - 1}")
+    options = meta.get("compile_options")
+    if options is not None and not isinstance(options, dict):
+        refuse("compile_options must be a mapping of option names to values")
+    record = meta.get("replication")
+    if record is None:
+        return
+    if not isinstance(record, dict):
+        refuse("replication must be a record (replicas, relay, populations), as compile --replicas writes it")
+    k = record.get("replicas")
+    if not _whole(k) or not 1 <= k <= MAX_REPLICAS:
+        refuse(f"replication replicas must be a whole number from 1 to {MAX_REPLICAS}")
+    by_name = {lay.name: lay for lay in layers} if names is None else dict(zip(names, layers))
+    if not isinstance(record.get("relay"), str) or record["relay"] not in by_name:
+        refuse("replication relay must name one of the bundle's layers")
+    populations = record.get("populations")
+    if not isinstance(populations, dict) or not populations:
+        refuse("replication populations must map each copied population to [model size, size]")
+    for name, sizes in populations.items():
+        ok = (isinstance(sizes, list) and len(sizes) == 2 and all(_whole(n) and n >= 1 for n in sizes)
+              and sizes[1] in (sizes[0], sizes[0] * k))
+        if not ok:
+            refuse(f"replication populations: {name!r} must map to [model size, size], the size the model size once "
+                   f"or {k} times")
+        lay = by_name.get(name)
+        if lay is None or lay.model_n != sizes[1]:
+            refuse(f"replication populations: {name!r} must name a layer of {sizes[1]} neurons"
+                   + ("" if lay is None else f" (its layer holds {lay.model_n})"))

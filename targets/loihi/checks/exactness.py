@@ -66,6 +66,7 @@ class ValidationRecord:
     prediction_agreement: float | None = None   # emulator vs float model as trained (None: undefined, outputs silent)
     prediction: dict[str, Any] = field(default_factory=dict)   # kit.agreement.ArgmaxAgreement
     overflow: dict[str, int] = field(default_factory=dict)
+    spike_counts: dict[str, dict[str, int]] = field(default_factory=dict)   # "emulator" / "float": population -> spikes
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -79,20 +80,30 @@ def _same(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> str | None:
     return None
 
 
+def twin_spikes(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer], xp: np.ndarray, shifts: dict[str, int],
+                steps: int) -> dict[str, np.ndarray]:
+    """Per population, the spikes of ``network`` run with ``graph``'s float parameters in its registers' place
+    (``float_twin``, exact float, no truncation) on the padded inputs ``xp``: the IR's spikes whenever the
+    lowering's timing is right (``validate_lowering`` checks that, spike for spike, on every compile)."""
+    with one_thread():
+        twin_net = float_twin(network, graph, layers)
+        twin = reference_run(twin_net, xp, arithmetic="float", record="spikes")
+    return loihi_spikes(twin, twin_net, layers, shifts, steps)
+
+
 def _check_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer], xp: np.ndarray, shifts: dict[str, int],
                 steps: int, expected: dict[str, np.ndarray], field: str, what: str) -> None:
     """Run ``network`` with ``graph``'s float parameters (``float_twin``); any spike unlike ``expected`` is an error."""
-    with one_thread():
-        twin_net = float_twin(network, graph, layers)
-        twin = reference_run(twin_net, xp, arithmetic="float", record="all")
-    problem = _same(loihi_spikes(twin, twin_net, layers, shifts, steps), expected)
+    problem = _same(twin_spikes(network, graph, layers, xp, shifts, steps), expected)
     if problem:
         raise InternalError(f"check failed: {what} ({problem})", field=field)
 
 
 def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: LoihiNetwork, layers: list[ChainLayer],
                       shifts: dict[str, int], output_shift: int, *, batch: int = 4, steps: int | None = None,
-                      rate: float = 0.05, seed: int = 0) -> ValidationRecord:
+                      rate: float = 0.05, seed: int = 0, prepared=None) -> ValidationRecord:
+    """The three exact checks (module docstring) on ``batch`` seeded random inputs; ``prepared``: ``network``
+    already flattened for the kernel (``emulator.PreparedNetwork``), else it is flattened here."""
     steps = int(steps or network.t_sample - output_shift)
     x = random_spikes(batch, steps, network.input_width, rate, seed)
     xp = pad(x, lead_steps(shifts, output_shift))
@@ -110,7 +121,7 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
                 "quantized registers do not reproduce the quantized IR")
     record.quantized_params_exact = True
 
-    fast = emulate(network, xp, record="all")
+    fast = emulate(network, xp, record="all") if prepared is None else prepared.run(xp, record="all")
     with one_thread():
         slow = reference_run(network, xp, record="all")
     for i in fast.spikes:
@@ -131,4 +142,6 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
     record.prediction_agreement = decisions.share
     record.prediction = decisions.as_dict()
     record.overflow = dict(fast.overflow)
+    record.spike_counts = {"emulator": {k: int(v.sum()) for k, v in emu.items()},
+                           "float": {k: int(v.sum()) for k, v in ir_trained.items()}}
     return record

@@ -152,7 +152,13 @@ def open_bundle(path: str | Path, graph: Graph) -> WrittenBundle:
         bundle.stages_note = ("the bundle records no compile options (not written by this snncc): the loss is not "
                               "broken down by cause; the bundle is measured against the model as a whole")
         return bundle
-    lowered, relayed = relower(graph, recorded)
+    try:
+        lowered, relayed = relower(graph, recorded)
+    except SnnccError as err:
+        raise err.with_file(str(path)) from None
+    finetuned = isinstance(meta.get("finetune"), dict) and bool(meta["finetune"].get("finetuned"))
+    if finetuned and relayed is None:
+        return _finetuned(bundle, lowered)
     difference = same_network(relayed if relayed is not None else lowered.network, network)
     if difference is not None:
         bundle.stages_note = (f"the model lowered with the bundle's recorded options gives another network "
@@ -162,12 +168,56 @@ def open_bundle(path: str | Path, graph: Graph) -> WrittenBundle:
     return bundle
 
 
+STRUCTURE = ("kind", "n", "always_on", "delay", "delay_rec", "ref_delay")
+
+
+def same_structure(a: LoihiNetwork, b: LoihiNetwork) -> str | None:
+    """None when ``a`` and ``b`` have the same layers, sizes, bias sources, delays and refractory periods (what
+    fine-tuning keeps; it trains weights, exponents, thresholds, decays and biases); else the first difference."""
+    if len(a.layers) != len(b.layers) or a.t_sample != b.t_sample:
+        return f"{len(a.layers)} layers, tSample {a.t_sample} against {len(b.layers)}, {b.t_sample}"
+    for i, (x, y) in enumerate(zip(a.layers, b.layers)):
+        for key in STRUCTURE if i else ("kind", "n", "always_on"):
+            u, v = getattr(x, key), getattr(y, key)
+            if np.shape(u) != np.shape(v) and np.ndim(u) and np.ndim(v):
+                return f"layer {i} {key}"
+            if not np.array_equal(np.broadcast_to(np.asarray(u), np.shape(v) or np.shape(u)),
+                                  np.broadcast_to(np.asarray(v), np.shape(u) or np.shape(v))):
+                return f"layer {i} {key}"
+    return None
+
+
+def _finetuned(bundle: WrittenBundle, lowered) -> WrittenBundle:
+    """A fine-tuned bundle (``compile --finetune``): its registers are not the lowering's, by design. When its
+    structure is the lowering's, the stages are the lowering's with (c) the fine-tuned registers read back in float
+    (``finetune.export.adapted_graph``, what ``--finetune-out`` writes, checked against the bundle at compile)."""
+    from snncc.targets.loihi.finetune.export import adapted_graph
+    from snncc.targets.loihi.lowering.chip_units import in_chip_units
+
+    problem = same_structure(lowered.network, bundle.network)
+    if problem is not None:
+        bundle.stages_note = (f"a fine-tuned bundle (--finetune) whose structure the model's lowering under the "
+                              f"recorded options does not reproduce ({problem} differs): the loss is not broken "
+                              "down by cause")
+        return bundle
+    lowered.quantized = in_chip_units(adapted_graph(lowered, bundle.network), lowered.quant_record)
+    bundle.lowered = lowered
+    bundle.stages_note = ("a fine-tuned bundle (--finetune): stage (c) is its fine-tuned registers read back in float "
+                          "(the adapted graph --finetune-out writes), so the weights cause includes what fine-tuning "
+                          "changed; the other stages are the lowering's")
+    return bundle
+
+
 def relower(graph: Graph, recorded: dict[str, Any]):
     """(LoweredModel, relayed network or None) of ``graph`` under compile's recorded options."""
     from snncc.targets.loihi.lowering.lower import lower_model
     from snncc.targets.loihi.mapping.relays import needs_relays, relay_network
 
-    lowered = lower_model(graph, recorded_options(recorded))
+    try:
+        options = recorded_options(recorded)
+    except SnnccError as err:       # an edited bundle: its recorded options are not ones compile takes
+        raise SnnccError(f"compile_options: {err.field}: {err.rule}", field="/snncc/metadata") from None
+    lowered = lower_model(graph, options)
     relayed = None
     if needs_relays(lowered.network):
         relayed = relay_network(lowered.network)[0]

@@ -91,12 +91,31 @@ SPARSE_MAX_DENSITY = 0.25      # multiplied as sparse matrices (the same exact i
 
 
 def _matrix_t(w: np.ndarray):
-    """w.T as float64: dense, or scipy CSR for a large, mostly-zero matrix (a folded convolution)."""
-    if w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size:
-        import scipy.sparse as sp
+    """w.T as float64: dense, or scipy CSR for a large, mostly-zero matrix (a folded convolution), built from its
+    nonzero entries (one scan; no dense float copy)."""
+    if w.size >= SPARSE_MIN_SIZE:
+        rows, cols = np.nonzero(w)
+        if rows.size <= SPARSE_MAX_DENSITY * w.size:
+            import scipy.sparse as sp
 
-        return sp.csr_matrix(w.T.astype(np.float64))
-    return w.astype(np.float64).T.copy()
+            return sp.csr_matrix((np.asarray(w[rows, cols], np.float64), (cols, rows)), shape=(w.shape[1], w.shape[0]))
+    return np.ascontiguousarray(w.T, dtype=np.float64)
+
+
+def _spikes_times(spikes: np.ndarray, w_t) -> np.ndarray:
+    """(B, n) = spikes (B, n_pre) 0/1 @ w_t (n_pre, n), as float64: over the spikes only (a sparse product:
+    spikes are few, so the work follows them, not n_pre x n), else a dense product for dense spike rows."""
+    rows, cols = np.nonzero(spikes)
+    if rows.size == 0:
+        return np.zeros((spikes.shape[0], w_t.shape[1]))
+    if rows.size > SPARSE_MAX_DENSITY * spikes.size:
+        return np.asarray(spikes.astype(np.float64) @ w_t)
+    import scipy.sparse as sp
+
+    indptr = np.searchsorted(rows, np.arange(spikes.shape[0] + 1))
+    s = sp.csr_matrix((np.ones(rows.size), cols, indptr), shape=spikes.shape)
+    out = s @ w_t
+    return out.toarray() if sp.issparse(out) else np.asarray(out)
 
 
 def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndarray]], zero: np.ndarray) -> np.ndarray:
@@ -105,7 +124,7 @@ def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndar
     for d, w_t in parts:
         src = t - 1 - d
         if src >= 0:
-            part = np.asarray(history[src].astype(np.float64) @ w_t)
+            part = _spikes_times(history[src], w_t)
             total = total + (part if zero.dtype.kind == "f" else np.rint(part).astype(np.int64))
     return total
 
@@ -114,7 +133,8 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
     """Batched run of the chip's rules written out plainly (slow; the statement the kernel must match).
 
     ``arithmetic="float"``: the same pipeline in float64 with no truncation, wrap or clip (the
-    network's fields may then hold float weights, thresholds and decays).
+    network's fields may then hold float weights, thresholds and decays). ``record``: "outputs", "all"
+    (every layer's spikes, u and v) or "spikes" (every layer's spikes only).
     """
     x = network.drive(check_inputs(inputs, network.input_width))
     as_float = arithmetic == "float"
@@ -182,10 +202,10 @@ def _result(network, hist, rec_u, rec_v, overflow, record, batch, steps) -> Emul
     out = stack(hist[last], network.n_outputs, np.uint8)
     counts = out.sum(axis=1, dtype=np.int64)
     res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts), overflow=overflow)
-    if record == "all":
+    if record in ("all", "spikes"):
         for i, layer in enumerate(network.layers):
             res.spikes[i] = stack(hist[i], layer.n, np.uint8)
-            if i:
+            if i and record == "all":
                 kind = np.float64 if rec_u[i] and rec_u[i][0].dtype.kind == "f" else np.int64
                 res.current[i] = stack(rec_u[i], layer.n, kind)
                 res.voltage[i] = stack(rec_v[i], layer.n, kind)
@@ -245,12 +265,19 @@ def _sparse_block(weight, exp, delay, where: str) -> SparseBlock:
 
 
 def _block(weight, exp, delay, where: str):
-    """(weights, delays) of one projection for the kernel: dense transposed, or a SparseBlock and None."""
+    """(weights, delays) of one projection for the kernel: dense transposed, or a SparseBlock and None. One delay
+    for the whole projection stays one value, broadcast (no array of equal entries)."""
     if _sparse_eligible(weight):
         return _sparse_block(weight, exp, delay, where), None
-    w = _chip_weights(weight, exp, where)
-    d = _as_delay(delay, w.shape)
-    return np.ascontiguousarray(w.T), np.ascontiguousarray(d.T)
+    e = np.asarray(exp, np.int64)
+    if e.size and e.min() < chip.WGT_EXP_MIN:
+        raise SnnccError(f"wgtExp below {chip.WGT_EXP_MIN} gives fractional chip weights", field=where)
+    w_t = np.ascontiguousarray(np.asarray(weight).T, dtype=np.int64)       # transposed once, shifted in place
+    w_t <<= (chip.WEIGHT_SHIFT + (e.T if e.ndim else e))
+    d = np.asarray(delay, np.int64)
+    if d.size <= 1:
+        return w_t, np.broadcast_to(d.reshape(-1)[:1].reshape(()) if d.size else np.int64(0), w_t.shape)
+    return w_t, np.ascontiguousarray(_as_delay(delay, np.asarray(weight).shape).T)
 
 
 def _max_delay(w, d) -> int:

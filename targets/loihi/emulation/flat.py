@@ -23,6 +23,9 @@ LANES = 16      # the kernel layout's unit: every layer starts at, and spans, a 
 
 
 def _uniform(d: np.ndarray) -> int:
+    """The one delay of a block (a broadcast single value is read without a scan), -1 when per synapse."""
+    if d.size and not any(d.strides):
+        return int(d.flat[0])
     return int(d.flat[0]) if d.size and np.all(d == d.flat[0]) else (-1 if d.size else 0)
 
 
@@ -52,6 +55,24 @@ def q_u_in_range(q_max: np.ndarray, keep_u: np.ndarray) -> bool:
     if np.any(q_max >= 1 << Q_BITS) or np.any(i_decay <= 0):
         return False
     return bool(np.all(q_max * DECAY_ONE < (1 << U_BITS) * i_decay))
+
+
+ACCUMULATORS = (np.int16, np.int32, np.int64)   # q accumulates in one of these ...
+# ... from weights stored as int8 where they fit, else in the accumulator's own type: with the state type (int32, or
+# int64 for wide runs and vmin/vmax beyond 32 bits), 12 kernel signatures in all, so that a warm numba cache holds
+# every one a network can need (``KERNEL_SIGNATURES``; a small network no longer gets an int8 accumulator of its own)
+KERNEL_SIGNATURES = tuple((acc, w, state) for acc in ("int16", "int32", "int64") for w in ("int8", acc)
+                          for state in ("int32", "int64"))
+
+
+def kernel_types(bound: int, w_min: int, w_max: int) -> tuple[type, type]:
+    """(accumulator type, stored weight type) for weights in [w_min, w_max] whose per-neuron sum of |w| is at most
+    ``bound``: the narrowest of ``ACCUMULATORS`` that holds +-bound (and the weights), weights as int8 where they fit,
+    else in the accumulator's type (exact: every value fits, see ``kernel.py``)."""
+    need = narrowest_int(min(-bound, w_min), max(bound, w_max))
+    acc = next(a for a in ACCUMULATORS if np.iinfo(a).bits >= np.iinfo(need).bits)
+    w = np.int8 if narrowest_int(w_min, w_max) is np.int8 else acc
+    return acc, w
 
 
 def narrowest_int(lo: int, hi: int):
@@ -166,14 +187,13 @@ class Flat:
                 scaled_w.append(w.w >> shift[i])
             else:
                 scaled_w.append((w >> shift[i]).ravel())
-            blocks_d.append(np.ravel(delays))
+            blocks_d.append(delays)                     # flattened below only when some block has per-synapse delays
             size += scaled_w[-1].size
         flat_w = np.concatenate(scaled_w) if scaled_w else np.zeros(0, np.int64)
-        self.acc_dtype = narrowest_int(-bound, bound)
-        w_type = narrowest_int(int(flat_w.min(initial=0)), int(flat_w.max(initial=0)))
+        self.acc_dtype, w_type = kernel_types(bound, int(flat_w.min(initial=0)), int(flat_w.max(initial=0)))
         self.wflat = np.ascontiguousarray(flat_w, dtype=w_type)
         per_synapse = np.any(duni[1:] < 0) or np.any(druni[1:] < 0)
-        flat_d = np.concatenate(blocks_d) if blocks_d and per_synapse else np.zeros(0, np.int64)
+        flat_d = np.concatenate([np.ravel(d) for d in blocks_d]) if blocks_d and per_synapse else np.zeros(0, np.int64)
         self.dflat = np.ascontiguousarray(flat_d, dtype=np.int64)
         self.sptr = np.ascontiguousarray(np.concatenate(ptrs) if ptrs else np.zeros(0, np.int64), np.int64)
         self.spost = np.ascontiguousarray(np.concatenate(posts) if posts else np.zeros(0, np.int32), np.int32)

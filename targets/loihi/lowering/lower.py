@@ -33,6 +33,13 @@ from snncc.targets.loihi.mapping.resources import LOIHI1
 from snncc.targets.loihi.options import COMPILE_OPTIONS, LoihiOptions
 
 VALIDATION_BATCH = 4
+# auto's second look (``scaling.choose``): the paper's rule and its best alternative in argmax agreement with the float
+# model on seeded random inputs; as many samples as fit SIGNIFICANCE_WORK synapse-steps of the float reference (the
+# float twin), at most SIGNIFICANCE_SAMPLES; fewer than SIGNIFICANCE_MIN cannot tell rules apart (a 95 % interval
+# of +-0.12 or more), so a network that large keeps the cheaper rule without the second look (the record says so)
+SIGNIFICANCE_SAMPLES, SIGNIFICANCE_MIN = 256, 64
+SIGNIFICANCE_WORK = 2.5e10
+SIGNIFICANCE_DENSITY, SIGNIFICANCE_SEED = 0.08, 2
 VALIDATING = "validating the bundle against the IR reference"
 
 
@@ -49,6 +56,7 @@ class LoweredModel:
     timing_record: Any
     deployed: Graph | None = None   # ``trained`` with only the reset change (None: same as ``trained``)
     notes: list[str] = field(default_factory=list)
+    calibration_float: dict | None = None   # ``order``'s float spikes on the calibration inputs (None: not run)
 
 
 _RECENT: OrderedDict[str, LoweredModel] = OrderedDict()   # graph content + options -> lowering (this process)
@@ -100,7 +108,7 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
                  t_sample: int | None = None) -> LoweredModel:
     from snncc.ir.liveness import calibration_spikes, calibration_text
     from snncc.targets.loihi.lowering import scaling
-    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
+    from snncc.targets.loihi.checks.exactness import lead_steps, loihi_spikes, pad, twin_spikes
 
     timing_mode = options.timing_mode
     rule = options.scale_rule
@@ -130,10 +138,10 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         from snncc.targets.loihi.bundle.portability import netx_runnable
         from snncc.targets.loihi.emulation.emulator import emulate
 
-        if "spikes" not in reference:
-            reference["spikes"] = ir_spikes(order, calib, names)
         net = build_network(order, layers, rq, trec, steps + trec.output_shift, {})
         xp = pad(calib, lead_steps(trec.shifts, trec.output_shift))
+        if "spikes" not in reference:   # the float model in Loihi's order: its float twin (every rule's structure)
+            reference["spikes"] = twin_spikes(net, order, layers, xp, trec.shifts, steps)
         emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
         float_silent = not reference["spikes"][names[-1]].any()
         error = None if float_silent else float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
@@ -141,7 +149,38 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         return scaling.CandidateMeasure(error, outputs_silent=not emu[names[-1]].any(), float_silent=float_silent,
                                         gaps=netx_runnable(net), agreement=agreement.as_dict())
 
-    quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps), progress=progress)
+    def compare(records: dict) -> dict:
+        """Argmax agreement of each candidate (records by name) with the float model on the significance set, and
+        its cores (the mapper's lower bound)."""
+        from snncc.targets.kit.agreement import argmax_agreement, random_inputs
+        from snncc.targets.loihi.emulation.emulator import emulate
+        from snncc.targets.loihi.mapping.partition import core_lower_bound
+
+        nets = {name: build_network(order, layers, rq, trec, steps + trec.output_shift, {})
+                for name, rq in records.items()}
+        first = next(iter(nets.values()))
+        synapses = sum(int(np.count_nonzero(lay.weight)) + (0 if lay.weight_rec is None else
+                                                            int(np.count_nonzero(lay.weight_rec)))
+                       for lay in first.layers[1:])
+        samples = int(min(SIGNIFICANCE_SAMPLES, SIGNIFICANCE_WORK // max(1, synapses * steps)))
+        if samples < SIGNIFICANCE_MIN:
+            return {"samples": 0, "inputs": f"not measured: {synapses:,} synapses x {steps} steps would allow "
+                    f"{samples} sample(s) of the float reference within the compile budget (at least "
+                    f"{SIGNIFICANCE_MIN} are needed to tell rules apart); `snncc check` measures a bundle on as many "
+                    "as it is given", "agreement": {}, "cores": {}}
+        x = random_inputs(samples, steps, first.input_width, SIGNIFICANCE_DENSITY, SIGNIFICANCE_SEED)
+        xp = pad(x, lead_steps(trec.shifts, trec.output_shift))
+        last, s = names[-1], trec.shifts.get(names[-1], 0)
+        ref = twin_spikes(first, order, layers, xp, trec.shifts, steps)[last].sum(axis=1, dtype=np.int64)
+        agreement, cores = {}, {}
+        for name, net in nets.items():
+            out = emulate(net, xp).output_spikes[:, s:s + steps, :net.layers[-1].model_n]
+            agreement[name] = argmax_agreement(ref, out.sum(axis=1, dtype=np.int64)).as_dict()
+            cores[name] = core_lower_bound(net)
+        return {"samples": samples, "inputs": f"{samples} seeded random spike trains (density {SIGNIFICANCE_DENSITY}, "
+                f"seed {SIGNIFICANCE_SEED}), {steps} steps (SYNTHETIC)", "agreement": agreement, "cores": cores}
+
+    quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps), progress=progress, compare=compare)
     quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
     meta = {
         "source_sha256": graph.metadata.get("source_sha256", ""),
@@ -165,7 +204,8 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         meta["replication"] = replication
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
     return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
-                        deployed=None if deployed is graph else deployed, notes=fold.notes())
+                        deployed=None if deployed is graph else deployed, notes=fold.notes(),
+                        calibration_float=reference.get("spikes"))
 
 
 def count_error(emulated, reference) -> float:
@@ -209,9 +249,12 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
         attach_core_map(lowered.network)
     if progress is not None:
         progress(0, 1, VALIDATING)
+    from snncc.targets.loihi.emulation.emulator import PreparedNetwork
+
+    prepared = PreparedNetwork(lowered.network)          # flattened once: the validation's and liveness' runs
     record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
                                lowered.timing_record.shifts, lowered.timing_record.output_shift,
-                               batch=VALIDATION_BATCH)
+                               batch=VALIDATION_BATCH, prepared=prepared)
     validation = record.as_dict()
     if plan is not None:
         trec = lowered.timing_record
@@ -226,7 +269,7 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
                      + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
                      + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
     # a replicated graph's relays and copies are populations of their own
-    liveness = calibration_liveness(lowered.trained if replication is not None else graph, lowered)
+    liveness = calibration_liveness(lowered.trained if replication is not None else graph, lowered, prepared)
     portability = portability_record(network, lowered.quant_record)
     if progress is not None:
         progress(1, 1, VALIDATING)
@@ -242,21 +285,29 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
                          liveness=liveness, portability=portability, model=model_record(graph))
 
 
-def calibration_liveness(graph: Graph, lowered: LoweredModel) -> dict[str, Any]:
+def calibration_liveness(graph: Graph, lowered: LoweredModel, prepared=None) -> dict[str, Any]:
     """Every population's activity on the calibration inputs (``snncc.ir.liveness.calibration_spikes``),
     in float (the model as given) and on Loihi (the lowered network, bit-exact), the silent or saturated
     ones named. (The one-line warning for a model silent in float is compile's: ``calibration_warning``.)"""
     from snncc.ir import liveness
-    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad
+    from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad, twin_spikes
     from snncc.targets.loihi.emulation.emulator import emulate
 
     steps = int(lowered.network.metadata["steps"])
     x = liveness.calibration_spikes(lowered.network.input_width, steps)
     names = [c.lif for c in lowered.layers]
     trec, net = lowered.timing_record, lowered.network
-    floats = ir_spikes(graph, x, names)
-    chip_run = loihi_spikes(emulate(net, pad(x, lead_steps(trec.shifts, trec.output_shift)), record="all"), net,
-                            lowered.layers, trec.shifts, steps)
+    xp = pad(x, lead_steps(trec.shifts, trec.output_shift))
+    if lowered.order is lowered.trained and "replication" not in net.metadata:
+        # Loihi runs the model's own order: its float spikes are its float twin's (the IR's, as the validation
+        # checks spike for spike on every compile), measured with the scale candidates or run here
+        floats = lowered.calibration_float
+        if floats is None:
+            floats = twin_spikes(net, lowered.order, lowered.layers, xp, trec.shifts, steps)
+    else:
+        floats = ir_spikes(graph, x, names)
+    run = emulate(net, xp, record="all") if prepared is None else prepared.run(xp, record="all")
+    chip_run = loihi_spikes(run, net, lowered.layers, trec.shifts, steps)
     f_act = liveness.activity(floats, liveness.graph_refractory(graph))
     l_act = liveness.activity(chip_run, {c.lif: int(net.layers[i].ref_delay) for i, c in enumerate(lowered.layers, 1)})
     return {"inputs": liveness.calibration_text(steps), "float": liveness.as_dicts(f_act),

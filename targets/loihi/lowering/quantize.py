@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -75,18 +76,24 @@ def synapse_exponents(values: np.ndarray, scale: float, fine: int, coarse: int) 
 def finest_exponents(values: np.ndarray, scale: float, low: int | None = None, high: int | None = None) -> np.ndarray:
     """Per synapse: the smallest e in [low, high] (default: the chip's wgtExp range, -6..7) where
     round(W * s / 2**e / 2) * 2 fits [-256, 254] (``high`` where none does: that weight is clipped,
-    and counted as such)."""
+    and counted as such).
+
+    In closed form, linear in the synapses: with y = W * s as the rounding computes it (W * (s / 2**e) is
+    y / 2**e exactly), round half to even of y / 2**(e+1) lies in [-128, 127] exactly when y < 255 * 2**e
+    (y > 0) or y >= -257 * 2**e (y < 0). Writing |y| = m * 2**x (``numpy.frexp``, 1/2 <= m < 1):
+    255 = (255/256) * 2**8 gives e = x - 8 when m < 255/256, else x - 7; 257 = (257/512) * 2**9 gives
+    e = x - 9 when m <= 257/512, else x - 8. W = 0 fits every exponent (the lowest)."""
     low = chip.WGT_EXP_MIN if low is None else low
     high = chip.WGT_EXP_MAX if high is None else high
-    v = np.asarray(values, np.float64)
-    out = np.full(v.shape, high, np.int64)
-    todo = np.ones(v.shape, bool)
-    for e in range(low, high + 1):
-        r = np.round(v * (float(scale) / 2.0 ** e) / 2.0) * 2.0
-        fits = todo & (r >= chip.WEIGHT_MIN) & (r <= chip.WEIGHT_MAX)
-        out[fits] = e
-        todo &= ~fits
-    return out
+    y = np.asarray(values, np.float64) * float(scale)
+    m, x = np.frexp(np.abs(y))
+    up = chip.WEIGHT_MAX + 1                         # 255 = (WEIGHT_MAX + 1): y < 255 * 2**e for y > 0
+    down = -chip.WEIGHT_MIN + 1                      # 257: |y| <= 257 * 2**e for y < 0
+    pos = x.astype(np.int64) - np.where(m < up / 256.0, 8, 7)
+    neg = x.astype(np.int64) - np.where(m <= down / 512.0, 9, 8)
+    e = np.where(y > 0, pos, np.where(y < 0, neg, low))
+    e = np.where(np.isfinite(y), e, high)
+    return np.clip(e, low, high).astype(np.int64)
 
 
 def bulk_max(values: np.ndarray, ratio: float = OUTLIER_RATIO) -> float:
@@ -164,12 +171,37 @@ class ProjectionQuant:
     exponents_used: list[int] = field(default_factory=list)   # fine: the distinct exponents (synapse formats)
 
     def exponents(self, values: np.ndarray):
-        """The exponent of each synapse carrying ``values``: one int, or an int array when split or fine."""
-        if self.per_synapse:
-            return finest_exponents(values, self.scale)
-        if self.wgt_exp_outliers is None:
+        """The exponent of each synapse carrying ``values``: one int, or an int array when split or fine.
+
+        Per-synapse exponents are computed once per array (lowering asks again for the same weights while it
+        builds the network); the memo is no field, so the record's ``as_dict`` never sees it."""
+        if self.wgt_exp_outliers is None and not self.per_synapse:
             return self.wgt_exp
-        return synapse_exponents(values, self.scale, self.wgt_exp, self.wgt_exp_outliers)
+        memo = self.__dict__.setdefault("_memo", [])
+        for array, found in memo:
+            if array is values:
+                return found
+        if self.per_synapse:
+            found = finest_exponents(values, self.scale)
+        else:
+            found = synapse_exponents(values, self.scale, self.wgt_exp, self.wgt_exp_outliers)
+        memo.append((values, found))
+        return found
+
+    def mantissas(self, values: np.ndarray) -> tuple[np.ndarray, int]:
+        """(``quantize_weights`` of ``values`` at their ``exponents``, how many were clipped: ``clipped_to_254``),
+        rounded once per array (one pass; the lowering asks again for the same weights)."""
+        memo = self.__dict__.setdefault("_mantissas", [])
+        for array, found in memo:
+            if array is values:
+                return found
+        e = self.exponents(values)
+        r = np.round(np.asarray(values, np.float64) * (float(self.scale) / 2.0 ** e) / 2.0) * 2.0
+        clipped = int(np.count_nonzero((r > chip.WEIGHT_MAX) | (r < chip.WEIGHT_MIN)))
+        np.clip(r, chip.WEIGHT_MIN, chip.WEIGHT_MAX, out=r)
+        found = (r.astype(np.int16), clipped)
+        memo.append((values, found))
+        return found
 
 
 @dataclass
@@ -199,6 +231,13 @@ class QuantizationRecord:
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
+
+    def forget(self) -> None:
+        """Drop the per-synapse exponents and mantissas the projections keep (``ProjectionQuant.exponents``): a
+        candidate measured and set aside holds its record, not one array per synapse."""
+        for p in self.projections:
+            p.__dict__.pop("_memo", None)
+            p.__dict__.pop("_mantissas", None)
 
 
 # -- the pass ------------------------------------------------------------------------------------
@@ -290,7 +329,8 @@ def quantize_graph(
     split: set[str] | frozenset[str] = frozenset(),
     reason: str = "",
     fine_step: float = 1.0,
-) -> tuple[Graph, QuantizationRecord]:
+    graph_out: bool = True,
+) -> tuple[Graph | None, QuantizationRecord]:
     """Quantize every projection and LIF of ``graph``; return (graph in quantized float units, record).
 
     ``rule``: "global" (the paper: one w_scale, wgtExp 0), "per-layer" (each LIF its own
@@ -304,7 +344,7 @@ def quantize_graph(
     if rule not in ("global", "per-layer", "fine"):
         raise SnnccError(f"scale rule must be one of {SCALE_RULES}", field="--scale")
     rounding = "nearest" if rule == "fine" else "truncate"
-    g = graph.copy()
+    g = graph.copy() if graph_out else None     # graph_out False: the record alone (a candidate being measured)
     scales, w_scale = layer_scales(graph, rule, fine_step)
     record = QuantizationRecord(rule=rule, reason=reason, w_scale=w_scale,
                                 fine_step=float(fine_step) if rule == "fine" else None)
@@ -317,9 +357,12 @@ def quantize_graph(
         pq = ProjectionQuant(dense=dense, target=lif, scale=s, wgt_exp=e, max_abs=max_abs, clipped=0, zeroed=0,
                              rms_error=0.0, range_used=float(max_abs * s / 2.0 ** e / chip.WEIGHT_SPAN))
         if rule == "fine":
-            values = np.concatenate([w.reshape(-1)] + [t.vector for t in carried])
-            used = np.unique(finest_exponents(values[values != 0], s)) if np.any(values != 0) else np.array([e])
-            pq.per_synapse, pq.exponents_used = True, [int(u) for u in used]
+            pq.per_synapse = True
+            present = np.zeros(chip.WGT_EXP_MAX - chip.WGT_EXP_MIN + 1, bool)   # the exponents nonzero values use
+            for values in [w] + [t.vector for t in carried]:
+                present[np.asarray(pq.exponents(values))[values != 0] - chip.WGT_EXP_MIN] = True
+            used = np.flatnonzero(present) + chip.WGT_EXP_MIN if present.any() else np.array([e])
+            pq.exponents_used = [int(u) for u in used]
             pq.wgt_exp, pq.range_used = int(used.min()), float(max_abs * s / 2.0 ** int(used.max()) / chip.WEIGHT_SPAN)
         elif dense in split:
             values = np.concatenate([w.reshape(-1)] + [t.vector for t in carried])
@@ -328,12 +371,14 @@ def quantize_graph(
                 pq.wgt_exp, pq.wgt_exp_outliers = fine, e
                 pq.outliers = int(np.count_nonzero(pq.exponents(values) == e))
         ew = pq.exponents(w)
-        wq = quantize_weights(w, s, ew)
-        back = wq.astype(np.float64) * (2.0 ** ew / s)
-        pq.clipped = clipped_to_254(w, s, ew)
+        wq, pq.clipped = pq.mantissas(w)
+        back = wq * (2.0 ** ew / s)
         pq.zeroed = int(np.count_nonzero((wq == 0) & (w != 0)))
-        pq.rms_error = float(np.sqrt(np.mean((back - w) ** 2))) if w.size else 0.0
-        g.node(dense).weight = back
+        diff = back - w
+        pq.rms_error = float(np.sqrt(np.mean(np.square(diff, out=diff)))) if w.size else 0.0
+        del diff
+        if g is not None:
+            g.node(dense).weight = back
         if carried:
             quantized = []
             for t in carried:
@@ -342,7 +387,8 @@ def quantize_graph(
                 pq.clipped += clipped_to_254(t.vector, s, et)
             pq.bias_starts = [t.start for t in carried]
             pq.bias_max_error = float(max(np.max(np.abs(q.vector - t.vector)) for q, t in zip(quantized, carried)))
-            restore_biases(g, lif, quantized)
+            if g is not None:
+                restore_biases(g, lif, quantized)
         record.projections.append(pq)
     for dense, lif in projections(graph):
         if graph.node(dense).bias is not None and bias_carrier(graph, lif) is None:
@@ -366,7 +412,7 @@ def quantize_graph(
         v_dec = per_neuron(op.tau_mem, lambda tau: decay_register(graph.dt, tau, op.discretisation, rounding))
         lq = LayerQuant(lif=name, scale=s, v_th_mant=register_value(vth), i_decay=register_value(i_dec),
                         v_decay=register_value(v_dec))
-        q = g.node(name)
+        q = g.node(name) if g is not None else SimpleNamespace()
         q.threshold = vth / s
         q.discretisation = "exp"
         # decays read back: alpha = 1 - iDecay/4096 expressed through an equivalent tau

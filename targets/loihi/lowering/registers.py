@@ -123,7 +123,7 @@ def build_network(graph: Graph, layers: list[ChainLayer], quant: QuantizationRec
         pq, lq = proj_q[c.ff], layer_q[c.lif]
         layer = LoihiLayer(
             name=c.lif, kind="dense_rec" if c.rec else "dense", n=op.n,
-            weight=quantize_weights(graph.node(c.ff).weight, pq.scale, pq.exponents(graph.node(c.ff).weight)),
+            weight=pq.mantissas(graph.node(c.ff).weight)[0],
             wgt_exp=pq.exponents(graph.node(c.ff).weight),
             delay=int(extra[(c.pre, c.ff)]),
             v_th_mant=_register(lq.v_th_mant), i_decay=_register(lq.i_decay), v_decay=_register(lq.v_decay),
@@ -132,7 +132,7 @@ def build_network(graph: Graph, layers: list[ChainLayer], quant: QuantizationRec
         if c.rec:
             rq = proj_q[c.rec]
             w_rec = graph.node(c.rec).weight
-            layer.weight_rec = quantize_weights(w_rec, rq.scale, rq.exponents(w_rec))
+            layer.weight_rec = rq.mantissas(w_rec)[0]
             layer.wgt_exp_rec = rq.exponents(w_rec)
             layer.delay_rec = int(extra[(c.lif, c.rec)])
         if lq.bias_mant is not None:

@@ -42,17 +42,16 @@ def render_compile_report(s: dict[str, Any], console) -> None:
     for change in s["timing_changes"]:
         console.print(f"  [yellow]timing: {change}[/yellow]")
     v = s["validation"]
-    console.print(f"  checked on {v['inputs']}: timing exact {v['timing_exact']}, quantized registers exact "
-                  f"{v['quantized_params_exact']}, emulator kernel exact {v['kernel_exact']}")
-    from snncc.targets.kit.agreement import ArgmaxAgreement
-
-    decided = (ArgmaxAgreement(**v["prediction"]).text() if v.get("prediction")
-               else f"{100 * v['prediction_agreement']:.1f}%")
-    console.print("  spike agreement, emulator vs float model as trained: "
-                  + ", ".join(f"{k} {'undefined (silent)' if a is None else f'{100 * a:.2f}%'}"
-                              for k, a in v["emulator_vs_trained"].items())
-                  + f"; predictions {decided} (quantization-only loss; `snncc check` measures the written bundle)",
+    exact = v["timing_exact"] and v["quantized_params_exact"] and v["kernel_exact"]
+    console.print(f"  checked on {v['inputs']}: " + ("exact" if exact else "NOT exact") + f" (timing {v['timing_exact']}, "
+                  f"quantized registers {v['quantized_params_exact']}, emulator kernel {v['kernel_exact']})",
                   markup=False)
+    counts = v.get("spike_counts") or {}
+    if counts:
+        console.print("  spikes on them, emulated vs float model as trained: "
+                      + ", ".join(f"{k} {counts['emulator'][k]:,} vs {counts['float'][k]:,}" for k in counts["emulator"])
+                      + "; for the bundle's agreement with the float model: `snncc check MODEL --artefact BUNDLE` "
+                      "(1,000 samples by default)", markup=False)
     if any(v["overflow"].values()):
         console.print(f"  [yellow]overflow on the check inputs: {v['overflow']}[/yellow]")
     live = s.get("liveness") or {}
@@ -67,11 +66,6 @@ def render_compile_report(s: dict[str, Any], console) -> None:
             console.print(f"  best bundle under a rule netx can run (the model's own needs aside): '{best['rule']}', "
                           f"calibration spike-count error {best['error']:.4f}"
                           + (f" (this bundle: {chosen:.4f})" if chosen is not None else ""), markup=False)
-            if best.get("agreement") is not None:
-                theirs, ours = best["agreement"], port.get("chosen_agreement")
-                console.print(f"    argmax agreement with the float model on the calibration inputs: '{best['rule']}' "
-                              f"{ArgmaxAgreement(**theirs).text()}"
-                              + (f"; this bundle {ArgmaxAgreement(**ours).text()}" if ours else ""), markup=False)
     for note in s["netx_compat"]:
         console.print(f"  [yellow]netx compatibility: {note}[/yellow]")
     if any(PER_NEURON_NOTE not in note for note in s["netx_compat"]):

@@ -1,24 +1,28 @@
 """Which weight-scale rule to use: the paper's global w_scale, per-layer scales, or a measured choice.
 
-scale="auto" keeps the paper's global rule unless a screen finds projections it would treat badly:
+scale="auto" keeps the paper's global rule (one w_scale, wgtExp 0, decays truncated as the paper states them)
+unless it is measurably worse. A screen first looks for projections it would treat badly:
     outlier ratio  max|W| / median|W != 0| > 20    (one weight dictates the scale of all others)
     range used     max|W_k| * w_scale / 256 < 1/8   (a projection left with fewer than 5 bits)
     max|W| > 256                                     (w_scale would be 0)
-Candidates are measured by emulating calibration inputs and comparing every layer's per-neuron
-spike counts with the float model's (in the order Loihi runs). Portable first: auto chooses among
-the rules lava-dl netx runs as written (``bundle/portability.py``: the global rule, per-layer
-scales), the global rule alone when the screen flags nothing. Only when no portable candidate is
-live -- the model itself needs what netx lacks (current biases through always-on sources,
-per-neuron profiles), or no portable rule lowers with live outputs -- are the others measured too:
-per-layer scales with split exponents on the projections that have outliers (the outliers keep
-the exponent that fits them, the bulk of the weights gets a finer one: two synapse formats), and
-the fine rule (every synapse its own finest exponent, thresholds near 2**14 chip units, decay
-registers rounded to nearest: ``quantize.py``) at the scales s * k, k in FINE_STEPS (one octave: the
-same precision, each weight rounded differently; which rounding errors cancel is measured, not
-assumed). The candidate with the smallest measured error among those considered wins (ties go to
-the one listed first, the simpler). A candidate whose outputs never spike on the calibration
-inputs is never chosen; when the float model's outputs are silent there, nothing can be measured
-and the simplest rule that lowers is kept (the report says so).
+When it flags nothing and the global rule's outputs spike and netx runs it, that is the rule. Otherwise
+candidates are measured by emulating the calibration inputs and comparing every layer's per-neuron spike
+counts with the float model's (in the order Loihi runs). Portable first: when a rule lava-dl netx runs as
+written (``bundle/portability.py``: the global rule, per-layer scales) is live, only those compete; else --
+the model itself needs what netx lacks (current biases through always-on sources, delays, a refractory
+period), or no portable rule lowers with live outputs -- per-layer scales with split exponents on the
+projections that have outliers (two synapse formats) and the fine rule (every synapse its finest exponent,
+thresholds near 2**14 chip units, decay registers rounded to nearest: ``quantize.py``) compete too.
+
+The cheapest live candidate (the paper's global rule where it is live; then per-layer, split, fine) is kept
+unless another measures better beyond the interval: the candidate with the smallest calibration
+error is measured again beside it, both in argmax agreement with the float model on ``compare``'s larger set
+(``lower.py``: seeded random inputs, the count stated in the record), and it is chosen only when its 95 %
+Wilson interval lies above the cheaper rule's. Otherwise the cheaper rule wins and the reason says what the
+alternative would gain and cost (its cores: the mapper's lower bound). A few calibration samples tell
+spike-count errors apart, not decisions. A candidate whose outputs never spike on the calibration inputs is
+never chosen; when the float model's outputs are silent there, nothing can be measured and the simplest rule
+that lowers is kept (the report says so).
 """
 
 from __future__ import annotations
@@ -33,7 +37,7 @@ from snncc.targets.kit import SnnccError
 from snncc.ir.graph import Graph
 from snncc.targets.kit import Progress
 from snncc.targets.loihi import chip
-from snncc.targets.loihi.lowering.quantize import (FINE_STEPS, OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
+from snncc.targets.loihi.lowering.quantize import (OUTLIER_RATIO, QuantizationRecord, projection_max, projections,
                                           quantize_graph)
 
 MIN_RANGE = 1.0 / 8.0
@@ -127,7 +131,11 @@ class CandidateMeasure:
         return not any(g.by_rule for g in self.gaps)
 
 
-ErrorFn = Callable[[Graph, QuantizationRecord], CandidateMeasure]
+ErrorFn = Callable[[Graph | None, QuantizationRecord], CandidateMeasure]
+Make = Callable[[bool], tuple[Graph | None, QuantizationRecord]]   # quantize a candidate (True: its graph too)
+# the paper's rule and an alternative measured on more samples: {"samples", "inputs", "agreement": {name: ArgmaxAgreement
+# as a dict}, "cores": {name: lower bound}}
+CompareFn = Callable[[dict[str, QuantizationRecord]], dict]
 
 
 def split_projections(record: QuantizationRecord) -> list[str]:
@@ -142,7 +150,7 @@ def _error_text(m: CandidateMeasure) -> str:
 
 
 def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
-           progress: Progress | None = None) -> tuple[Graph, QuantizationRecord]:
+           progress: Progress | None = None, compare: CompareFn | None = None) -> tuple[Graph, QuantizationRecord]:
     """Quantize ``graph`` under ``rule``; for "auto", decide by the screen and by measurement
     (``progress(done, total, phase)`` after each candidate; the total grows when more rules are measured).
 
@@ -161,6 +169,9 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
         return quantize_graph(graph, "fine", reason=FINE_REASON)
     if rule not in ("auto", "split"):
         raise SnnccError("scale must be one of global, per-layer, split, fine, auto", field="--scale")
+    if compare is None:
+        def compare(records: dict) -> dict:
+            return {"samples": 0, "inputs": "not measured (no second look given)", "agreement": {}, "cores": {}}
     sc = screen(graph)
     outliers = sc.of_kind(FlagKind.OUTLIERS)
     if rule == "split":
@@ -171,15 +182,17 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
                     f"(max|W| > {OUTLIER_RATIO:.0f}x its median): per-layer scales")
         return g, r
     refused: dict[str, str] = {}
-    candidates: list[tuple[str, Graph, QuantizationRecord, CandidateMeasure]] = []
+    candidates: list[tuple[str, Make, QuantizationRecord, CandidateMeasure]] = []
     planned = [int(sc.global_possible) + 1]          # the portable rules; more when the rest are measured
     considered = [0]
 
-    def consider(name: str, make: Callable[[], tuple[Graph, QuantizationRecord]]) -> None:
-        """Quantize and measure a candidate; one that cannot be lowered (a register out of range) is left out."""
+    def consider(name: str, make: Make) -> None:
+        """Quantize and measure a candidate; one that cannot be lowered (a register out of range) is left out.
+        Only its record is kept (its quantized graph is made again for the one chosen)."""
         try:
-            g, r = make()
-            candidates.append((name, g, r, measure(g, r)))
+            _, r = make(False)
+            candidates.append((name, make, r, measure(None, r)))
+            r.forget()
         except SnnccError as ex:
             refused[name] = ex.line()
         considered[0] += 1
@@ -190,28 +203,28 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
         progress(0, planned[0], MEASURING)
 
     if sc.global_possible:
-        consider("global", lambda: quantize_graph(graph, "global"))
+        consider("global", lambda out: quantize_graph(graph, "global", graph_out=out))
         if "global" in refused:
             sc.flagged["graph"] = Flag(FlagKind.GLOBAL_REFUSED, "the paper's global rule cannot be lowered")
     clean = not sc.flagged and candidates and candidates[0][3].live and candidates[0][3].portable
     if not clean and not (candidates and candidates[0][3].float_silent):
-        consider("per-layer", lambda: quantize_graph(graph, "per-layer"))
+        consider("per-layer", lambda out: quantize_graph(graph, "per-layer", graph_out=out))
     float_silent = any(m.float_silent for *_, m in candidates)
     portable = [c for c in candidates if c[3].live and c[3].portable]
-    extended = not portable and not float_silent
+    extended = not portable and not float_silent and not clean
     if extended:        # the model needs what netx lacks, or no portable rule is live: measure the rest
-        planned[0] = considered[0] + int(bool(outliers)) + len(FINE_STEPS)
+        planned[0] = considered[0] + int(bool(outliers)) + 1
         if outliers:
             try:
-                split = quantize_graph(graph, "per-layer", split=outliers)
+                split = quantize_graph(graph, "per-layer", split=outliers, graph_out=False)[1]
             except SnnccError as ex:
                 refused["split"] = ex.line()
             else:
-                if split_projections(split[1]):
-                    consider(f"per-layer, split exponents on {split_projections(split[1])}", lambda: split)
-        for step in FINE_STEPS:
-            consider("fine" if step == 1.0 else f"fine x{step:g}",
-                     lambda step=step: quantize_graph(graph, "fine", fine_step=step))
+                split.forget()
+                if split_projections(split):
+                    consider(f"per-layer, split exponents on {split_projections(split)}",
+                             lambda out: quantize_graph(graph, "per-layer", split=outliers, graph_out=out))
+        consider("fine", lambda out: quantize_graph(graph, "fine", graph_out=out))
     if not candidates:
         raise SnnccError(f"no scale rule can be lowered: {'; '.join(f'{k}: {v}' for k, v in refused.items())}",
                          field="--scale")
@@ -223,12 +236,13 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
     silent = sorted(name for name, m in measures.items() if m.outputs_silent and m.error is not None)
     live = [c for c in candidates if c[3].live]
     best_rule_portable = min((c for c in live if c[3].rule_portable), key=lambda c: c[3].error, default=None)
+    significance = None
     if float_silent:
-        name, g, r, m = candidates[0]        # the simplest rule that lowers: nothing to measure
+        name, make, r, m = candidates[0]        # the simplest rule that lowers: nothing to measure
         why = (f"auto: the float model's outputs are silent on the calibration inputs, so no rule can be measured; "
                f"kept '{name}', the simplest rule that lowers")
     elif clean:
-        name, g, r, m = candidates[0]
+        name, make, r, m = candidates[0]
         why = (f"auto: the paper's global rule; no outlier weights (every max|W| <= {OUTLIER_RATIO:.0f}x its median, "
                "every projection uses >= 1/8 of the 8-bit range); outputs spike on the calibration inputs "
                f"(spike-count error {m.error:.4f})")
@@ -238,17 +252,54 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
             raise SnnccError("every scale rule leaves the outputs silent on the calibration inputs, where the float "
                              f"model's spike ({', '.join(f'{k}: {_error_text(v)}' for k, v in measures.items())}); "
                              "a bundle that never answers is not written", field="--scale")
-        name, g, r, m = min(pool, key=lambda c: c[3].error)   # min keeps the first of equal errors
-        paper = errors.get("global")
-        versus = (f" vs {paper:.4f} under the paper's global rule" if paper is not None else
-                  " (the global rule cannot be lowered)" if "global" in refused else
-                  " (the global rule is impossible: max|W| > 256)" if not sc.global_possible else "")
-        scope = (f"the smallest of {len(pool)} netx-runnable candidate(s) ({', '.join(c[0] for c in pool)})"
-                 if portable else f"the smallest of {len(pool)} live candidates (no netx-runnable rule is: "
+        paper = pool[0]                                         # the cheapest: the paper's rule where it is live
+        best = min(pool, key=lambda c: c[3].error)               # min keeps the first of equal errors
+        scope = (f"{len(pool)} netx-runnable candidate(s) ({', '.join(c[0] for c in pool)})" if portable else
+                 f"{len(pool)} live candidates (no netx-runnable rule is: "
                  + "; ".join(sorted({str(gap) for c in candidates for gap in c[3].gaps if not gap.by_rule}
                                     or {"none lowers with live outputs"})) + ")")
-        why = (f"auto: {', '.join(f'{k}: {v}' for k, v in sc.flagged.items()) or 'no flags'}; chose '{name}' by "
-               f"measured spike-count error {m.error:.4f}{versus}, {scope}")
+        flags = ", ".join(f"{k}: {v}" for k, v in sc.flagged.items()) or "no flags"
+        kept = (f"'{paper[0]}' (the paper's rule)" if paper[0] == "global" else
+                f"'{paper[0]}', the cheapest live rule" + (" (the global rule cannot be lowered)" if "global" in refused
+                                                         else " (max|W| > 256: the global rule is impossible)"
+                                                         if not sc.global_possible else ""))
+        if best is paper or not best[3].error < paper[3].error:
+            name, make, r, m = paper
+            why = (f"auto: {flags}; kept {kept}: no other of {scope} measures a smaller spike-count error on the "
+                   f"calibration inputs ({paper[3].error:.4f})")
+        else:
+            significance = compare({paper[0]: paper[2], best[0]: best[2]})
+            empty = {"share": None, "low": None, "high": None}
+            ours = significance["agreement"].get(paper[0], empty)
+            theirs = significance["agreement"].get(best[0], empty)
+            beyond = (theirs["low"] is not None and ours["high"] is not None and theirs["low"] > ours["high"])
+            name, make, r, m = best if beyond else paper
+            gain = (None if theirs["share"] is None or ours["share"] is None
+                    else 100.0 * (theirs["share"] - ours["share"]))
+            said = (f"'{best[0]}' {_share_text(theirs)} vs {_share_text(ours)} for '{paper[0]}' in argmax agreement with "
+                    f"the float model on {significance['samples']} samples")
+            cost = _cost_text(significance, paper[0], best[0])
+            if not significance["samples"]:
+                why = (f"auto: {flags}; kept {kept}: '{best[0]}' measures a smaller calibration spike-count error "
+                       f"({best[3].error:.4f} vs {paper[3].error:.4f}) on the calibration inputs only; the second look "
+                       f"was {significance['inputs']}; of {scope}")
+            elif beyond:
+                why = (f"auto: {flags}; chose '{best[0]}' over {kept}: it measures better beyond the 95 % interval: "
+                       f"{said}{cost} (calibration spike-count error {best[3].error:.4f} vs {paper[3].error:.4f}; "
+                       f"of {scope})")
+            else:
+                why = (f"auto: {flags}; kept {kept}: '{best[0]}' measures a smaller calibration spike-count error "
+                       f"({best[3].error:.4f} vs {paper[3].error:.4f}) but not a better agreement beyond the 95 % "
+                       f"interval on {significance['samples']} samples: {said}; it would gain "
+                       + ("an undefined amount" if gain is None else f"{gain:+.1f} points") + f"{cost}; of {scope}")
+            significance["alternative"], significance["paper"] = best[0], paper[0]
+            significance["chosen"] = name
+            significance["rule"] = ("an alternative to the cheaper, paper-faithful rule is chosen only when its "
+                                    "agreement's 95 % Wilson interval lies above the paper's")
+        if name.startswith("fine"):
+            why += ("; the fine rule rounds the decay registers to nearest (the paper truncates: "
+                    "int(4096 * (1 - exp(-dt / tau))))")
+    g, r = make(True)          # the chosen candidate's quantized graph (the same record, made again)
     if silent:
         why += "; left out (outputs silent on the calibration inputs): " + ", ".join(silent)
     if refused:
@@ -261,5 +312,19 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
                      "best_netx_rule": None if best_rule_portable is None else
                      {"rule": best_rule_portable[0], "error": best_rule_portable[3].error,
                       "agreement": best_rule_portable[3].agreement},
-                     "chosen_agreement": m.agreement}
+                     "chosen_agreement": m.agreement,
+                     "significance": significance}
     return g, r
+
+
+def _share_text(a: dict) -> str:
+    if a.get("share") is None:
+        return "undefined"
+    return f"{a['share']:.3f} [{a['low']:.3f}, {a['high']:.3f}]"
+
+
+def _cost_text(significance: dict, paper: str, other: str) -> str:
+    cores = significance.get("cores") or {}
+    if cores.get(paper) is None or cores.get(other) is None:
+        return ""
+    return f", at least {cores[other]} core(s) against {cores[paper]} (the mapper's lower bound)"

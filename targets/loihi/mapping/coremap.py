@@ -205,38 +205,66 @@ class CoreMap:
                           f"timing: {t['timing']}; accuracy: {t['accuracy']}")
 
     # -- picture -----------------------------------------------------------------------------------
-    def plot(self, path: str | Path) -> None:
-        """Utilisation (% of each limit) per core as a PNG, written atomically."""
+    def drawn_limits(self) -> tuple[str, ...]:
+        """The per-core limits the picture draws: the four shown in the table, and the binding one where it is
+        another (a profile count): a title never names a limit the picture does not draw."""
+        return SHOWN + ((self.binding_constraint,) if self.binding_constraint not in SHOWN else ())
+
+    def figure(self):
+        """The picture as a matplotlib figure (``plot`` writes it): above, utilisation (% of each drawn limit) per
+        core; below, which population sits on which core (neurons of each layer per core, stacked)."""
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
         import numpy as np
 
-        from snncc.targets.kit.writing import atomic_path
-
-        pct = np.array([[self.percent(c)[k] for k in SHOWN] for c in self.cores]).reshape(-1, len(SHOWN))
+        drawn = self.drawn_limits()
+        pct = np.array([[self.percent(c)[k] for k in drawn] for c in self.cores]).reshape(-1, len(drawn))
         ids = np.arange(len(self.cores))
-        fig, ax = plt.subplots(figsize=(max(6.0, min(18.0, 0.35 * len(ids) + 3)), 4.0), dpi=100)
+        fig, (ax, low) = plt.subplots(2, 1, figsize=(max(6.0, min(18.0, 0.35 * len(ids) + 3)), 6.5), dpi=100,
+                                      sharex=True, gridspec_kw={"height_ratios": [3, 2]})
         if len(ids) <= 64:
-            width = 0.8 / len(SHOWN)
-            for j, k in enumerate(SHOWN):
-                ax.bar(ids + (j - (len(SHOWN) - 1) / 2) * width, pct[:, j], width, label=k.replace("_", " "))
+            width = 0.8 / len(drawn)
+            for j, k in enumerate(drawn):
+                ax.bar(ids + (j - (len(drawn) - 1) / 2) * width, pct[:, j], width, label=k.replace("_", " "))
             ax.set_xticks(ids)
         else:
-            for j, k in enumerate(SHOWN):
+            for j, k in enumerate(drawn):
                 ax.plot(ids, pct[:, j], drawstyle="steps-mid", lw=0.8, label=k.replace("_", " "))
         ax.axhline(100.0, color="k", lw=1, ls="--")
         for b in range(1, self.n_chips):
-            ax.axvline(b * self.chip.cores_per_chip - 0.5, color="grey", lw=0.8, ls=":")
-        ax.set_xlabel("core")
+            for a in (ax, low):
+                a.axvline(b * self.chip.cores_per_chip - 0.5, color="grey", lw=0.8, ls=":")
         ax.set_ylabel("% of per-core limit")
         ax.set_ylim(0, 125)
         ax.set_title(f"{self.chip.name}: {self.n_cores} cores on {self.n_chips} chip(s) "
                      f"(lower bound {self.lower_bound}; binding: {self.binding_constraint.replace('_', ' ')})",
                      fontsize=9)
-        ax.legend(fontsize=8, loc="upper center", ncol=len(SHOWN), frameon=False)
+        ax.legend(fontsize=8, loc="upper center", ncol=len(drawn), frameon=False)
+        layers = list(dict.fromkeys(s.layer for c in self.cores for s in c.layers))
+        per = np.zeros((len(layers), len(ids)))
+        for j, c in enumerate(self.cores):
+            for s_ in c.layers:
+                per[layers.index(s_.layer), j] += s_.size
+        bottom = np.zeros(len(ids))
+        for k, name in enumerate(layers):
+            low.bar(ids, per[k], 0.8, bottom=bottom, label=name)
+            bottom += per[k]
+        low.set_xlabel("core")
+        low.set_ylabel("neurons per population")
+        low.set_title("populations on each core", fontsize=9)
+        low.legend(fontsize=8, loc="upper center", ncol=min(len(layers), 6), frameon=False)
         fig.tight_layout()
+        return fig
+
+    def plot(self, path: str | Path) -> None:
+        """``figure()`` as a PNG, written atomically."""
+        import matplotlib.pyplot as plt
+
+        from snncc.targets.kit.writing import atomic_path
+
+        fig = self.figure()
         with atomic_path(path) as tmp:
             fig.savefig(tmp, format="png")
         plt.close(fig)

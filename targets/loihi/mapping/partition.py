@@ -68,6 +68,16 @@ def map_network(network: LoihiNetwork, chip: ChipSpec = LOIHI1) -> CoreMap:
         network=mapped)
 
 
+def core_lower_bound(network: LoihiNetwork, chip: ChipSpec = LOIHI1) -> int | None:
+    """The fewest cores any map of ``network`` can use (``search.lower_bound`` without the exact search): what a
+    scale rule would cost, without mapping it. None when the network needs fan-in relays (mapping decides)."""
+    mapped, transforms = split_wide_fan_in(network, chip)
+    if transforms:
+        return None
+    model = NetworkModel(mapped, chip)
+    return int(lower_bound(model, dense_layer_minimum(model), None)[0])
+
+
 def map_bundle(source, options) -> CoreMap:
     """The ``map`` capability: the core map of the written bundle at ``source`` (``snncc map MODEL`` compiles
     the model first, with compile's options, then maps the written bundle). ``options`` (``LoihiOptions``): a

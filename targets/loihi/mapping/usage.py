@@ -120,6 +120,24 @@ def _distinct_per_core(core: np.ndarray, key: np.ndarray, n_cores: int, n_keys: 
     return np.bincount(uk // n_keys, minlength=n_cores).astype(np.int64)
 
 
+def _distinct_pairs(cores: list[np.ndarray], srcs: list[np.ndarray], n_cores: int, n_global: int):
+    """The distinct (core, global source) pairs of several projections from one source layer, sorted by key
+    (what ``np.unique`` of core * n_global + source gives): through a presence table over the keys the sources
+    span (linear) when it is small, else by sorting."""
+    lo = min(int(s.min(initial=n_global)) for s in srcs)
+    hi = max(int(s.max(initial=-1)) for s in srcs) + 1
+    width = max(hi - lo, 0)
+    if 0 < n_cores * width <= 1 << 27:
+        seen = np.zeros(n_cores * width, bool)
+        for c, s in zip(cores, srcs):
+            seen[c * np.int64(width) + (s - lo)] = True
+        key = np.flatnonzero(seen)
+        a_core, a_src = np.divmod(key, np.int64(width))
+        return a_core, a_src + lo
+    key = np.unique(np.concatenate([c * np.int64(n_global) + s for c, s in zip(cores, srcs)]))
+    return np.divmod(key, np.int64(n_global))
+
+
 def core_usage(model: NetworkModel, core_of: dict[int, np.ndarray], n_cores: int,
                layers: set[int] | None = None) -> dict[str, np.ndarray]:
     """Per-core usage arrays (length n_cores) of every resource for the assignment ``core_of``.
@@ -164,8 +182,7 @@ def core_usage(model: NetworkModel, core_of: dict[int, np.ndarray], n_cores: int
         if len(projs) == 1:
             a_core, a_src = cores[0], srcs[0]
         else:
-            key = np.unique(np.concatenate([c * np.int64(model.n_global) + s_ for c, s_ in zip(cores, srcs)]))
-            a_core, a_src = np.divmod(key, np.int64(model.n_global))
+            a_core, a_src = _distinct_pairs(cores, srcs, n_cores, model.n_global)
         del cores, srcs
         axons += np.bincount(a_core, minlength=n_cores)
         # output axons: one per (source neuron, destination core), charged to the source's core
@@ -199,17 +216,20 @@ def range_usage(model: NetworkModel, i: int, a: int, z: int) -> dict[str, int]:
     """Usage of neurons a..z-1 of layer i alone on a core (no output axons: they depend on others)."""
     m = z - a
     axons, bits = [], 0
+    sources: dict[int, np.ndarray] = {}          # source layer -> which of its neurons have a synapse here
     for p in model.into[i]:
+        used = sources.setdefault(p.src, np.zeros(p.n_pre, bool))
         if p.full:
-            axons.append(np.arange(p.n_pre, dtype=np.int64) + model.offset[p.src])
+            used[:] = True
             bits += p.n_pre * int(list_bits(m, p.bits_per_weight, model.chip))
             continue
-        pre = p.indices[p.indptr[a]:p.indptr[z]]
-        uniq, cnt = np.unique(pre, return_counts=True)
-        axons.append(uniq.astype(np.int64) + model.offset[p.src])
+        # synapses per source in rows a..z-1: a count per source (linear), not a sort
+        cnt = np.bincount(p.indices[p.indptr[a]:p.indptr[z]], minlength=p.n_pre)
+        has = cnt > 0
+        used |= has
+        cnt = cnt[has]
         bits += int(pair_bits(cnt, np.full(cnt.size, m, np.int64), p.bits_per_weight, model.chip).sum())
-    srcs = {p.src for p in model.into[i]}
-    n_axons = sum(x.size for x in axons) if len(srcs) == len(axons) else np.unique(np.concatenate(axons)).size
+    n_axons = sum(int(np.count_nonzero(used)) for used in sources.values())
     out = {"neurons": m, "input_axons": int(n_axons), "synapse_bits": int(bits)}
     for name, keys in zip(("vth_profiles", "compartment_profiles", "voltage_limits"), model.layer_keys(i)):
         k = keys[a:z]

@@ -27,18 +27,19 @@ def _agree(graph, options, **how):
 
 
 def test_trained_braille_zero_needs_what_netx_lacks_and_agrees_with_its_float_graph():
-    """braille_zero_2023 has current biases (always-on sources, which netx lacks): auto measures every rule and
-    takes the best (a fine candidate), says the bundle is not runnable by netx as written, and records the best
-    rule netx runs beside it. Measured at 20 samples x 256 steps, density 0.08, seed 0: fine 1.000 / 0.983,
-    the paper's global rule 0.85 / 0.885."""
+    """braille_zero_2023 has current biases (always-on sources, which netx lacks): auto measures every rule, and the
+    fine rule measures better than the paper's beyond the 95 % interval on its second look, so it is chosen; the
+    report says the bundle is not runnable by netx as written, and records the best rule netx runs beside it.
+    Measured at 20 samples x 256 steps, density 0.08, seed 0: fine 1.000 / 0.983, the paper's global rule
+    0.85 / 0.885."""
     g = load_model(DATA / "braille_zero_2023.nir", LoadOptions(dt=1e-4))
     kw = dict(samples=20, density=0.08)
     rec = _agree(g, {"scale": "auto", "time_steps": 256}, **kw)
     details = rec.details
     errors = details["candidates"]
-    assert {"global", "per-layer", "fine", "fine x1.5"} <= set(errors), errors
-    best = min(errors, key=errors.get)            # auto: never worse than a rule it tried
-    assert details["scale_rule"] == "fine" and best.startswith("fine") and f"chose '{best}'" in details["scale_reason"]
+    assert {"global", "per-layer", "fine"} <= set(errors), errors
+    best = min(errors, key=errors.get)
+    assert details["scale_rule"] == "fine" and best == "fine" and "chose 'fine' over 'global'" in details["scale_reason"]
     assert "no netx-runnable rule is: /layer/0/alwaysOn: always-on input axons" in details["scale_reason"]
     assert rec.steps == 256 and rec.argmax_agreement >= 0.95 and rec.count_correlation >= 0.94, rec.lines()
     assert not any(details["overflow"].values()), details["overflow"]
@@ -79,3 +80,32 @@ def test_check_without_labels_prints_agreement_and_the_noise_ceiling(tmp_path, c
                               "--agreement"],
                              capsys)
     assert code == 0 and "argmax agreement" in out and "3 given spike trains of 40 steps" in out, err
+
+
+def test_compile_and_check_read_the_float_reference_as_numpy_arrays_too(monkeypatch, tmp_path):
+    """The lead makes ``snncc.ir.simulate`` torch-free: the Loihi code reads its spikes with ``np.asarray``, so a
+    reference that returns numpy arrays gives the same bundle and the same figures."""
+    import importlib
+
+    from snncc.targets.loihi.lowering import lower
+    from tests.loihi.helpers import small_graph
+
+    graph = small_graph(seed=3)
+    x = (np.random.default_rng(0).random((6, 40, 8)) < 0.1).astype(np.uint8)
+    labels = np.arange(6) % 5
+    lower._RECENT.clear()
+    target.lower(graph, {"scale": "global"}).write(tmp_path / "torch.net")
+    before = target.check(graph, x, labels, {"scale": "global"}).as_dict()
+    sim = importlib.import_module("snncc.ir.simulate")
+    real = sim.simulate
+
+    def as_numpy(*args, **kwargs):
+        res = real(*args, **kwargs)
+        res.spikes = {k: np.asarray(v) for k, v in res.spikes.items()}
+        return res
+
+    monkeypatch.setattr(sim, "simulate", as_numpy)
+    lower._RECENT.clear()
+    target.lower(graph, {"scale": "global"}).write(tmp_path / "numpy.net")
+    after = target.check(graph, x, labels, {"scale": "global"}).as_dict()
+    assert (tmp_path / "torch.net").read_bytes() == (tmp_path / "numpy.net").read_bytes() and before == after

@@ -88,6 +88,24 @@ def test_accumulator_type_at_its_limit_is_exact(n_in, first, rest, acc):
     assert fast.current[1][0, 1, 0] == q_wrapped
 
 
+def test_every_network_runs_one_of_the_kernel_signatures_a_warm_cache_holds():
+    """The accumulator is int16 at least and weights are int8 or the accumulator's type, so that the numba cache
+    of a warm install holds the signature any network needs (a 1-neuron graph used to compile one of its own)."""
+    from snncc.targets.loihi.emulation.flat import KERNEL_SIGNATURES, kernel_types
+
+    tiny = LoihiNetwork([LoihiLayer("input", "input", 1),
+                         LoihiLayer("one", "dense", 1, weight=np.array([[2]], np.int16), v_th_mant=1)], t_sample=3)
+    nets = [tiny, random_network(0), random_network(1, big=True), random_network(2, split_exponents=True),
+            _all_on_network(259, 254, 254)]
+    for net in nets:
+        flat = Flat(program(net))
+        for wide in (False, True):
+            state = flat.registers(wide)[-1].dtype.name
+            assert (np.dtype(flat.acc_dtype).name, flat.wflat.dtype.name, state) in KERNEL_SIGNATURES
+    assert kernel_types(3, -2, 2) == (np.int16, np.int8) and kernel_types(40000, -300, 300) == (np.int32, np.int32)
+    assert kernel_types(2**40, -100, 100) == (np.int64, np.int8)
+
+
 def test_narrowest_int_and_common_shift():
     assert [narrowest_int(-b, b) for b in (0, 127, 128, 32767, 32768, 2**31 - 1, 2**31)] == [
         np.int8, np.int8, np.int16, np.int16, np.int32, np.int32, np.int64]

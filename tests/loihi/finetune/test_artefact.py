@@ -171,4 +171,9 @@ def test_check_measures_the_finetuned_bundle_against_the_model_as_trained(tuned,
     _, out, _, _ = tuned
     record = api.check(model, artefact=out, samples=20, density=0.25).as_dict()
     assert record["reference"] == "the float graph as trained (its own reset)"
+    # its breakdown is given (stage (c): the fine-tuned registers in float), and the note names fine-tuning
+    assert [s["cause"] for s in record["stages"]] == ["reset", "weights", "decays", "saturation"], record["stages"]
+    assert all(record["causes"][c] is not None for c in ("reset", "weights", "decays", "saturation"))
+    assert any("fine-tuned bundle (--finetune)" in n for n in record["notes"]), record["notes"]
+    assert not any("another snncc version" in n for n in record["notes"])
     assert record["artefact"]["path"] == str(out)

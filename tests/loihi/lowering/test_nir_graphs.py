@@ -117,7 +117,8 @@ def test_trained_graph_with_outliers_agrees_on_loihi(tmp_path, capsys):
     assert code == 0, err
     reason = json.loads(out)["scale_reason"]
     assert "outlier" in reason or "median" in reason   # the screen saw the outliers ...
-    assert "by measured spike-count error" in reason and "the smallest of" in reason   # ... and auto measured
+    assert "calibration spike-count error" in reason and "live candidates" in reason   # ... and auto measured, then
+    assert "beyond the 95 % interval" in reason and "on 256 samples" in reason        # ... looked again at the best
     agree, _, res = _agreement(src, net_path, x.astype(np.uint8))
     assert agree >= 0.95, agree   # measured 0.97
 
@@ -224,7 +225,7 @@ def test_compile_reports_progress_through_the_scale_candidates_and_the_validatio
     # the portable rules first (2); the total grows when the model needs what netx lacks and every rule is measured
     assert measuring[0] == (0, measuring[0][1], "measuring scale candidates") and measuring[0][1] >= 2
     assert [d for d, _, _ in measuring] == sorted(d for d, _, _ in measuring) and measuring[-1][0] == measuring[-1][1]
-    assert [t for _, t, _ in measuring] == sorted(t for _, t, _ in measuring) and measuring[-1][1] >= 10
+    assert [t for _, t, _ in measuring] == sorted(t for _, t, _ in measuring) and measuring[-1][1] >= 4
     assert all(d <= t for d, t, _ in measuring)
     assert calls[-2:] == [(0, 1, "validating the bundle against the IR reference"),
                           (1, 1, "validating the bundle against the IR reference")]

@@ -48,3 +48,19 @@ def test_per_neuron_registers_alone_do_not_say_lava_runs_the_bundle_differently(
     assert "one value per neuron" in text([per_neuron]) and "Lava would run this bundle differently" not in text(
         [per_neuron])
     assert "Lava would run this bundle differently" in text([per_neuron, "/layer/1/neuron/refDelay = 2 (...)"])
+
+
+def test_compile_prints_the_exactness_verdict_and_counts_and_points_to_check(capsys):
+    """No interval on the validation's 4 samples (nearly empty, and alarming): the verdict, the spike counts, and
+    where agreement is measured."""
+    from rich.console import Console
+
+    art = target.lower(small_graph(seed=1), {"scale": "global"})
+    art.render_text(Console(width=200, force_terminal=False))
+    out = capsys.readouterr().out
+    checked = next(line for line in out.splitlines() if "checked on 4 seeded random spike trains" in line)
+    assert ": exact (timing True, quantized registers True, emulator kernel True)" in checked
+    counts = art.validation["spike_counts"]
+    assert set(counts) == {"emulator", "float"} and set(counts["float"]) == {"hidden", "out"}
+    assert f"hidden {counts['emulator']['hidden']:,} vs {counts['float']['hidden']:,}" in out
+    assert "`snncc check MODEL --artefact BUNDLE`" in out and "predictions" not in out and "[0." not in out

@@ -62,24 +62,49 @@ def test_auto_never_chooses_a_candidate_whose_outputs_are_silent():
     assert "left out (outputs silent" in rec.reason
 
 
-def test_auto_keeps_to_portable_rules_unless_the_model_needs_more():
+def _compare(shares, samples=256):
+    """A stand-in second look: argmax agreement ``shares`` by rule, each as (share, low, high)."""
+    def compare(records):
+        return {"samples": samples, "inputs": f"{samples} stand-in samples",
+                "agreement": {name: dict(zip(("share", "low", "high"), shares[records[name].rule]))
+                              for name in records} if samples else {},
+                "cores": {name: 1 for name in records}}
+    return compare
+
+
+def test_auto_keeps_the_paper_rule_unless_another_measures_better_beyond_the_interval():
     graph = _outlier_graph()
-    _, rec = choose(graph, "auto", _measure({"global": 0.3, "per-layer": 0.2, "fine x1.25": 0.01}), "none")
-    assert rec.rule == "per-layer" and set(rec.calibration["errors"]) == {"global", "per-layer"}
-    # the model needs always-on sources whatever the rule: every candidate is measured, the best is taken,
-    # and the best under a rule netx runs is recorded beside it
-    _, rec = choose(graph, "auto", _measure({"global": 0.3, "per-layer": 0.2, "fine x1.25": 0.01}, model_gap=True),
-                    "none")
-    assert rec.rule == "fine" and rec.fine_step == 1.25 and rec.calibration["best_netx_rule"] == {
+    errors = {"global": 0.3, "per-layer": 0.2, "fine": 0.01}
+    overlapping = _compare({"global": (0.70, 0.64, 0.75), "per-layer": (0.80, 0.74, 0.85)})
+    _, rec = choose(graph, "auto", _measure(errors), "none", compare=overlapping)
+    assert rec.rule == "global" and set(rec.calibration["errors"]) == {"global", "per-layer"}   # portable only
+    assert "not a better agreement beyond the 95 % interval on 256 samples" in rec.reason
+    assert "would gain +10.0 points" in rec.reason and rec.calibration["significance"]["chosen"] == "global"
+    beyond = _compare({"global": (0.70, 0.64, 0.75), "per-layer": (0.85, 0.80, 0.89)})
+    _, rec = choose(graph, "auto", _measure(errors), "none", compare=beyond)
+    assert rec.rule == "per-layer" and "measures better beyond the 95 % interval" in rec.reason
+    _, rec = choose(graph, "auto", _measure(errors), "none", compare=_compare({}, samples=0))
+    assert rec.rule == "global" and "on the calibration inputs only" in rec.reason     # too large to look again
+    _, rec = choose(graph, "auto", _measure({"global": 0.1, "per-layer": 0.2}), "none", compare=beyond)
+    assert rec.rule == "global" and rec.calibration["significance"] is None          # nothing measured better
+
+
+def test_auto_measures_every_rule_when_the_model_needs_more_and_says_what_fine_changes():
+    graph = _outlier_graph()
+    errors = {"global": 0.3, "per-layer": 0.2, "fine": 0.01}
+    beyond = _compare({"global": (0.70, 0.64, 0.75), "fine": (0.90, 0.86, 0.93)})
+    _, rec = choose(graph, "auto", _measure(errors, model_gap=True), "none", compare=beyond)
+    assert rec.rule == "fine" and rec.fine_step == 1.0 and rec.calibration["best_netx_rule"] == {
         "rule": "per-layer", "error": 0.2, "agreement": None}     # this stub measures no agreement
+    assert "rounds the decay registers to nearest (the paper truncates" in rec.reason
+    assert not any(name.startswith("fine x") for name in rec.calibration["errors"])   # no noise-fitting sweep
 
 
 def test_a_model_silent_in_float_is_not_measured_and_all_silent_rules_are_refused():
     graph = _outlier_graph()
     _, rec = choose(graph, "auto", _measure({}, float_silent=True), "none")
     assert rec.rule == "global" and "silent" in rec.reason and set(rec.calibration["errors"].values()) == {None}
-    everything = {"global", "per-layer", "split", "fine"} | {f"fine x{k:g}" for k in (1.125, 1.25, 1.375, 1.5, 1.625,
-                                                                                      1.75, 1.875)}
+    everything = {"global", "per-layer", "split", "fine"}
     import pytest
 
     from snncc.errors import SnnccError

@@ -39,3 +39,30 @@ def test_plot_writes_a_real_png(tmp_path):
     data = path.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
     assert not list(tmp_path.glob(".*part"))          # atomic: no temporary left behind
+
+
+def test_the_picture_draws_the_limit_its_title_names_and_which_population_sits_where():
+    """A map bound by threshold profiles (8 per core) names that limit in the title and draws it; the lower panel
+    stacks each population's neurons per core."""
+    import numpy as np
+    import matplotlib.pyplot as plt
+
+    from .helpers import layer
+    from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
+
+    rng = np.random.default_rng(0)
+    n = 64
+    net = LoihiNetwork([LoihiLayer("input", "input", 4),
+                        layer("profiled", n, (rng.integers(1, 60, (n, 4)) * 2).astype(np.int64),
+                              v_th_mant=np.arange(100, 100 + n)),        # one threshold profile per neuron
+                        layer("readout", 3, (rng.integers(1, 60, (3, n)) * 2).astype(np.int64))], t_sample=10)
+    cm = map_network(net)
+    assert cm.binding_constraint == "vth_profiles" and "vth_profiles" in cm.drawn_limits()
+    fig = cm.figure()
+    top, low = fig.axes
+    drawn = [t.get_text() for t in top.get_legend().get_texts()]
+    assert cm.binding_constraint.replace("_", " ") in top.get_title() and "vth profiles" in drawn
+    assert [t.get_text() for t in low.get_legend().get_texts()] == ["profiled", "readout"]
+    heights = sum(np.array([p.get_height() for p in bars]) for bars in low.containers)
+    assert heights.sum() == n + 3 and len(heights) == cm.n_cores
+    plt.close(fig)
