@@ -183,6 +183,13 @@ def _spikes(path: Path) -> None:
     np.save(path, (np.random.default_rng(0).random((2, 20, 48)) < 0.1).astype(np.uint8))
 
 
+def _spikes12(path: Path) -> None:
+    """A NIR Braille graph's input: 2 samples x 40 steps x 12 channels of spikes."""
+    import numpy as np
+
+    np.save(path, (np.random.default_rng(0).random((2, 40, 12)) < 0.1).astype(np.uint8))
+
+
 def _copy(name: str):
     return lambda path: shutil.copyfile(NIR / name, path)
 
@@ -199,6 +206,7 @@ FIXTURES = {
     "inputs.npz": _labelled(12, 7, 100),
     "test.npz": _labelled(24, 27, 20),        # for model.pt: 24 channels, Braille's 27 letters
     "spikes.npy": _spikes,
+    "spikes12.npy": _spikes12,
 }
 
 
