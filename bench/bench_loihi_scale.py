@@ -36,7 +36,6 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
 
 
 def snncc_cmd() -> list[str]:
@@ -177,7 +176,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--no-split", action="store_true", help="skip the in-process profile of the largest compile")
     ap.add_argument("--out", default=str(HERE / "results" / "loihi_scale.json"))
     args = ap.parse_args(argv)
-    import loihi_rsnn_graphs as graphs
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("loihi_rsnn_graphs", HERE / "loihi_rsnn_graphs.py")
+    graphs = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(graphs)
 
     snncc = snncc_cmd()
     out: dict = {"machine": {"cores": os.cpu_count(), "load_1min_before": os.getloadavg()[0],

@@ -55,9 +55,8 @@ def test_compile_emulate_check(tmp_path, capsys, weights, th1_params):
     (np.full((5, 48), 2, np.uint8), "binary"),
     (np.full((5, 48), np.nan), "NaN"),
 ])
-def test_emulate_bad_input_one_line(tmp_path, capsys, weights, th1_params, array, needle):
-    out = tmp_path / "m.net"
-    assert run_cli(["compile", weights, "--params", th1_params, "--target", "loihi", "-o", out], capsys)[0] == 0
+def test_emulate_bad_input_one_line(tmp_path, capsys, authors_layout_bundle, array, needle):
+    out = authors_layout_bundle[2]
     np.save(tmp_path / "x.npy", array)
     code, _, err = run_cli(["emulate", out, "--input", tmp_path / "x.npy", "-o", tmp_path / "o.npz"], capsys)
     assert code == 2 and needle in err and len(err.strip().splitlines()) == 1 and "x.npy" in err
@@ -93,9 +92,8 @@ def test_check_needs_a_target_with_check(tmp_path, capsys, weights, th1_params):
     assert code == 2 and "labels" in err and len(err.strip().splitlines()) == 1
 
 
-def test_emulate_stream_mode(tmp_path, capsys, weights, th1_params):
-    out = tmp_path / "m.net"
-    assert run_cli(["compile", weights, "--params", th1_params, "--target", "loihi", "-o", out], capsys)[0] == 0
+def test_emulate_stream_mode(tmp_path, capsys, authors_layout_bundle):
+    out = authors_layout_bundle[2]
     np.save(tmp_path / "x.npy", (np.random.default_rng(3).random((3, 20, 48)) < 0.2).astype(np.uint8))
     code, stdout, err = run_cli(["emulate", out, "--input", tmp_path / "x.npy", "-o", tmp_path / "o.npz",
                                  "--stream", "--gap", "7", "--json"], capsys)

@@ -149,6 +149,17 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         return scaling.CandidateMeasure(error, outputs_silent=not emu[names[-1]].any(), float_silent=float_silent,
                                         gaps=netx_runnable(net), agreement=agreement.as_dict())
 
+    def affordable(synapses: int) -> int:
+        """Samples of the second look within SIGNIFICANCE_WORK synapse-steps of the float reference."""
+        return int(min(SIGNIFICANCE_SAMPLES, SIGNIFICANCE_WORK // max(1, synapses * steps)))
+
+    model_synapses = sum(int(np.count_nonzero(order.node(d).weight)) for c in layers for d in (c.ff, c.rec) if d)
+    too_large = None
+    if affordable(model_synapses) < SIGNIFICANCE_MIN:
+        too_large = (f"{model_synapses:,} synapses x {steps} steps allow {affordable(model_synapses)} sample(s) of the "
+                     f"float reference within the compile's budget, and telling rules apart takes at least "
+                     f"{SIGNIFICANCE_MIN}")
+
     def compare(records: dict) -> dict:
         """Argmax agreement of each candidate (records by name) with the float model on the significance set, and
         its cores (the mapper's lower bound)."""
@@ -162,7 +173,7 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         synapses = sum(int(np.count_nonzero(lay.weight)) + (0 if lay.weight_rec is None else
                                                             int(np.count_nonzero(lay.weight_rec)))
                        for lay in first.layers[1:])
-        samples = int(min(SIGNIFICANCE_SAMPLES, SIGNIFICANCE_WORK // max(1, synapses * steps)))
+        samples = affordable(synapses)
         if samples < SIGNIFICANCE_MIN:
             return {"samples": 0, "inputs": f"not measured: {synapses:,} synapses x {steps} steps would allow "
                     f"{samples} sample(s) of the float reference within the compile budget (at least "
@@ -180,7 +191,8 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         return {"samples": samples, "inputs": f"{samples} seeded random spike trains (density {SIGNIFICANCE_DENSITY}, "
                 f"seed {SIGNIFICANCE_SEED}), {steps} steps (SYNTHETIC)", "agreement": agreement, "cores": cores}
 
-    quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps), progress=progress, compare=compare)
+    quantized, qrec = scaling.choose(order, rule, measure, calibration_text(steps), progress=progress, compare=compare,
+                                     no_second_look=too_large)
     quantized = in_chip_units(quantized, qrec)   # the same spikes; ties at threshold decided as on the chip
     meta = {
         "source_sha256": graph.metadata.get("source_sha256", ""),

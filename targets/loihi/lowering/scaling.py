@@ -150,7 +150,8 @@ def _error_text(m: CandidateMeasure) -> str:
 
 
 def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
-           progress: Progress | None = None, compare: CompareFn | None = None) -> tuple[Graph, QuantizationRecord]:
+           progress: Progress | None = None, compare: CompareFn | None = None,
+           no_second_look: str | None = None) -> tuple[Graph, QuantizationRecord]:
     """Quantize ``graph`` under ``rule``; for "auto", decide by the screen and by measurement
     (``progress(done, total, phase)`` after each candidate; the total grows when more rules are measured).
 
@@ -207,11 +208,14 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
         if "global" in refused:
             sc.flagged["graph"] = Flag(FlagKind.GLOBAL_REFUSED, "the paper's global rule cannot be lowered")
     clean = not sc.flagged and candidates and candidates[0][3].live and candidates[0][3].portable
-    if not clean and not (candidates and candidates[0][3].float_silent):
+    # a network too large for the second look keeps the paper's rule whenever it is live: no alternative could
+    # be chosen, so none is measured
+    skipped = bool(no_second_look) and not clean and bool(candidates) and candidates[0][3].live
+    if not clean and not skipped and not (candidates and candidates[0][3].float_silent):
         consider("per-layer", lambda out: quantize_graph(graph, "per-layer", graph_out=out))
     float_silent = any(m.float_silent for *_, m in candidates)
     portable = [c for c in candidates if c[3].live and c[3].portable]
-    extended = not portable and not float_silent and not clean
+    extended = not portable and not float_silent and not clean and not skipped
     if extended:        # the model needs what netx lacks, or no portable rule is live: measure the rest
         planned[0] = considered[0] + int(bool(outliers)) + 1
         if outliers:
@@ -241,6 +245,12 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
         name, make, r, m = candidates[0]        # the simplest rule that lowers: nothing to measure
         why = (f"auto: the float model's outputs are silent on the calibration inputs, so no rule can be measured; "
                f"kept '{name}', the simplest rule that lowers")
+    elif skipped:
+        name, make, r, m = candidates[0]
+        flags = ", ".join(f"{k}: {v}" for k, v in sc.flagged.items()) or "no flags"
+        why = (f"auto: {flags}; kept the paper's global rule (calibration spike-count error {m.error:.4f}): "
+               f"{no_second_look}, so no other rule could be shown better beyond the interval and none was "
+               "measured (--scale per-layer, split or fine asks for one)")
     elif clean:
         name, make, r, m = candidates[0]
         why = (f"auto: the paper's global rule; no outlier weights (every max|W| <= {OUTLIER_RATIO:.0f}x its median, "

@@ -60,11 +60,13 @@ def test_check_measures_what_compile_wrote_with_the_same_hash_and_figures(tmp_pa
     assert set(written["liveness"]) == {"float", "loihi"} and set(written["liveness"]["loihi"]) == {"hidden", "out"}
 
 
-def test_check_runs_the_file_it_is_given(tmp_path, capsys, th1_params):
+def test_check_runs_the_file_it_is_given(tmp_path, capsys, authors_layout_bundle):
     """A bundle changed after compile (same source hash) is measured as it is, not as compile recorded it."""
-    weights = _weights(tmp_path / "w.pt")
+    import shutil
+
+    weights, th1_params, compiled = authors_layout_bundle
     out = tmp_path / "m.net"
-    _compile(capsys, weights, out, "--params", th1_params)
+    shutil.copy(compiled, out)                                      # the session's bundle, edited as a copy
     before = _check(capsys, weights, "--params", th1_params, "--artefact", out, *AGREEMENT)
     with h5py.File(out, "r+") as f:
         w = f["layer/2/weight"]
@@ -77,10 +79,9 @@ def test_check_runs_the_file_it_is_given(tmp_path, capsys, th1_params):
     assert set(after["causes"].values()) == {None}                    # no breakdown for a foreign network
 
 
-def test_check_refuses_what_does_not_belong(tmp_path, capsys, th1_params):
-    weights, other = _weights(tmp_path / "w.pt"), _weights(tmp_path / "other.pt", seed=5)
-    out = tmp_path / "m.net"
-    _compile(capsys, weights, out, "--params", th1_params)
+def test_check_refuses_what_does_not_belong(tmp_path, capsys, authors_layout_bundle):
+    weights, th1_params, out = authors_layout_bundle
+    other = _weights(tmp_path / "other.pt", seed=5)
     code, _, err = run_cli(["check", other, "--params", th1_params, "--artefact", out], capsys)
     _one_line(code, err, "source_sha256: was compiled from another model")
     code, _, err = run_cli(["check", weights, "--params", th1_params, "--artefact", out, "--target", "jetson"], capsys)
@@ -96,10 +97,8 @@ def test_check_refuses_what_does_not_belong(tmp_path, capsys, th1_params):
     assert out.exists() and junk.read_bytes() == b"not a bundle"    # nothing lost
 
 
-def test_the_authors_rsnn_takes_its_24_event_channels(tmp_path, capsys, th1_params):
-    weights = _weights(tmp_path / "w.pt")
-    out = tmp_path / "m.net"
-    _compile(capsys, weights, out, "--params", th1_params)
+def test_the_authors_rsnn_takes_its_24_event_channels(tmp_path, capsys, authors_layout_bundle):
+    weights, th1_params, out = authors_layout_bundle
     events = (np.random.default_rng(0).random((3, 30, 24)) < 0.15).astype(np.uint8)
     np.save(tmp_path / "x24.npy", events)
     np.save(tmp_path / "x48.npy", np.tile(events, (1, 1, 2)))

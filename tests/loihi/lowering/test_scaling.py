@@ -111,3 +111,20 @@ def test_a_model_silent_in_float_is_not_measured_and_all_silent_rules_are_refuse
 
     with pytest.raises(SnnccError, match="silent"):
         choose(graph, "auto", _measure({}, silent=everything), "none")
+
+
+def test_a_network_too_large_for_the_second_look_keeps_the_paper_rule_without_measuring_others():
+    graph = _outlier_graph()
+    seen = []
+
+    def measure(g, r):
+        seen.append(r.rule)
+        return CandidateMeasure(0.3 if r.rule == "global" else 0.01)
+
+    _, rec = choose(graph, "auto", measure, "none", no_second_look="1,000,000 synapses x 100 steps allow 20 samples")
+    assert rec.rule == "global" and seen == ["global"] and "none was measured" in rec.reason
+    assert "allow 20 samples" in rec.reason and set(rec.calibration["errors"]) == {"global"}
+    # a paper rule that cannot run (outputs silent) still falls back to the others
+    _, rec = choose(graph, "auto", _measure({"global": 0.0, "per-layer": 0.3}, silent={"global"}), "none",
+                    no_second_look="too large")
+    assert rec.rule == "per-layer"
