@@ -5,5 +5,4 @@
     read.py          a bundle read and validated (snncc's, netx's or SLAYER v1's)
     identify.py      the ``identify`` capability: is this file a Loihi bundle, from which model
     portability.py   what lava-dl netx runs as written (the rules bench/lava_netx_agreement.py measured)
-    self_contained.py  no HDF5 link may lead to another file (interim copy; see its docstring)
 """

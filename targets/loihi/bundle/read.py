@@ -2,7 +2,7 @@
 
 Everything read is validated first: one SnnccError line naming the file, the HDF5 path and the rule.
 A dataset is refused by its declared size before it is read; a link that leads to another file is
-refused before any value is read (``self_contained.py``).
+refused before any value is read (``kit.hdf5``).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from snncc.targets.kit import SnnccError
 from snncc.targets.kit.compute import check_memory, check_time_steps
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.bundle.layout import KIND, MAX_TEXT_BYTES, RECORDS, SNNCC_GROUP
-from snncc.targets.loihi.bundle.self_contained import check_self_contained
+from snncc.targets.kit.hdf5 import check_self_contained
 from snncc.targets.loihi.network import LoihiLayer, LoihiNetwork
 
 
