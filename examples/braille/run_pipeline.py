@@ -245,20 +245,17 @@ def results(p: Pipeline) -> dict:
         return None if r is None else r["history"]["test_accuracy"]
 
     def check_acc(name, key):
-        r = p.record(name)
-        if r is None:
-            return None
-        return r.get("accuracy", {}).get(key) if key in r.get("accuracy", {}) else r.get(key)
+        return stage_accuracy(p.record(name), key)
 
     qat = p.record("train RSNN QAT")
     rows = [
         {"model": "RSNN th1, float (PyTorch, authors' order)", "ours_percent": percent(train_acc("train RSNN th1")), "paper_percent": PAPER["rsnn_th1_pytorch"]},
-        {"model": "RSNN th1, Loihi emulated (bit-exact, global scale)", "ours_percent": percent(check_acc("check RSNN Loihi", "emulator")), "paper_percent": PAPER["rsnn_th1_loihi"]},
+        {"model": "RSNN th1, Loihi emulated (bit-exact, global scale)", "ours_percent": percent(check_acc("check RSNN Loihi", "artefact")), "paper_percent": PAPER["rsnn_th1_loihi"]},
         {"model": "RSNN th1, fake-quantized after QAT", "ours_percent": percent(None if qat is None else qat["quantization"]["after"]["quantized_test_accuracy"]), "paper_percent": None},
-        {"model": "RSNN th1 after QAT, Loihi emulated", "ours_percent": percent(check_acc("check RSNN QAT Loihi", "emulator")), "paper_percent": None},
-        {"model": "RSNN th1, Jetson (ONNX Runtime)", "ours_percent": percent(check_acc("check RSNN Jetson", "accuracy_artefact")), "paper_percent": None},
+        {"model": "RSNN th1 after QAT, Loihi emulated", "ours_percent": percent(check_acc("check RSNN QAT Loihi", "artefact")), "paper_percent": None},
+        {"model": "RSNN th1, Jetson (ONNX Runtime)", "ours_percent": percent(check_acc("check RSNN Jetson", "artefact")), "paper_percent": None},
         {"model": "LSTM on frames", "ours_percent": percent(train_acc("train LSTM")), "paper_percent": PAPER["lstm_frames"]},
-        {"model": "LSTM, Jetson (ONNX Runtime)", "ours_percent": percent(check_acc("check LSTM Jetson", "accuracy_artefact")), "paper_percent": None},
+        {"model": "LSTM, Jetson (ONNX Runtime)", "ours_percent": percent(check_acc("check LSTM Jetson", "artefact")), "paper_percent": None},
         {"model": "eLSTM on events th1", "ours_percent": percent(train_acc("train eLSTM")), "paper_percent": PAPER["elstm_events"]},
     ]
     for kind, (label, paper_acc, paper_params) in PAPER_BASELINES.items():
@@ -292,6 +289,20 @@ def results(p: Pipeline) -> dict:
     }
 
 
+def stage_accuracy(record: dict | None, key: str) -> float | None:
+    """A check record's accuracy (``snncc check --json``: the kit's CheckReport): ``"float"`` or ``"artefact"``, or a
+    stage the target names (Loihi: ``ir_quantized``, ``emulator``, ... in ``details.accuracy_by_stage``)."""
+    if record is None:
+        return None
+    overall = record.get("accuracy") or {}
+    if key in overall:
+        return overall[key]
+    by_stage = (record.get("details") or {}).get("accuracy_by_stage") or {}
+    if key in by_stage:
+        return by_stage[key]
+    return next((s.get("accuracy") for s in record.get("stages") or [] if s.get("key") == key), None)
+
+
 CHANCE_PERCENT = 100.0 / 27
 TRAINED = (("train RSNN th1", "RSNN th1"), ("train RSNN QAT", "RSNN th1 QAT"), ("train LSTM", "LSTM"),
            ("train eLSTM", "eLSTM"))
@@ -301,6 +312,8 @@ def accuracy_by_model(p: Pipeline) -> list[dict]:
     """Per model, test accuracy (%) in float, quantized (Loihi weights in float), on the bit-exact Loihi
     emulator and as the Jetson artefact in ONNX Runtime, beside the paper's figures (real data)."""
     def acc(step, *keys):
+        if keys and keys[0] == "accuracy":           # a check record: its overall or a stage's accuracy
+            return percent(stage_accuracy(p.record(step), keys[1]))
         r = p.record(step)
         for key in keys:
             r = None if r is None else r.get(key)
@@ -311,13 +324,14 @@ def accuracy_by_model(p: Pipeline) -> list[dict]:
                 "jetson": jetson, "paper_float": paper_float, "paper_loihi": paper_loihi}
 
     rows = [
-        row("RSNN th1", acc("check RSNN Loihi", "accuracy", "float_trained") or acc("train RSNN th1", "history",
-                                                                                     "test_accuracy"),
-            acc("check RSNN Loihi", "accuracy", "ir_quantized"), acc("check RSNN Loihi", "accuracy", "emulator"),
-            acc("check RSNN Jetson", "accuracy_artefact"), PAPER["rsnn_th1_pytorch"], PAPER["rsnn_th1_loihi"]),
-        row("RSNN th1 after QAT", acc("check RSNN QAT Loihi", "accuracy", "float_trained"),
-            acc("check RSNN QAT Loihi", "accuracy", "ir_quantized"), acc("check RSNN QAT Loihi", "accuracy", "emulator")),
-        row("LSTM (frames)", acc("train LSTM", "history", "test_accuracy"), jetson=acc("check LSTM Jetson", "accuracy_artefact"),
+        row("RSNN th1", acc("check RSNN Loihi", "accuracy", "float") or acc("train RSNN th1", "history",
+                                                                             "test_accuracy"),
+            acc("check RSNN Loihi", "accuracy", "ir_quantized"), acc("check RSNN Loihi", "accuracy", "artefact"),
+            acc("check RSNN Jetson", "accuracy", "artefact"), PAPER["rsnn_th1_pytorch"], PAPER["rsnn_th1_loihi"]),
+        row("RSNN th1 after QAT", acc("check RSNN QAT Loihi", "accuracy", "float"),
+            acc("check RSNN QAT Loihi", "accuracy", "ir_quantized"), acc("check RSNN QAT Loihi", "accuracy", "artefact")),
+        row("LSTM (frames)", acc("train LSTM", "history", "test_accuracy"), jetson=acc("check LSTM Jetson", "accuracy",
+                                                                                        "artefact"),
             paper_float=PAPER["lstm_frames"]),
         row("eLSTM (events th1)", acc("train eLSTM", "history", "test_accuracy"), paper_float=PAPER["elstm_events"]),
     ]

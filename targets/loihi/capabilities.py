@@ -117,6 +117,14 @@ class LoihiTarget:
         found: Record = estimate_bundle(source, inputs, data=data, note=note, limit=limit, progress=progress)
         return found
 
+    def profile(self, graph: Graph, artefact: Path, inputs: np.ndarray, *,
+                progress: Progress | None = None) -> Record:
+        """Cores, real time and energy ESTIMATE at the inputs' event rates, NeuroBench (``estimate/profile.py``)."""
+        from snncc.targets.loihi.estimate.profile import profile_bundle
+
+        found: Record = profile_bundle(graph, artefact, inputs, progress)
+        return found
+
     def hardware(self) -> HardwareCosts:
         from snncc.targets.loihi.estimate.search_figures import LoihiHardware
 
