@@ -170,6 +170,14 @@ class XyloTarget:
             progress(int(x.shape[0]) if x.ndim == 3 else 1)
         return found
 
+    def profile(self, graph: Graph, artefact: Path, inputs: np.ndarray, *,
+                progress: Progress | None = None) -> Record:
+        """The chip's limits, real time at the inputs' event rates, NeuroBench (``estimate/profile.py``)."""
+        from snncc.targets.xylo.estimate.profile import profile_artefact
+
+        found: Record = profile_artefact(graph, artefact, inputs, progress)
+        return found
+
     def hardware(self) -> HardwareCosts:
         from snncc.targets.xylo.estimate.search_figures import XyloHardware
 
