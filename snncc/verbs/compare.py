@@ -213,7 +213,7 @@ def compare_model(model: str | Path, *, targets: str | Sequence[str] | None = No
     from snncc.measure.agreement import argmax_agreement
     from snncc.measure.neurobench import float_figures
     from snncc.targets import get_target, loaded_targets, offered_options
-    from snncc.targets.kit.reference import float_counts, noise_ceiling
+    from snncc.targets.kit.reference import float_scores, is_spiking, noise_ceiling
 
     model = Path(model)
     if not 0.0 < density <= 1.0:
@@ -263,12 +263,15 @@ def compare_model(model: str | Path, *, targets: str | Sequence[str] | None = No
             progress(min(done[0], total), total, phase)
 
     report("the float graph")
-    counts = float_counts(graph, x)
+    spiking = is_spiking(graph)
+    counts = float_scores(graph, x)
     ceiling = noise_ceiling(graph, x, counts, noise) if noise > 0 else None
-    itself = argmax_agreement(counts, counts)
+    itself = argmax_agreement(counts, counts, spiking=spiking)
     float_row = Row("float", "float", argmax_agreement=1.0 if itself.defined else None, argmax=itself,
                     accuracy=None if labels is None else float(np.mean(np.argmax(counts, 1) == labels)),
-                    neurobench=float_figures(graph, x), notes=["the reference every row is measured against"])
+                    neurobench=float_figures(graph, x) if spiking else None,
+                    notes=["the reference every row is measured against"]
+                    + ([] if spiking else ["not a spiking model: NeuroBench's spiking metrics are not computed"]))
     rows = [float_row]
     if ceiling is not None:
         rows.append(Row(CEILING.replace("1 %", f"{100 * noise:g} %"), "ceiling", argmax_agreement=ceiling.share,

@@ -16,7 +16,6 @@ from pathlib import Path
 
 import numpy as np
 
-from snncc.targets.kit import SnnccError
 
 
 def initializer_bytes(model_path: Path) -> tuple[int, int]:
@@ -48,7 +47,10 @@ def profile_artefact(graph, artefact: Path, inputs: np.ndarray, progress=None):
                  Resource(f"{sequence['file']} bytes", (Path(artefact) / sequence["file"]).stat().st_size, unit="B")]
     lifs = [n for n, op in graph.items() if isinstance(op, LIF)]
     if not lifs:
-        raise SnnccError("NeuroBench's spiking metrics need spiking populations; this model has none", field="model")
+        return Profile("jetson", resources, None, None, None,
+                       ["real time and power are measured on the board (snncc bench, TensorRT); none is estimated here",
+                        "no spiking population: NeuroBench 2.3's spiking metrics do not apply (and it counts no "
+                        "synaptic operations of LSTM layers)"])
     projections, notes = graph_projections(graph)
     x = np.asarray(inputs)
     name = graph.of_kind(Input)[0]

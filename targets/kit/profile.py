@@ -63,7 +63,7 @@ class Profile:
 
     target: str
     resources: list[Resource]
-    neurobench: NeuroBenchFigures
+    neurobench: NeuroBenchFigures | None          # None: a model NeuroBench's spiking metrics do not cover (an LSTM)
     real_time: RealTime | None = None
     energy: EnergyEstimate | None = None
     notes: list[str] = field(default_factory=list)
@@ -77,10 +77,11 @@ class Profile:
             out.append(f"real time: {self.real_time.text()} ({self.real_time.basis})")
         out.append("energy: " + ("no published cost model for this target" if self.energy is None else self.energy.text()))
         nb = self.neurobench
-        ops = nb.synaptic_operations
-        out.append(f"NeuroBench: footprint {nb.footprint:,} B, connection sparsity {nb.connection_sparsity:.3f}, "
-                   f"activation sparsity {nb.activation_sparsity:.4f}, synaptic operations per sample "
-                   f"{ops['Effective_ACs']:,.0f} ACs + {ops['Effective_MACs']:,.0f} MACs (dense {ops['Dense']:,.0f})")
+        if nb is not None:
+            ops = nb.synaptic_operations
+            out.append(f"NeuroBench: footprint {nb.footprint:,} B, connection sparsity {nb.connection_sparsity:.3f}, "
+                       f"activation sparsity {nb.activation_sparsity:.4f}, synaptic operations per sample "
+                       f"{ops['Effective_ACs']:,.0f} ACs + {ops['Effective_MACs']:,.0f} MACs (dense {ops['Dense']:,.0f})")
         return out + [f"note: {n}" for n in self.notes]
 
     def render_text(self, console: Any) -> None:

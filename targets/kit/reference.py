@@ -8,6 +8,7 @@ population's), computed chunk by chunk so memory stays bounded whatever the samp
     float_counts(graph, x)               (B, n) output spike counts
     float_spikes(graph, x, populations)  per population (B, T, n) uint8 spikes, for small runs
     perturbed(graph, noise, seed)        every trained weight (and bias) times 1 + noise * N(0, 1)
+    float_scores(graph, x)               (B, classes): spike counts, or an LSTM's readout scores
     noise_ceiling(graph, x, counts)      the float graph's agreement with itself under that perturbation:
                                          how much of an artefact's disagreement any 1 % weight error causes
 """
@@ -73,6 +74,30 @@ def float_counts(graph: Graph, x: np.ndarray, population: str | None = None, *, 
     return np.concatenate(out)
 
 
+def is_spiking(graph: Graph) -> bool:
+    """The graph decides by counting a spiking population's spikes (else by a readout's scores: an LSTM)."""
+    from snncc.ir.nodes import LIF
+
+    return any(isinstance(op, LIF) for _, op in graph.items())
+
+
+def float_scores(graph: Graph, x: np.ndarray, *, most: int = CHUNK) -> np.ndarray:
+    """(B, classes) what the float graph decides by: the readout's spike counts for a spiking graph, else its
+    readout's scores (an LSTM's last output), chunk by chunk."""
+    from snncc.ir.simulate import simulate
+    from snncc.threads import one_thread
+
+    if is_spiking(graph):
+        return float_counts(graph, x, most=most)
+    x = np.asarray(x)
+    out = []
+    with one_thread():
+        for start in range(0, x.shape[0], most):
+            res = simulate(graph, x[start:start + most])
+            out.append(np.asarray(res.readout if res.readout is not None else res.output[:, -1]))
+    return np.concatenate(out)
+
+
 def float_spikes(graph: Graph, x: np.ndarray, populations: Sequence[str] | None = None) -> dict[str, np.ndarray]:
     """Per population (default: every LIF), (B, T, n) uint8 spikes of the float graph on ``x`` (one run: for a
     handful of samples)."""
@@ -105,9 +130,11 @@ def perturbed(graph: Graph, noise: float, seed: int = NOISE_SEED) -> Graph:
 
 def noise_ceiling(graph: Graph, x: np.ndarray, counts: np.ndarray, noise: float = DEFAULT_NOISE,
                   seed: int = NOISE_SEED) -> ArgmaxAgreement:
-    """Agreement of ``perturbed(graph, noise, seed)`` with the float graph's own ``counts`` on ``x``."""
-    return argmax_agreement(counts, float_counts(perturbed(graph, noise, seed), x))
+    """Agreement of ``perturbed(graph, noise, seed)`` with the float graph's own ``counts`` (its ``float_scores``)
+    on ``x``."""
+    spiking = is_spiking(graph)
+    return argmax_agreement(counts, float_scores(perturbed(graph, noise, seed), x), spiking=spiking)
 
 
-__all__ = ["DEFAULT_NOISE", "NOISE_SEED", "float_counts", "float_spikes", "noise_ceiling", "perturbed",
-           "readout_population", "spiking_neurons"]
+__all__ = ["DEFAULT_NOISE", "NOISE_SEED", "float_counts", "float_scores", "float_spikes", "is_spiking", "noise_ceiling",
+           "perturbed", "readout_population", "spiking_neurons"]
