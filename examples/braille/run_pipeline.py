@@ -43,6 +43,8 @@ PAPER = {  # real data, the paper's figures (accuracy, %)
     "elstm_events": 82.31,
 }
 PAPER_LOIHI = {"cores": 8, "power_mw": 31.0, "energy_uj_per_sample": 71.0, "delay_ms_per_sample": 2.3}  # measured
+PAPER_JETSON_LSTM = {"power_mw": 5385.0, "energy_uj_per_sample": 35212.0, "delay_ms_per_sample": 6.7}   # measured
+PAPER_ENERGY_RATIO = 496          # the paper's Table: LSTM on Jetson / RSNN on Loihi, energy per sample (both measured)
 PAPER_BASELINES = {  # kind -> (label, test accuracy %, trainable parameters as the paper states them)
     "resnet": ("ResNet", 98.2, "516k"),
     "inception": ("Inception", 97.8, "452k"),
@@ -276,6 +278,7 @@ def results(p: Pipeline) -> dict:
                              "inputs": inputs_kind(m.get("data", ""))} for m in bench["models"]]
     return {
         **extra,
+        "paper_comparison": paper_comparison(p),
         "accuracy_by_model": accuracy_by_model(p),
         "training_curves": training_curves(p),
         "loihi": loihi_figures(p),
@@ -287,6 +290,28 @@ def results(p: Pipeline) -> dict:
         "rows": rows,
         "steps": [asdict(s) | {"record": None} for s in p.steps],
     }
+
+
+def compare_row(record: dict | None, target: str) -> dict | None:
+    """The row of ``target`` in a ``snncc compare`` record (None when absent)."""
+    return next((r for r in (record or {}).get("rows") or [] if r.get("target") == target), None)
+
+
+def paper_comparison(p: Pipeline) -> dict:
+    """The paper's headline (RSNN on Loihi against the LSTM on Jetson) as measured here: accuracies on this run's
+    SYNTHETIC test splits, the RSNN's energy per sample on Loihi as snncc's ESTIMATE against the LSTM's on the Jetson
+    as the paper MEASURED it (no Jetson here), and their ratio beside the paper's (both measured there)."""
+    rsnn = compare_row(p.record("compare RSNN"), "loihi")
+    lstm = compare_row(p.record("compare LSTM"), "jetson")
+    energy = None if rsnn is None or not rsnn.get("energy") else rsnn["energy"]["uj_per_sample"]
+    return {"rsnn_loihi_accuracy": None if rsnn is None else rsnn.get("accuracy"),
+            "lstm_jetson_accuracy": None if lstm is None else lstm.get("accuracy"),
+            "paper_rsnn_loihi_accuracy": PAPER["rsnn_th1_loihi"], "paper_lstm_jetson_accuracy": PAPER["lstm_frames"],
+            "rsnn_loihi_energy_uj_estimate": energy,
+            "energy_source": None if rsnn is None or not rsnn.get("energy") else rsnn["energy"]["source"],
+            "lstm_jetson_energy_uj_paper": PAPER_JETSON_LSTM["energy_uj_per_sample"],
+            "ratio": None if not energy else PAPER_JETSON_LSTM["energy_uj_per_sample"] / energy,
+            "paper_ratio": PAPER_ENERGY_RATIO}
 
 
 def stage_accuracy(record: dict | None, key: str) -> float | None:
@@ -391,6 +416,26 @@ def learning(record: dict | None, settings: dict) -> dict:
     return {"rsnn_test_percent_per_epoch": accs, "chance_percent": round(CHANCE_PERCENT, 2), "statement": statement}
 
 
+def paper_comparison_markdown(c: dict) -> list[str]:
+    """The paper's Table of Loihi against Jetson, beside this run (``paper_comparison``)."""
+    if not c or (c.get("rsnn_loihi_accuracy") is None and c.get("lstm_jetson_accuracy") is None):
+        return []
+    energy, ratio = c.get("rsnn_loihi_energy_uj_estimate"), c.get("ratio")
+    return ["", "The paper's comparison, RSNN th1 on Loihi against the LSTM on Jetson, as measured here (this run: "
+            "SYNTHETIC test splits, snncc compare; the full cross-platform tables are compare_rsnn.md and "
+            "compare_lstm.md):", "",
+            "| | RSNN th1 on Loihi | LSTM on Jetson | LSTM / RSNN |", "|---|---|---|---|",
+            f"| accuracy, this run | {pct(percent(c.get('rsnn_loihi_accuracy')))} (bit-exact emulator) | "
+            f"{pct(percent(c.get('lstm_jetson_accuracy')))} (ONNX Runtime) | |",
+            f"| accuracy, paper (real data) | {c['paper_rsnn_loihi_accuracy']:.2f} % | "
+            f"{c['paper_lstm_jetson_accuracy']:.2f} % | |",
+            f"| energy per sample | {'—' if energy is None else f'{energy:.3g} uJ (snncc ESTIMATE)'} | "
+            f"{c['lstm_jetson_energy_uj_paper']:,.0f} uJ (the paper's MEASUREMENT; no Jetson here) | "
+            f"{'—' if ratio is None else f'{ratio:,.0f}x (ESTIMATE against measurement)'} |",
+            f"| energy per sample, paper (both measured) | 71 uJ | 35,212 uJ | {c['paper_ratio']}x |", "",
+            f"Energy source for the Loihi ESTIMATE: {c.get('energy_source') or '—'}."]
+
+
 def figures_markdown(res: dict) -> list[str]:
     """The accuracy-per-deployment table, the Loihi ESTIMATE beside the paper's measurement, and the figures."""
     lines = []
@@ -477,6 +522,7 @@ def markdown(res: dict) -> str:
         for m in res["latency"]:
             lines.append(f"| {Path(m['artefact']).name} | {m['kind']} | {m.get('inputs', '?')} | {m['median_ms']:.3f} | "
                          f"{m['spread_ms']:.3f} | {m['ratio_to_reference']:.2f} |")
+    lines += paper_comparison_markdown(res.get("paper_comparison") or {})
     lines += figures_markdown(res)
     lines += ["", "| step | status | seconds | message |", "|---|---|---|---|"]
     for s in res["steps"]:
@@ -556,6 +602,12 @@ def main(argv: list[str] | None = None) -> int:
           needs=("compile RSNN Loihi",))
     p.api("energy RSNN Loihi", "report", out / "rsnn_th1.net", energy=True, data=out / "rsnn_test.npz",
           limit=ENERGY_SAMPLES, needs=("compile RSNN Loihi", "test split rsnn_test.npz"))
+    # one model on every target, on the same test samples and time base (snncc compare): the cross-platform table
+    p.api("compare RSNN", "compare", out / "rsnn_th1.pt", targets="loihi,xylo,jetson,c", data=out / "rsnn_test.npz",
+          scale="global", allow_reset_change=True, output=out / "compare_rsnn.md",
+          figure=out / FIGURES / "compare_rsnn.png", needs=("train RSNN th1", "test split rsnn_test.npz"))
+    p.api("compare LSTM", "compare", out / "lstm.pt", targets="jetson,loihi,xylo,c", data=out / "lstm_test.npz",
+          output=out / "compare_lstm.md", needs=("train LSTM", "test split lstm_test.npz"))
 
     if args.baselines:
         baselines(p, out, frames, events, seed)

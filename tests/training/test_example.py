@@ -108,10 +108,18 @@ def _reader_pipeline(rp, tmp_path, small_rsnn_checkpoint):
         p.steps.append(rp.Step(name, [], "ok", 1.0, "", {"epochs": _epochs(*accs), "device": "cpu",
                                                         "history": {"test_accuracy": max(accs)},
                                                         "quantization": {"after": {"quantized_test_accuracy": 0.21}}}))
-    p.steps.append(rp.Step("check RSNN Loihi", [], "ok", 1.0, "", {"accuracy": {
-        "float_trained": 0.2, "ir_reset_changed": 0.2, "ir_loihi_order": 0.2, "ir_quantized": 0.18, "emulator": 0.17}}))
-    p.steps.append(rp.Step("check RSNN Jetson", [], "ok", 1.0, "", {"accuracy_artefact": 0.2}))
-    p.steps.append(rp.Step("check LSTM Jetson", [], "ok", 1.0, "", {"accuracy_artefact": 0.5}))
+    # check records as `snncc check --json` writes them (the kit's CheckReport)
+    p.steps.append(rp.Step("check RSNN Loihi", [], "ok", 1.0, "", {
+        "accuracy": {"float": 0.2, "artefact": 0.17},
+        "details": {"accuracy_by_stage": {"float_trained": 0.2, "ir_quantized": 0.18, "emulator_wide": 0.17,
+                                          "emulator": 0.17}}}))
+    p.steps.append(rp.Step("check RSNN Jetson", [], "ok", 1.0, "", {"accuracy": {"float": 0.2, "artefact": 0.2}}))
+    p.steps.append(rp.Step("check LSTM Jetson", [], "ok", 1.0, "", {"accuracy": {"float": 0.5, "artefact": 0.5}}))
+    # compare records as `snncc compare --json` writes them (rows per target)
+    p.steps.append(rp.Step("compare RSNN", [], "ok", 1.0, "", {"rows": [
+        {"target": "loihi", "accuracy": 0.17, "energy": {"uj_per_sample": 0.5, "source": "estimate"}},
+        {"target": "jetson", "accuracy": 0.2}]}))
+    p.steps.append(rp.Step("compare LSTM", [], "ok", 1.0, "", {"rows": [{"target": "jetson", "accuracy": 0.5}]}))
     bundle = tmp_path / "rsnn_th1.net"
     snncc.api.compile(small_rsnn_checkpoint, target="loihi", output=bundle)
     (tmp_path / rp.FIGURES).mkdir()
@@ -136,6 +144,9 @@ def test_results_hold_the_papers_figures_and_draw_them(tmp_path, small_rsnn_chec
     assert loihi["core_map"]["cores"] >= 1 and loihi["core_map"]["paper_cores"] == 8
     assert loihi["estimate"]["energy_uj_per_sample"] > 0 and "ESTIMATE" in loihi["estimate"]["label"]
     assert loihi["estimate"]["paper_measurement"]["energy_uj_per_sample"] == 71.0
+    cmp = res["paper_comparison"]
+    assert cmp["rsnn_loihi_accuracy"] == 0.17 and cmp["lstm_jetson_accuracy"] == 0.5
+    assert cmp["ratio"] == 35212.0 / 0.5 and cmp["paper_ratio"] == 496
 
     figures = rp.write_figures(p, res)
     assert list(figures) == ["training_curves", "accuracy", "core_map", "energy_delay"]
@@ -148,6 +159,8 @@ def test_results_hold_the_papers_figures_and_draw_them(tmp_path, small_rsnn_chec
     assert "| RSNN th1 | 20.00 % | 18.00 % | 17.00 % | 20.00 % | 79.90 % | 78.32 % |" in text
     assert "snncc ESTIMATE" in text and "paper, measured" in text and "| energy per sample |" in text
     assert "| delay per sample |" in text and "71 uJ" in text and "2.3 ms" in text
+    assert "| accuracy, this run | 17.00 % (bit-exact emulator) | 50.00 % (ONNX Runtime) | |" in text
+    assert "ESTIMATE against measurement" in text and "| 496x |" in text
 
 
 def test_figures_are_labelled_and_their_tick_labels_readable(tmp_path, small_rsnn_checkpoint):
