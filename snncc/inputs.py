@@ -70,9 +70,9 @@ def check_dataset(inputs, labels, graph, *, source: str | None = None) -> None:
 
 
 # -- input files and seeded random inputs ----------------------------------------------------------
-def load_array(path, field: str = "--input", *, npz_inputs: bool = True) -> np.ndarray:
-    """A .npy array (no pickles); a .npz data set gives its ``inputs`` array (``snncc run --input``),
-    or is refused with ``npz_inputs=False`` (``snncc emulate --input`` takes one .npy array)."""
+def load_array(path, field: str = "--input") -> np.ndarray:
+    """A .npy array (no pickles), or a .npz data set's ``inputs`` array (what ``snncc data`` writes and
+    ``check --data`` reads: every verb takes the same files)."""
     import zipfile
     from pathlib import Path
 
@@ -82,12 +82,9 @@ def load_array(path, field: str = "--input", *, npz_inputs: bool = True) -> np.n
     try:
         obj = np.load(path, allow_pickle=False)
     except (ValueError, OSError, EOFError, zipfile.BadZipFile) as ex:   # not .npy / a broken .npz
-        kinds = ".npy/.npz" if npz_inputs else ".npy"
-        raise SnnccError(f"not a readable {kinds} array ({type(ex).__name__})", file=str(path), field=field) from None
+        raise SnnccError(f"not a readable .npy/.npz array ({type(ex).__name__})", file=str(path), field=field) from None
     if isinstance(obj, np.lib.npyio.NpzFile):
         with obj:
-            if not npz_inputs:
-                raise SnnccError("expected one .npy array, got an .npz archive", file=str(path), field=field)
             if "inputs" not in obj.files:
                 raise SnnccError(f"a .npz input needs an 'inputs' array (has {sorted(obj.files)})", file=str(path),
                                  field="inputs")

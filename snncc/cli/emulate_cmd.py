@@ -1,6 +1,6 @@
 """``snncc emulate``: run a written artefact in its target's emulator, or a model file as the float graph (``snncc.api.emulate``).
 
-X.npy: (T, C) or (B, T, C) inputs, C the artefact's (or model's) input width, or in the model's own shape (the
+X.npy (or a data set .npz's ``inputs``): (T, C) or (B, T, C) inputs, C the artefact's (or model's) input width, or in the model's own shape (the
 data's channels, tiled for input copies; CNN frames (B, T, C, H, W)). OUT.npz: output_spikes (B, T, n_out) uint8,
 counts (B, n_out), prediction (B,) and what the target adds; with --record all the recorded states (each target
 names them: a Loihi bundle's layer{i}_spikes / _voltage / _current; the float graph's <population>_spikes /
@@ -25,7 +25,7 @@ from snncc.cli.output import err_console, print_record, progress_bar
 @declares_paths(inputs=("bundle", "input", "params"), outputs=("output",))
 def emulate_command(
     bundle: Path = typer.Argument(..., metavar="ARTEFACT", help="A written artefact (a Loihi bundle .net/.h5 written by snncc, lava-dl netx or SLAYER v1; a Xylo artefact directory; any installed target's that emulates) or a model file (.pt/.nir/.snnir: the float graph, run by the IR reference)."),
-    input: Path = typer.Option(..., "--input", "-i", help="Input spikes .npy: (T, C) or (B, T, C), values 0/1; or in the model's shape: the data's channels (input copies tiled by snncc), CNN frames (B, T, C, H, W)."),
+    input: Path = typer.Option(..., "--input", "-i", "--data", help="Input spikes .npy: (T, C) or (B, T, C), values 0/1, or a data set .npz (its 'inputs', as check --data reads it); or in the model's shape: the data's channels (input copies tiled by snncc), CNN frames (B, T, C, H, W)."),
     output: Path = typer.Option(..., "--output", "-o", help="Result .npz (written atomically; the name must end in .npz)."),
     record: str = typer.Option("outputs", "--record", help="'outputs' or 'all' (every layer's spikes, voltage, current)."),
     stream: bool = typer.Option(False, "--stream", help="The paper's protocol: one continuous run, --gap blank steps between samples."),

@@ -20,7 +20,7 @@ from snncc.cli.output import print_record
 @declares_paths(inputs=("artefact", "input"), outputs=("output",))
 def run_command(
     artefact: Path = typer.Argument(..., help="Jetson artefact directory (snncc compile --target jetson -o DIR)."),
-    input: Path = typer.Option(..., "--input", "-i", help=".npy of shape (T, C) or (B, T, C) (C = the data's channels, copies are applied inside), CNN frames (B, T, C, H, W), or a data-set .npz."),
+    input: Path = typer.Option(..., "--input", "-i", "--data", help=".npy of shape (T, C) or (B, T, C) (C = the data's channels, copies are applied inside), CNN frames (B, T, C, H, W), or a data-set .npz."),
     stream: bool = typer.Option(False, "--stream", help="Feed step.onnx one time step at a time (any T, streaming)."),
     output: Optional[Path] = typer.Option(None, "--output", "-o", help="Write the results to this .npz (atomically)."),
     backend: str = typer.Option("auto", "--backend", help="auto (TensorRT if importable and an engine was built, else ONNX Runtime) | tensorrt | onnxruntime."),

@@ -83,7 +83,7 @@ def emulate_bundle(bundle: str | Path, *, input: str | Path, output: str | Path,
             raise SnnccError("applies to a model file, not to a written artefact (compile fixed the model)",
                              field=given)
         emulate = capability(tgt, "emulate")
-        x = load_array(input, npz_inputs=False)
+        x = load_array(input)
         total = int(x.shape[0]) if x.ndim in (3, 5) else 1   # (B, T, C) or (B, T, C, H, W) frames
         emulation = emulate(path, x, record=record, stream=stream, gap=gap, source=str(input),
                             progress=counting(progress, total, "emulating"))
@@ -104,7 +104,7 @@ def _float_emulation(path: Path, input: str | Path, record: str, stream: bool, p
     if stream:
         raise SnnccError("applies to a target's emulator; the float graph runs each sample from rest", field="--stream")
     graph = load_model(path, LoadOptions(params=None if params is None else Path(params), dt=dt, reset=reset))
-    x = load_array(input, npz_inputs=False)
+    x = load_array(input)
     total = int(x.shape[0]) if x.ndim in (3, 5) else 1
     found: Emulation = run_float(graph, x, record=record, source=str(input),
                                  progress=counting(progress, total, "running the float graph"))

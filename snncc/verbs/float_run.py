@@ -80,7 +80,8 @@ def run_float(graph: Graph, inputs: np.ndarray, *, record: str = "outputs", sour
     x = check_batch(x, layout.width, spikes=False, source=source, field="--input")
     lifs = [n for n, op in graph.items() if isinstance(op, LIF)]
     readout = next((n for n, op in graph.items() if isinstance(op, Readout)), None)
-    spiking_out = bool(lifs) and readout is None
+    # a spiking graph decides by its last population's spike counts (a spike_count readout or none)
+    spiking_out = bool(lifs) and (readout is None or getattr(graph.node(readout), "mode", "") == "spike_count")
     neurons = int(sum(int(getattr(graph.node(p), "n")) for p in lifs))
     step = chunk_size(max(1, neurons), int(x.shape[1]), 64)
     spikes, scores = [], []

@@ -62,7 +62,7 @@ def report_energy(bundle: str | Path, *, target: str | None = None, energy: bool
         x, source, note = load_dataset(data)[0], str(data), f"data set {data.name}"
     elif input is not None:
         input = Path(input)
-        x, source, note = load_array(input, npz_inputs=False), str(input), f"input file {input.name}"
+        x, source, note = load_array(input), str(input), f"input file {input.name}"
     else:
         x, source, note = RandomSpikes(8 if samples is None else samples, 0.05 if rate is None else rate,
                                        0 if seed is None else seed), None, ""

@@ -23,5 +23,12 @@ def test_the_letters_are_labelled_nir_layout_data(tmp_path, capsys, shared_nir):
     assert code == 0, err
     checked = json.loads(stdout)
     assert checked["accuracy"] is not None and "SYNTHETIC" in checked["inputs"] and checked["samples"] == 14
+    # the same file feeds emulate (--data, as check and compare name it): the float graph counts its output spikes
+    code, _, err = run_cli(["emulate", shared_nir / "braille_noDelay_noBias_subtract.nir", "--data", out,
+                            "-o", tmp_path / "float.npz"], capsys)
+    assert code == 0, err
+    with np.load(tmp_path / "float.npz") as z:
+        assert z["output_spikes"].shape == (14, 256, 7)
+        assert (z["counts"] == z["output_spikes"].sum(axis=1)).all() and (z["prediction"] == z["counts"].argmax(1)).all()
     code, _, err = run_cli(["data", "nir", "-o", tmp_path / "letters.npy"], capsys)
     assert code == 2 and "name the file .npz" in err
