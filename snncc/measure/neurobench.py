@@ -11,7 +11,9 @@ its synapses as stored).
                            sample (the input is not an activation)
     synaptic_operations    per sample: ``Dense`` = every weight at every step (in x out per projection and step),
                            ``Effective_ACs`` = non-zero inputs x non-zero weights where the projection's input is binary
-                           (spikes), ``Effective_MACs`` the same where it is graded; biases excluded
+                           (spikes), ``Effective_MACs`` the same where it is graded; biases excluded; binary or
+                           graded is decided per sample and step (NeuroBench decides per layer call: the same at
+                           batch size 1); a synaptic layer behind a pooling sees the pooled sums, as in a torch model
 
 A projection's input at step t is its source's output at step t - delay (zeros before), as NeuroBench's hooks see
 a layer called once per step. ``tests/measure/test_neurobench.py`` runs the ``neurobench`` package's own metrics on
@@ -42,6 +44,8 @@ class Projection:
     target: str
     weight: Any
     delay: int = 0
+    pooling: Any = None     # (in, source width): the pooling between source and weight (its output is what the
+                            # synaptic layer sees, graded: NeuroBench counts MACs there); None: fed directly
 
 
 @dataclass
@@ -104,11 +108,12 @@ class Tally:
             out, inp = _sizes(p.weight)
             self.dense += float(out) * float(inp) * t * b
             fed = _shifted(x, int(p.delay)).reshape(b * t, -1)
-            ops = float((fed != 0).sum(axis=0) @ fan_out)
-            if bool(np.all((fed == 0) | (fed == 1) | (fed == -1))):
-                self.ac += ops
-            else:
-                self.mac += ops
+            if p.pooling is not None:                    # the synaptic layer sees the pooled activity
+                fed = np.asarray(p.pooling @ fed.T).T
+            ops = (fed != 0) @ fan_out                   # per (sample, step): non-zero inputs x their non-zero weights
+            binary = np.all((fed == 0) | (fed == 1) | (fed == -1), axis=1)
+            self.ac += float(ops[binary].sum())
+            self.mac += float(ops[~binary].sum())
         for name in self.populations:
             a = np.asarray(activity[name])
             b = int(a.shape[0])
@@ -192,16 +197,19 @@ def graph_projections(graph: Graph) -> tuple[list[Projection], list[str]]:
         if len(preds) != 1:
             continue
         src, delay = preds[0], graph.delay(preds[0], name)
+        pooling = None
         while isinstance(graph.node(src), (Dense, Conv)) and is_pooling(graph.node(src)):
             up = list(graph.predecessors(src))[0]
             delay += graph.delay(up, src)
-            notes.append(f"{src}: pooling, not a synaptic layer (NeuroBench counts none); its input feeds {name}")
+            pool = conv_matrix(graph.node(src))
+            pooling = pool if pooling is None else pooling @ pool
+            notes.append(f"{src}: pooling, not a synaptic layer (NeuroBench counts none); its sums feed {name}")
             src = up
         if not isinstance(graph.node(src), (LIF, Input)):
             notes.append(f"{name}: fed by {src}, neither a population nor an input: not counted")
             continue
         weight = conv_matrix(op) if isinstance(op, Conv) else np.asarray(op.weight)
-        out.append(Projection(src, name, weight, int(delay)))
+        out.append(Projection(src, name, weight, int(delay), pooling))
     return out, notes
 
 

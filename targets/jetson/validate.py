@@ -3,10 +3,13 @@
 1. ``onnx.checker`` (full check), no ``Sequence*`` / ``ConcatFromSequence`` (TensorRT has no
    sequence types) and no loop operators (``Loop``, ``Scan``, ``If``), every graph input used.
 2. Every declared dynamic axis really is dynamic: each model is run at two sizes of it.
-3. Against the IR reference (``snncc.ir.simulate``, float64) on seeded inputs: output spike
-   agreement (>= 99.9 % required) or max |delta| of values (<= 1e-3 of their range), score
-   delta, prediction agreement; the step model driven for T steps against the reference and
-   against the sequence model.
+3. Against the IR reference (``snncc.ir.simulate``) in float32, the artefact's own precision, on
+   seeded inputs: output spike agreement (>= 99.9 % required) or max |delta| of values (<= 1e-3 of
+   their range), score delta, prediction agreement; the step model driven for T steps against the
+   reference and against the sequence model. The float64 reference's agreement is measured beside
+   and reported, not required: float32 against float64 is rounding (a long run of non-leaky neurons
+   drifts by a spike where a voltage ties the threshold), which ``snncc check`` measures as loss, not
+   an export bug.
 4. fp16 emulation (weights, inputs and every arithmetic result rounded to float16, in torch):
    spike flips and score delta against the float32 ONNX result. Reported, not a failure: TensorRT --fp16 is the user's choice.
 """
@@ -104,10 +107,11 @@ def seeded_inputs(plan: GraphPlan, batch: int, steps: int, seed: int) -> np.ndar
     return rng.standard_normal((batch, steps, plan.base_inputs)).astype(np.float32)
 
 
-def reference(plan: GraphPlan, x: np.ndarray):
-    """IR reference (float64) on base-channel data: copies tiled as the authors do."""
+def reference(plan: GraphPlan, x: np.ndarray, dtype=np.float32):
+    """IR reference in ``dtype`` (float32: the artefact's precision) on base-channel data: copies tiled as the
+    authors do."""
     tiled = np.tile(x, (1, 1, plan.input_copies)) if plan.input_copies > 1 else x
-    res = simulate(plan.graph, tiled.astype(np.float64))
+    res = simulate(plan.graph, tiled.astype(dtype), dtype=dtype)
     return np.asarray(res.output), (np.asarray(res.readout) if res.readout is not None else None)
 
 
@@ -173,6 +177,22 @@ def _compare(plan: GraphPlan, got_seq: np.ndarray | None, got_score: np.ndarray,
     return rec
 
 
+REFERENCE = "snncc.ir.simulate in float32 (the artefact's precision); float64 agreement measured beside"
+
+
+def float64_agreement(plan: GraphPlan, x: np.ndarray, got_seq: np.ndarray | None, got_score: np.ndarray) -> dict:
+    """How model.onnx (float32) agrees with the float64 reference on the validation inputs: measured, not required."""
+    seq64, score64 = reference(plan, x, np.float64)
+    if score64 is None:
+        score64 = host_score(plan.score_mode, seq64)
+    rec: dict = {"max_abs_delta_score": float(np.max(np.abs(got_score - score64))) if got_score.size else 0.0}
+    if got_seq is not None and plan.spiking_output and got_seq.shape == seq64.shape:
+        rec["spike_agreement"] = float(np.mean(got_seq == seq64))
+        rec["spikes_differing"] = int(np.sum(got_seq != seq64))
+    rec["prediction_agreement"] = float(np.mean(np.argmax(got_score, 1) == np.argmax(score64, 1)))
+    return rec
+
+
 def _run_sequence(plan: GraphPlan, sess: ort.InferenceSession, x: np.ndarray):
     outs = sess.run(None, {sess.get_inputs()[0].name: x})
     score = outs[0]
@@ -189,7 +209,7 @@ def validate_export(plan: GraphPlan, steps: int, sequence: ExportedModel, step: 
 
 
 def _validate(plan: GraphPlan, steps: int, sequence: ExportedModel, step: ExportedModel, seed: int) -> ValidationRecord:
-    record = ValidationRecord(reference="snncc.ir.simulate (float64)", seed=seed, samples=MAIN_BATCH, steps=steps)
+    record = ValidationRecord(reference=REFERENCE, seed=seed, samples=MAIN_BATCH, steps=steps)
     record.sequence["operators"] = check_structure(sequence, "model.onnx")
     record.step["operators"] = check_structure(step, "step.onnx")
     seq_sess, step_sess = session(sequence), session(step)
@@ -200,6 +220,7 @@ def _validate(plan: GraphPlan, steps: int, sequence: ExportedModel, step: Export
         ref_score = host_score(plan.score_mode, ref_seq)
     got_seq, got_score = _run_sequence(plan, seq_sess, x)
     record.sequence.update(_compare(plan, got_seq, got_score, ref_seq, ref_score, "model.onnx"))
+    record.sequence["float64"] = float64_agreement(plan, x, got_seq, got_score)
 
     # a second shape on every dynamic axis: batch always; time too for whole-sequence models
     second_steps = steps if plan.has_lif else max(2, steps // 2 + 3)

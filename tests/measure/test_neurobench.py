@@ -107,3 +107,30 @@ def test_float_graph_figures_equal_neurobenchs_own(shared_nir):
     bookkeeping = sum(b.numel() * b.element_size() for name, b in float32.named_buffers()
                       if name.split(".")[-1] in ("graded_spikes_factor", "reset_mechanism_val"))
     assert static["Footprint"] - bookkeeping == ours.footprint
+
+
+def test_a_layer_behind_a_pooling_counts_as_neurobench_counts_it():
+    """A synaptic layer fed through a sum pooling sees graded sums: NeuroBench's own per-call rule (MACs where the
+    call's input is not all 0/±1, else ACs), called per sample and step, gives what snncc's tally gives."""
+    torch = require("torch")
+    from neurobench.metrics.utils.layers.macs import single_layer_MACs
+
+    from snncc.measure.neurobench import Projection, Tally
+
+    rng = np.random.default_rng(0)
+    x = (rng.random((3, 20, 8)) < 0.2).astype(np.float64)                  # spikes of an 8-neuron population
+    pool = np.kron(np.eye(4), np.ones((1, 2)))                               # sum pooling, pairs: (4, 8)
+    weight = np.where(rng.random((3, 4)) < 0.3, 0.0, rng.normal(size=(3, 4)))
+    tally = Tally([Projection("pop", "dense", weight, 0, pool)], [])
+    tally.add({"pop": x})
+    layer = torch.nn.Linear(4, 3, bias=False, dtype=torch.float64)
+    layer.weight.data = torch.as_tensor(weight)
+    ac = mac = 0
+    for b in range(x.shape[0]):
+        for t in range(x.shape[1]):
+            ops, spiking = single_layer_MACs(torch.as_tensor(pool @ x[b, t])[None], layer)
+            ac, mac = (ac + ops, mac) if spiking else (ac, mac + ops)
+    got = tally.synaptic_operations()
+    assert mac > 0 and ac > 0                                               # both kinds occur on these inputs
+    assert got["Effective_ACs"] * 3 == ac and got["Effective_MACs"] * 3 == mac
+    assert got["Dense"] == 3 * 4 * 20
