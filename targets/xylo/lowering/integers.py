@@ -23,7 +23,7 @@ from snncc.targets.xylo.lowering import decays, sigma_delta as relay_rules
 from snncc.targets.xylo.lowering.chip_form import (BIAS_SOURCE, SAFE_WEIGHT_SHIFT, SINGLE_THRESHOLD, STATE_MARGIN,
                                                    STATE_MAX, MIN_GAIN, WEIGHT_MAX, WEIGHT_MIN, HiddenFloat,
                                                    OutputFloat)
-from snncc.targets.xylo.lowering.filters import synaptic
+from snncc.targets.xylo.lowering.compiled import synaptic
 
 
 @dataclass
