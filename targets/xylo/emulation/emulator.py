@@ -31,8 +31,8 @@ def emulate(spec: XyloSpec, inputs, *, record: bool = False, threads: int | None
     from snncc.targets.xylo.emulation import vectorized
 
     x = check_inputs(inputs, spec.n_in, source=source)
-    if (threads is None and x.shape[0] * spec.n_hidden <= vectorized.SMALL_RUN and vectorized.plain(spec)
-            and "snncc.targets.xylo.emulation.kernel" not in sys.modules):
+    small = x.shape[0] * x.shape[1] * spec.n_hidden <= vectorized.SMALL_RUN
+    if threads is None and small and vectorized.plain(spec) and "snncc.targets.xylo.emulation.kernel" not in sys.modules:
         return vectorized.run(spec, x, record=record)
     from snncc.targets.xylo.emulation.kernel import prepare, run_prepared
 

@@ -13,8 +13,8 @@ others) one step at a time, as ``literal.reference_run`` does, on int64 states:
   shift on int64); with every threshold > 0 a neuron's events are min(cap, V // threshold) at once and V - n x
   threshold stays in int16.
 
-``emulator.emulate`` takes this path for a run of few samples x hidden neurons (``SMALL_RUN``) while the kernel is
-not loaded; the tests hold it to XyloSim like the kernel (tests/xylo/emulation/test_emulator_oracle.py).
+``emulator.emulate`` takes this path for a run of few neuron-steps (samples x steps x hidden neurons, ``SMALL_RUN``:
+one 256-step sample of 576 hidden neurons, say) while the kernel is not loaded; the tests hold it to XyloSim like the kernel (tests/xylo/emulation/test_emulator_oracle.py).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from snncc.targets.xylo.emulation.result import STATE_NAMES, XyloResult
 from snncc.targets.xylo.emulation.weights import effective_weights, wrap16
 from snncc.targets.xylo.spec import XyloSpec
 
-SMALL_RUN = 20_000           # samples x hidden neurons up to which this path runs rather than the compiled kernel
+SMALL_RUN = 200_000          # samples x steps x hidden neurons up to which this path runs rather than the kernel
 LO, HI = CORE.state_min, CORE.state_max
 
 
