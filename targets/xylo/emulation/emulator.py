@@ -32,7 +32,8 @@ def emulate(spec: XyloSpec, inputs, *, record: bool = False, threads: int | None
 
     x = check_inputs(inputs, spec.n_in, source=source)
     small = x.shape[0] * x.shape[1] * spec.n_hidden <= vectorized.SMALL_RUN
-    if threads is None and small and vectorized.plain(spec) and "snncc.targets.xylo.emulation.kernel" not in sys.modules:
+    loaded = "snncc.targets.xylo.emulation.kernel" in sys.modules
+    if threads is None and small and vectorized.plain(spec) and not loaded:
         return vectorized.run(spec, x, record=record)
     from snncc.targets.xylo.emulation.kernel import prepare, run_prepared
 

@@ -14,7 +14,8 @@ others) one step at a time, as ``literal.reference_run`` does, on int64 states:
   threshold stays in int16.
 
 ``emulator.emulate`` takes this path for a run of few neuron-steps (samples x steps x hidden neurons, ``SMALL_RUN``:
-one 256-step sample of 576 hidden neurons, say) while the kernel is not loaded; the tests hold it to XyloSim like the kernel (tests/xylo/emulation/test_emulator_oracle.py).
+one 256-step sample of 576 hidden neurons, say) while the kernel is not loaded; the tests hold it to XyloSim like
+the kernel (tests/xylo/emulation/test_emulator_oracle.py).
 """
 
 from __future__ import annotations
