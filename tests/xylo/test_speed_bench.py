@@ -33,8 +33,16 @@ def test_the_former_arithmetic_is_patched_in_and_restored():
     bench = load_bench("bench_xylo_finetune")
     from snncc.targets.xylo.lowering import integers
 
-    current = identify.normal_equations, integers.round_with_feedback
+    current = identify.hidden_normal_equations, integers.round_with_feedback
     with bench.former_arithmetic():
-        assert identify.normal_equations is bench.per_neuron_normal_equations
+        assert identify.hidden_normal_equations is bench.former_hidden_normal_equations
         assert integers.round_with_feedback is bench.former_rounding
-    assert (identify.normal_equations, integers.round_with_feedback) == current
+    assert (identify.hidden_normal_equations, integers.round_with_feedback) == current
+    rng = np.random.default_rng(5)
+    sources = [(rng.random((6, 50, 3)) < 0.3).astype(np.uint8), (rng.random((6, 50, 4)) < 0.2).astype(np.uint8)]
+    v_pre = rng.normal(size=(6, 50, 2))
+    former = bench.former_hidden_normal_equations(sources, (0.75, 0.875), v_pre, np.ones(2), 2.0, True)
+    for (h0, b0), (h1, b1) in zip(former, identify.hidden_normal_equations(sources, (0.75, 0.875), v_pre, np.ones(2),
+                                                                            2.0, True)):
+        np.testing.assert_allclose(h1, h0, rtol=1e-12)
+        np.testing.assert_allclose(b1, b0, rtol=1e-12)

@@ -14,7 +14,6 @@ import pytest
 from snncc.ir.serialize import save_graph
 from snncc.targets.xylo.spec import XyloSpec
 from snncc_test_helpers import run_cli
-from tests.xylo.oracle import XyloSimOracle
 
 from xylo_models import chain
 
@@ -22,21 +21,6 @@ QUICK = ["--calibration-samples", "12", "--time-steps", "48"]
 KWARGS = ("weights_in", "weights_rec", "weights_out", "dash_mem", "dash_mem_out", "dash_syn", "dash_syn_2",
           "dash_syn_out", "threshold", "threshold_out", "bias", "bias_out", "weight_shift_in", "weight_shift_rec",
           "weight_shift_out", "aliases", "dt")
-
-
-@pytest.fixture(scope="module")
-def compiled(tmp_path_factory):
-    """(model, artefact, inputs): a small chain compiled once with --rule single (two synaptic currents)."""
-    from snncc.cli.main import run
-
-    d = tmp_path_factory.mktemp("xylo")
-    model = d / "chain.snnir"
-    save_graph(chain(np.random.default_rng(0), w_scale=1.0), model)
-    out = d / "net.xylo"
-    assert run(["compile", str(model), "--target", "xylo", "-o", str(out), "--rule", "single", *QUICK]) == 0
-    x = (np.random.default_rng(5).random((5, 40, 6)) < 0.2).astype(np.uint8)
-    np.save(d / "x.npy", x)
-    return model, out, d / "x.npy"
 
 
 def test_compile_writes_the_artefact_directory(compiled):
@@ -81,7 +65,7 @@ def test_compiling_again_gives_the_same_bytes_and_replaces_only_its_own_director
     assert sorted(p.name for p in user.iterdir()) == ["notes.txt"] and (user / "notes.txt").read_text() == "keep"
 
 
-def test_xylosim_runs_the_spec_unchanged_with_the_output_spikes_of_snncc_emulate(compiled, tmp_path, capsys):
+def test_xylosim_runs_the_spec_unchanged_with_the_output_spikes_of_snncc_emulate(compiled, xylosim, tmp_path, capsys):
     _, out, x_path = compiled
     res = tmp_path / "em.npz"
     code, _, err = run_cli(["emulate", out, "--target", "xylo", "--input", x_path, "-o", res, "--record", "all"], capsys)
@@ -91,7 +75,7 @@ def test_xylosim_runs_the_spec_unchanged_with_the_output_spikes_of_snncc_emulate
     x = np.load(x_path)
     fed = np.zeros((x.shape[0], x.shape[1] + max(pad, lag), x.shape[2]), np.uint8)
     fed[:, pad:pad + x.shape[1]] = x
-    oracle = XyloSimOracle(XyloSpec.load_npz(out / "spec.npz")).run(fed, record=True)
+    oracle = xylosim(XyloSpec.load_npz(out / "spec.npz"), out).run(fed, record=True)
     with np.load(res, allow_pickle=False) as got:
         assert got["output_spikes"].shape == (5, 40, 3)
         assert np.array_equal(got["output_spikes"], oracle.output_spikes[:, lag:lag + 40])
@@ -101,7 +85,7 @@ def test_xylosim_runs_the_spec_unchanged_with_the_output_spikes_of_snncc_emulate
         assert np.array_equal(got["counts"], got["output_spikes"].sum(axis=1))
 
 
-def test_stream_emulation_runs_the_samples_back_to_back(compiled, tmp_path, capsys):
+def test_stream_emulation_runs_the_samples_back_to_back(compiled, xylosim, tmp_path, capsys):
     _, out, x_path = compiled
     res = tmp_path / "stream.npz"
     code, _, err = run_cli(["emulate", out, "--target", "xylo", "--input", x_path, "-o", res, "--stream", "--gap", "7"],
@@ -113,7 +97,7 @@ def test_stream_emulation_runs_the_samples_back_to_back(compiled, tmp_path, caps
     run = np.zeros((1, pad + 5 * 47 + max(0, lag - pad), 6), np.uint8)
     for i in range(5):
         run[0, pad + 47 * i:pad + 47 * i + 40] = x[i]
-    oracle = XyloSimOracle(XyloSpec.load_npz(out / "spec.npz")).run(run).output_spikes[0]
+    oracle = xylosim(XyloSpec.load_npz(out / "spec.npz"), out).run(run).output_spikes[0]
     with np.load(res, allow_pickle=False) as got:
         for i in range(5):
             assert np.array_equal(got["output_spikes"][i], oracle[lag + 47 * i:lag + 47 * i + 40])

@@ -50,6 +50,7 @@ from snncc.targets.xylo.feed import chip_window, read_window
 COUNTED_SAMPLES = 8          # samples the literal emulator counts rule events on
 UNCAPPED = 1 << 20           # hidden events per step when the chip's cap of 31 is lifted
 CHUNK = 64                   # samples per chunk at most
+TRIM_EVERY = 8               # chunks between two returns of freed heap memory to the system (``_heap_trimmer``)
 POSSIBLE = ("reset", "weights", "decays", "saturation")
 STAGES = (
     ("trained", "the float graph as given", None),
@@ -153,6 +154,21 @@ def chunk_for(graph: Graph, spec, steps: int) -> int:
     return chunk_size(max(spiking_neurons(graph), int(spec.n_hidden) + int(spec.n_out)), steps, CHUNK)
 
 
+def _heap_trimmer() -> Callable[[], object]:
+    """A call that hands the C heap's freed pages back to the system (glibc's ``malloc_trim``; elsewhere nothing).
+
+    Each chunk frees what it allocated, but glibc keeps freed medium-sized blocks of the heap, so without this the
+    resident size of a long check creeps up with the sample count (measured: 1.12 GB at 10,000 Braille samples,
+    0.67 GB at 3,000; with it flat). The kit has no such helper (told the lead): it is kept here until it does."""
+    try:
+        import ctypes
+
+        trim = ctypes.CDLL("libc.so.6").malloc_trim
+    except (OSError, AttributeError):
+        return lambda: None
+    return lambda: trim(0)
+
+
 class _Tally:
     """Per-population spike counts over the chunks (liveness), without holding the spikes."""
 
@@ -204,6 +220,7 @@ def check_written(graph: Graph, written, x: np.ndarray | None, labels: np.ndarra
     floats, chips = _Tally(), _Tally()
     events: dict[str, int] | None = None
     first: np.ndarray | None = None
+    trim, done = _heap_trimmer(), 0
     for part in chunks:
         with one_thread():
             spikes = float_spikes(graph, part)
@@ -224,6 +241,9 @@ def check_written(graph: Graph, written, x: np.ndarray | None, labels: np.ndarra
         if events is None:
             events = rule_events(written, part)
             first = part
+        done += 1
+        if done % TRIM_EVERY == 0:
+            trim()                              # the chunks' freed memory back to the system: a flat footprint
         if progress is not None:
             progress(int(part.shape[0]))
     c = {k: np.concatenate(v) for k, v in counts.items()}

@@ -157,7 +157,8 @@ def prepare(spec) -> Prepared:
     scale = lambda dash, width: _padded(np.ldexp(1.0, -np.asarray(dash, np.int64)), width)   # noqa: E731
     scale_syn = np.concatenate([scale(spec.dash_syn, np_), scale(spec.dash_syn_2, np_)])
     return Prepared(
-        spec.n_in, n, n_out, spec.n_oen, np_, w_in, _spans(w_in, 2 * n), w_rec, _spans(w_rec, 2 * n), w_out_p, scale_syn, scale(spec.dash_mem, np_), _padded(spec.threshold, np_, 1.0), _padded(spec.bias, np_),
+        spec.n_in, n, n_out, spec.n_oen, np_, w_in, _spans(w_in, 2 * n), w_rec, _spans(w_rec, 2 * n), w_out_p,
+        scale_syn, scale(spec.dash_mem, np_), _padded(spec.threshold, np_, 1.0), _padded(spec.bias, np_),
         scale(spec.dash_syn_out, nop), scale(spec.dash_mem_out, nop), _padded(spec.threshold_out, nop, 1.0),
         _padded(spec.bias_out, nop), alias_ptr, alias_idx,
         bool(alias_idx.size == 0 and np.all(spec.threshold > 0)), bool(np.all(spec.threshold_out > 0)))

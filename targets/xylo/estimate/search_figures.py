@@ -21,7 +21,6 @@ from snncc.targets.kit.search import SearchCosts, tiled_inputs, timed
 
 if TYPE_CHECKING:
     from snncc.ir.graph import Graph
-    from snncc.targets.xylo.capabilities import XyloTarget
 
 LABEL = ("Xylo: neurons and synapses used and design-rule feasibility (exact); real-time margin an ESTIMATE from "
          "per-operation cycle costs (not a measurement); no energy figure")

@@ -12,9 +12,8 @@ from typing import Callable
 
 import numpy as np
 
-from snncc.targets.kit import SnnccError
 from snncc.ir.graph import Graph
-from snncc.ir.nodes import Input
+from snncc.targets.kit import SnnccError
 from snncc.targets.xylo.chip import XyloChip
 from snncc.targets.xylo.lowering.structure import Population
 

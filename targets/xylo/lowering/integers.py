@@ -23,7 +23,7 @@ from snncc.targets.xylo.lowering import decays, sigma_delta as relay_rules
 from snncc.targets.xylo.lowering.chip_form import (BIAS_SOURCE, SAFE_WEIGHT_SHIFT, SINGLE_THRESHOLD, STATE_MARGIN,
                                                    STATE_MAX, MIN_GAIN, WEIGHT_MAX, WEIGHT_MIN, HiddenFloat,
                                                    OutputFloat)
-from snncc.targets.xylo.lowering.filters import synaptic
+from snncc.targets.xylo.lowering.compiled import synaptic
 
 
 @dataclass
@@ -50,6 +50,18 @@ class PopulationRecord:
 
 
 STATE_SAMPLES = 32           # samples whose currents are held at once (``hidden_state_limit``)
+SPARSE_BELOW = 0.05          # a weight matrix with fewer non-zero weights than this drives the currents sparse
+
+
+def _driven(filtered: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``filtered`` (s, T, m) through ``w.T`` (w: (n, m)): dense, or sparse where ``w`` is (a large sparse network's
+    cost then grows with its synapses, not with n x m)."""
+    if w.size and np.count_nonzero(w) < SPARSE_BELOW * w.size:
+        from scipy.sparse import csr_matrix
+
+        s, t, m = filtered.shape
+        return (csr_matrix(w) @ filtered.reshape(s * t, m).T).T.reshape(s, t, w.shape[0])
+    return filtered @ w.T
 
 
 def _currents(pop: HiddenFloat, trains: dict[str, np.ndarray], s0: int, s1: int) -> np.ndarray:
@@ -63,7 +75,7 @@ def _currents(pop: HiddenFloat, trains: dict[str, np.ndarray], s0: int, s1: int)
         for src, w in pop.weights.items():
             if np.any(w[k]):
                 part = trains[src][s0:s1]
-                total = total + synaptic(part, a).reshape(shape + (part.shape[2],)) @ w[k].T
+                total = total + _driven(synaptic(part, a).reshape(shape + (part.shape[2],)), w[k])
         out.append(np.broadcast_to(total, shape + (pop.n,)) if np.isscalar(total) else total)
     return np.stack(out)
 

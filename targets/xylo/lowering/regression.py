@@ -17,7 +17,7 @@ so rounding costs as little voltage error as the data allow.
 
 The normal equations of all neurons of a population are summed block by block over the rows
 (``ROW_BLOCK`` rows, the same blocks whatever the sample length), each block of features computed from the
-trains when it is needed (``filters.py``, compiled) and used by every neuron while it is in cache: memory is
+trains when it is needed (``compiled.py``, compiled) and used by every neuron while it is in cache: memory is
 bounded by a block of features and the neurons' quadratic forms, never the whole feature matrix.
 """
 
@@ -38,16 +38,16 @@ CHUNK_ROWS = 8 * ROW_BLOCK    # rows of features computed at once (whole samples
 
 
 def chip_filter(z: np.ndarray, a: float) -> np.ndarray:
-    """F[t] = a (F[t-1] + z[t]) along axis 1 of (B, T, n), float64 (``filters.synaptic``)."""
-    from snncc.targets.xylo.lowering.filters import synaptic
+    """F[t] = a (F[t-1] + z[t]) along axis 1 of (B, T, n), float64 (``compiled.synaptic``)."""
+    from snncc.targets.xylo.lowering.compiled import synaptic
 
     z = np.asarray(z)
     return synaptic(z, a).reshape(z.shape)
 
 
 def membrane_filter(z: np.ndarray, b: float) -> np.ndarray:
-    """G[t] = b G[t-1] + z[t] along axis 1 of (B, T, n), float64 (``filters.membrane``)."""
-    from snncc.targets.xylo.lowering.filters import membrane
+    """G[t] = b G[t-1] + z[t] along axis 1 of (B, T, n), float64 (``compiled.membrane``)."""
+    from snncc.targets.xylo.lowering.compiled import membrane
 
     z = np.asarray(z)
     return membrane(z, b).reshape(z.shape)
@@ -88,8 +88,8 @@ def design(sources: list[np.ndarray], decays: tuple[float, float], v_pre: np.nda
 def _hidden_chunks(sources: list[np.ndarray], decays: tuple[float, ...], v_pre: np.ndarray, theta: np.ndarray,
                    scale: float, constant: bool, samples: int) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """(features, targets, weights) of ``samples`` samples at a time: per synapse decay each source's trains
-    filtered (``filters.synaptic``) into the feature columns, then the constant column."""
-    from snncc.targets.xylo.lowering.filters import synaptic
+    filtered (``compiled.synaptic``) into the feature columns, then the constant column."""
+    from snncc.targets.xylo.lowering.compiled import synaptic
 
     b_all, steps, n = v_pre.shape
     widths = [src.shape[2] for src in sources]
@@ -131,18 +131,21 @@ def accumulate(blocks: Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]], neur
     """Per neuron j of ``neurons``: (H, b) = (A^T A, A^T y) of its weighted rows, A = w_j * features on the rows
     with w_j >= ROW_FLOOR, summed over the (features, targets, weights) ``blocks`` in order, each block used by
     every neuron while it is in cache."""
+    from snncc.targets.xylo.lowering.compiled import gather_scaled
+
     neurons = [int(j) for j in neurons]
     h = np.zeros((len(neurons), f_count, f_count))
     b = np.zeros((len(neurons), f_count))
+    buffer = np.empty((ROW_BLOCK, f_count))
     for block, target, weight in blocks:
+        block = np.ascontiguousarray(block, np.float64)
         for at, j in enumerate(neurons):
             w = weight[:, j]
             keep = np.flatnonzero(w >= ROW_FLOOR)
             if not keep.size:
                 continue
             wk = w[keep]
-            a = np.take(block, keep, axis=0)
-            a *= wk[:, None]
+            a = gather_scaled(block, keep, wk, buffer)        # block[keep] * wk, into the reused buffer
             h[at] += a.T @ a
             b[at] += a.T @ (target[keep, j] * wk)
     return list(zip(h, b))
@@ -251,7 +254,7 @@ def _output_chunks(out: OutputFloat, pre: np.ndarray, own: np.ndarray, v_pre: np
                    rates: tuple[float, float], samples: int) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """(features, targets, weights) of the output neurons' regression for the dash pair of ``rates``, a chunk of
     samples at a time (``fitted_output``)."""
-    from snncc.targets.xylo.lowering.filters import membrane, synaptic
+    from snncc.targets.xylo.lowering.compiled import membrane, synaptic
 
     a, b = rates
     b_all, steps, n = v_pre.shape

@@ -66,6 +66,12 @@ def refused(capsys, args) -> str:
     return lines[0]
 
 
+def names_link(line: str, art: Path, member: str) -> bool:
+    """The one line names the artefact, the linked file and why (the kit's wording of the field may change:
+    ``<art>/<member>: <member>: is a symbolic link`` or ``<art>: manifest.json/files/<member>: lists ...``)."""
+    return line.startswith(f"snncc: error: {art}") and member in line and "symbolic link" in line
+
+
 def commands(good: Path, art: Path, *verbs: str) -> dict[str, list]:
     every = {"emulate": ["emulate", art, "--input", good / "in12.npy", "-o", good / f"{art.name}.npz"],
              "map": ["map", art], "report": ["report", art, "--energy"],
@@ -78,7 +84,7 @@ def test_spec_npz_linked_outside_is_refused_by_every_reader(good, capsys, absolu
     art = linked(good, f"spec_{absolute}.xylo", "spec.npz", absolute)
     for verb, args in commands(good, art, "emulate", "map", "report", "check").items():
         line = refused(capsys, args)
-        assert f"{art}/spec.npz: spec.npz: is a symbolic link" in line, (verb, line)
+        assert names_link(line, art, "spec.npz"), (verb, line)
 
 
 @pytest.mark.parametrize("absolute", [False, True], ids=["relative", "absolute"])
@@ -88,10 +94,10 @@ def test_manifest_linked_outside_is_refused(good, capsys, absolute):
     art = linked(good, f"manifest_{absolute}.xylo", "manifest.json", absolute)
     for verb, args in commands(good, art, "emulate", "map").items():
         line = refused(capsys, [*args, "--target", "xylo"])
-        assert f"{art}/manifest.json: manifest.json: is a symbolic link" in line, (verb, line)
+        assert names_link(line, art, "manifest.json"), (verb, line)
         refused(capsys, args)
     line = refused(capsys, commands(good, art, "check")["check"])
-    assert f"{art}/manifest.json: manifest.json: is a symbolic link" in line
+    assert names_link(line, art, "manifest.json"), line
 
 
 @pytest.mark.parametrize("member", ["README.md", "run_on_board.py"])
@@ -99,7 +105,7 @@ def test_readme_or_board_script_linked_outside_is_not_hashed_through_the_link(go
     art = linked(good, f"{member}.xylo", member, absolute=True)
     for verb, args in commands(good, art, "check", "emulate").items():
         line = refused(capsys, args)
-        assert f"{art}/{member}: {member}: is a symbolic link" in line, (verb, line)
+        assert names_link(line, art, member), (verb, line)
 
 
 @pytest.mark.parametrize("field, value, rule", [

@@ -5,24 +5,17 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
-
 from snncc.frontends import load_model
-from snncc.ir.serialize import save_graph
 from snncc.targets.kit.artefact import model_record
 from snncc.targets.xylo.capabilities import target
-from snncc_test_helpers import run_cli
-
-from xylo_models import chain
 
 
-def test_identify_returns_the_model_record_the_manifest_holds(tmp_path, capsys):
-    model = tmp_path / "m.snnir"
-    save_graph(chain(np.random.default_rng(0)), model)
+def test_identify_returns_the_model_record_the_manifest_holds(compiled, tmp_path):
+    import shutil
+
+    model, written, _ = compiled
     art = tmp_path / "m.xylo"
-    code, _, err = run_cli(["compile", model, "-o", art, "--rule", "direct", "--calibration-samples", "8",
-                            "--time-steps", "32"], capsys)
-    assert code == 0, err
+    shutil.copytree(written, art)
     manifest = json.loads((art / "manifest.json").read_text())
     assert manifest["model"] == model_record(load_model(model))          # the model as compile and check load it
     identity = target.identify(art)

@@ -8,6 +8,7 @@ import pytest
 from snncc.errors import SnnccError
 from snncc.targets.xylo.spec import XyloSpec
 from snncc.targets.xylo.emulation import kernel as _kernel
+from snncc.targets.xylo.emulation import vectorized
 from snncc.targets.xylo.chip import CORE
 from snncc.targets.xylo.emulation.emulator import (
     STATE_NAMES, XyloResult, check_inputs, decay, effective_weights, emulate, reference_run, wrap16, wrapped_weights,
@@ -15,10 +16,13 @@ from snncc.targets.xylo.emulation.emulator import (
 from tests.xylo.networks import Knobs, random_inputs, random_spec
 
 
-def spec_for_tests(**changes):
-    k = dict(seed=3, n_in=4, n_hidden=12, n_out=3, n_ien=8, n_oen=5, synapse_axis=2, shift_in=7, shift_rec=5,
-             shift_out=6, density=0.5, threshold_scale=0.5, bias_fraction=0.5, alias_fraction=0.3,
+KNOBS = dict(seed=3, n_in=4, n_hidden=12, n_out=3, n_ien=8, n_oen=5, synapse_axis=2, shift_in=7, shift_rec=5,
+             shift_out=6, density=0.5, threshold_scale=0.5, bias_fraction=0.5, alias_fraction=0.0,
              negative_thresholds=False)
+
+
+def spec_for_tests(**changes):
+    k = dict(KNOBS, alias_fraction=0.3)
     k.update(changes)
     return random_spec(Knobs(**k))
 
@@ -159,3 +163,35 @@ def test_the_package_exports_its_record_and_emulator_lazily():
     code = "import sys, snncc.targets.xylo; print('snncc.targets.xylo.emulation.emulator' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+def test_a_small_run_without_the_kernel_loaded_takes_the_vectorised_path_and_the_same_results():
+    """``emulate`` of a few samples of a plain spec does not import numba (the kernel's import costs more than the
+    run): the vectorised numpy path, equal to the kernel."""
+    import subprocess
+    import sys
+
+    code = ("import sys, numpy as np\n"
+            "from tests.xylo.networks import Knobs, random_inputs, random_spec\n"
+            "from snncc.targets.xylo.emulation.emulator import emulate\n"
+            f"spec = random_spec(Knobs(**{KNOBS!r}))\n"
+            "x = random_inputs(3, 2, 30, spec.n_in, 0.3, 20)\n"
+            "r = emulate(spec, x, record=True)\n"
+            "print('numba' in sys.modules)\n"
+            "np.savez(sys.argv[1], **r.arrays())\n")
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "v.npz"
+        proc = subprocess.run([sys.executable, "-c", code, str(out)], capture_output=True, text=True,
+                              cwd=Path(__file__).resolve().parents[3])
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stdout.strip() == "False"
+        spec = random_spec(Knobs(**KNOBS))
+        assert vectorized.plain(spec)
+        x = random_inputs(3, 2, 30, spec.n_in, 0.3, 20)
+        kernel = emulate(spec, x, record=True, threads=1)
+        with np.load(out) as got:
+            for name, value in kernel.arrays().items():
+                assert np.array_equal(got[name], value), name

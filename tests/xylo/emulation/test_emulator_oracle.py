@@ -18,7 +18,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from snncc.targets.xylo.chip import CHIPS, CORE
-from snncc.targets.xylo.emulation.emulator import STATE_NAMES, emulate, reference_run
+from snncc.targets.xylo.emulation import vectorized
+from snncc.targets.xylo.emulation.emulator import STATE_NAMES, check_inputs, emulate, reference_run
 from snncc.targets.xylo.spec import XyloSpec
 from tests.xylo.networks import Knobs, chip_sized_knobs, random_inputs, random_spec
 from tests.xylo.oracle import XyloSimOracle
@@ -65,6 +66,9 @@ def run_and_compare(spec: XyloSpec, x: np.ndarray, stats: Counter, label: str) -
     expected = XyloSimOracle(spec).run(x, record=True)
     assert_same(expected, emulate(spec, x, record=True), f"{label} kernel")
     assert_same(expected, emulate(spec, x, record=True, threads=2), f"{label} kernel, 2 threads")
+    if vectorized.plain(spec):
+        assert_same(expected, vectorized.run(spec, check_inputs(x, spec.n_in), record=True), f"{label} vectorised")
+        stats["vectorised"] += 1
     counted = reference_run(spec, x, record=True, count=True)
     assert_same(expected, counted, f"{label} numpy reference")
     stats["examples"] += 1
@@ -87,6 +91,7 @@ def test_random_networks_equal_xylosim_spike_for_spike_and_state_for_state():
 
     check()
     check_coverage(stats, 45)
+    assert stats["vectorised"] >= 5, dict(stats)
 
 
 @pytest.mark.parametrize("key", sorted(CHIPS))
@@ -101,6 +106,8 @@ def test_networks_at_each_chips_limits_equal_xylosim(key):
     expected = XyloSimOracle(spec).run(x, record=True)
     got = emulate(spec, x, record=True)
     assert_same(expected, got, key)
+    if vectorized.plain(spec):
+        assert_same(expected, vectorized.run(spec, check_inputs(x, spec.n_in), record=True), f"{key} vectorised")
     assert got.spikes.sum() > 0 and got.output_spikes.sum() > 0 and (x > CORE.max_input_spikes).any()
     capped = (got.spikes == CORE.max_hidden_spikes) & (got.vmem >= spec.threshold)   # 31 events, V still >= th
     assert capped.any()
@@ -117,6 +124,7 @@ def test_dense_kernel_path_and_no_alias_fast_path_equal_xylosim():
         assert not any(spec.aliases) and spec.threshold.min() > 0
         run_and_compare(spec, random_inputs(seed, 2, 60, 12, 0.2, 20), stats, f"dense {seed}")
     assert stats["silent"] == 0 and stats["hidden_capped"] and stats["current_saturations"]
+    assert stats["vectorised"] == 6
 
 
 def one_neuron(**overrides) -> XyloSpec:

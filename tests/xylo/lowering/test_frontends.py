@@ -10,7 +10,6 @@ from snncc.frontends.checkpoint import save_checkpoint
 from snncc.ir.simulate import simulate
 from snncc.models import SNNConfig, SpikingClassifier
 from snncc.targets.kit.agreement import argmax_agreement
-from snncc.targets.xylo import feed
 from xylo_models import lower_with
 
 from xylo_models import run_xylosim

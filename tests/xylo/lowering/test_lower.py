@@ -9,7 +9,6 @@ from snncc.errors import SnnccError
 from snncc.ir import LIF, LSTM, Dense, Graph, Input, Output, Readout
 from snncc.ir.simulate import simulate
 from snncc.targets.kit.agreement import argmax_agreement
-from snncc.targets.xylo import feed
 from xylo_models import lower_with
 
 from xylo_models import chain, run_xylosim, spikes
