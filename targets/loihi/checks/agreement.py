@@ -36,10 +36,6 @@ from snncc.targets.kit.checks import CheckReport
 
 SEED = 0
 
-# bench/xylo_*.py import these target-neutral helpers from here; they are the kit's (kit.agreement, kit.reference)
-from snncc.targets.kit.agreement import random_inputs  # noqa: E402,F401
-from snncc.targets.kit.reference import perturbed  # noqa: E402,F401
-
 
 def agree_bundle(graph: Graph, path: str | Path, inputs: np.ndarray | None, how: AgreementOptions, *,
                  data: str | None = None, progress: Callable[[int], None] | None = None) -> CheckReport:
