@@ -1,4 +1,4 @@
-"""What Xylo costs a user, this tree against an earlier commit, side by side in one run (issue 41).
+"""What Xylo costs a user, this tree against an earlier commit, side by side in one run.
 
 Every figure is a separate ``snncc`` process, as a user runs it: CPU seconds (user + system of the process and
 its threads, ``os.wait4``'s rusage, what ``/usr/bin/time -v`` reports) and peak resident memory (its
@@ -8,7 +8,7 @@ caches warm, as on an installed machine). Runs alternate before / after.
 
     compile            snncc compile braille_noDelay_noBias_subtract.nir --dt 1e-4 --reset subtract --target xylo
                        (``--replicas 4 --relays both`` too), as a user runs it (thread pools as installed) and with
-                       every pool pinned to one thread (OMP / OPENBLAS / MKL / NUMBA_NUM_THREADS=1); the spec.npz of
+                       every pool pinned to one thread (OMP / OPENBLAS / MKL / NUMBA_NUM_THREADS=1); spec.npz of
                        both trees compared byte for byte
     emulate            snncc emulate of one 256-step sample of the default artefact
     check              snncc check --artefact of the default artefact without data: 1,000 seeded random samples

@@ -11,7 +11,7 @@ Two networks, each run on the same seeded inputs by both:
   with 64 random recurrent targets (the chip's fan-out), every hidden neuron reached by the inputs
   and feeding the outputs; SYNTHETIC zero-mean weights, thresholds set so that about 5 % of the
   hidden neurons fire per step;
-* ``replicated``: the spec.npz of ``snncc compile braille_noDelay_noBias_subtract.nir --dt 1e-4 --reset subtract
+* ``replicated``: spec.npz of ``snncc compile braille_noDelay_noBias_subtract.nir --dt 1e-4 --reset subtract
   --target xylo --replicas 4 --relays both`` (12 -> 576 -> 7: four copies of the relayed network, each a block
   of the recurrent matrix), compiled here unless ``--replicated DIR`` names such an artefact (not with
   ``--quick``).

@@ -1,4 +1,4 @@
-"""The Xylo lowering's CPU time per synapse across network sizes the chip holds (issue 41), in one run.
+"""The Xylo lowering's CPU time per synapse across network sizes the chip holds, in one run.
 
 Seeded chains 12 -> N (recurrent) -> 7, the shape of the Braille RSNN (alpha 0.75, beta 0.85; SYNTHETIC weights
 scaled so the hidden population fires a few percent of its steps), lowered for Xylo Audio 2 with the default
@@ -11,7 +11,7 @@ calibration (256 seeded samples of 256 steps):
   holds at those sizes.
 
 Per network: the lowering's CPU seconds (this process, ``time.process_time``, its thread pools on one thread as
-the lowering runs them), the synapses of the spec it wrote (non-zero weights of the three matrices), and CPU
+the lowering runs them), the synapses of its spec.npz (non-zero weights of the three matrices), and CPU
 microseconds per synapse; per family the largest over the smallest of those. ``numba``'s kernels are compiled (or
 loaded) before timing.
 

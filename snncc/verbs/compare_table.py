@@ -146,7 +146,8 @@ def markdown(result: Comparison) -> str:
 
 
 def draw(result: Comparison, path: Path) -> None:
-    """Agreement with intervals per row (the ceiling as a band), and energy per sample where one is estimated."""
+    """Three panels: agreement with intervals per row (the ceiling in grey); per target, its most used limited
+    resource as a share of the chip's limit; energy per sample where one is estimated (log scale, values written)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -155,7 +156,7 @@ def draw(result: Comparison, path: Path) -> None:
     from snncc.atomic import atomic_path
 
     shown = [r for r in result.rows if r.argmax_agreement is not None and r.kind != "float"]
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), gridspec_kw={"width_ratios": [3, 2]})
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2), gridspec_kw={"width_ratios": [3, 2, 2]})
     ax = axes[0]
     for i, r in enumerate(shown):
         share = float(r.argmax_agreement or 0.0)
@@ -168,16 +169,46 @@ def draw(result: Comparison, path: Path) -> None:
     ax.set_ylim(0, 1.02)
     ax.set_title(f"{Path(result.model).name}: {result.samples} samples x {result.steps} steps", fontsize=10)
     ax.grid(axis="y", alpha=0.3)
-    energies = [(r.target, r.energy.uj_per_sample) for r in result.rows if r.energy is not None]
-    ax = axes[1]
-    if energies:
-        ax.bar([t for t, _ in energies], [e for _, e in energies], color="C1")
-        ax.set_ylabel("energy per sample, uJ (ESTIMATE)")
-        ax.set_title("energy where a published cost model exists", fontsize=10)
-    else:
-        ax.axis("off")
-        ax.text(0.5, 0.5, "no target has a published\nenergy cost model for this network", ha="center", va="center")
+    _draw_resources(axes[1], result)
+    _draw_energy(axes[2], result)
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=120)
     plt.close(fig)
+
+
+def most_used(row: Row):
+    """The row's resource with the largest share of its chip's limit (None where no resource states a limit)."""
+    limited = [r for r in row.resources if r.limit]
+    return max(limited, key=lambda r: r.used / float(r.limit or 1), default=None)
+
+
+def _draw_resources(ax, result: Comparison) -> None:  # noqa: ANN001 (a matplotlib Axes)
+    bars = [(r.target, most_used(r)) for r in result.rows if r.kind == "artefact" and most_used(r) is not None]
+    if not bars:
+        ax.axis("off")
+        ax.text(0.5, 0.5, "no target states a limit\nfor what this network uses", ha="center", va="center")
+        return
+    shares = [100.0 * res.used / float(res.limit or 1) for _, res in bars]
+    ax.bar([t for t, _ in bars], shares, color=["C3" if v > 100 else "C2" for v in shares])
+    for i, ((_, res), v) in enumerate(zip(bars, shares)):
+        ax.text(i, v, f"{res.what.split(' (')[0]}\n{v:.0f} %", ha="center", va="bottom", fontsize=7)
+    ax.axhline(100, color="0.4", lw=0.8, ls="--")
+    ax.set_ylim(0, max(110.0, max(shares) * 1.25))
+    ax.set_ylabel("most used resource, % of the chip's limit")
+    ax.set_title("resources against each chip's limits", fontsize=10)
+
+
+def _draw_energy(ax, result: Comparison) -> None:  # noqa: ANN001 (a matplotlib Axes)
+    energies = [(r.target, r.energy.uj_per_sample) for r in result.rows if r.energy is not None]
+    if not energies:
+        ax.axis("off")
+        ax.text(0.5, 0.5, "no target has a published\nenergy cost model for this network", ha="center", va="center")
+        return
+    ax.bar([t for t, _ in energies], [e for _, e in energies], color="C1")
+    for i, (_, e) in enumerate(energies):
+        ax.text(i, e, f"{e:.3g} uJ", ha="center", va="bottom", fontsize=8)
+    ax.set_yscale("log")
+    ax.set_ylim(min(e for _, e in energies) / 3, max(e for _, e in energies) * 5)
+    ax.set_ylabel("energy per sample, uJ (ESTIMATE, log)")
+    ax.set_title("energy where a published cost model exists", fontsize=10)

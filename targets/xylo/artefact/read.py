@@ -40,7 +40,7 @@ class WrittenXylo:
 
     def runnable(self) -> WrittenXylo:
         """The artefact, after checking its spec against its chip's limits (the chip refuses what breaks them, so
-        neither snncc's emulator nor a report runs it): one line naming the spec file, the field and the limit."""
+        neither snncc's emulator nor a report runs it): one line naming spec.npz, the field and the limit."""
         self.spec.check_chip(self.chip, file=str(self.path / SPEC))
         return self
 

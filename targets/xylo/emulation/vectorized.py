@@ -32,7 +32,7 @@ LO, HI = CORE.state_min, CORE.state_max
 
 
 def plain(spec: XyloSpec) -> bool:
-    """No aliases and every threshold > 0: the spec this path runs."""
+    """No aliases and every threshold > 0: the XyloSpec this path runs."""
     return (not any(spec.aliases) and int(np.min(spec.threshold)) > 0 and int(np.min(spec.threshold_out)) > 0)
 
 

@@ -8,7 +8,7 @@ real time   ``real_time.py``'s ESTIMATE from per-operation cycle costs at the ev
 energy      None: no published cost model gives this network's energy on the chip (none is invented)
 NeuroBench  from the artefact's own emulation: synapses as stored (int8; each synaptic current's weight one
             synapse), the hidden neurons' events (up to 31 a step: graded, so their synaptic operations count
-            as MACs) and the output events; footprint = every int8 weight the spec holds, and per neuron its
+            as MACs) and the output events; footprint = every int8 weight spec.npz holds, and per neuron its
             16-bit membrane, 16-bit current per synaptic current, 16-bit threshold and 16-bit bias
 """
 
