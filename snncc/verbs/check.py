@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from snncc.errors import SnnccError
+from snncc.errors import InternalError, SnnccError
 from snncc.verbs import VerbProgress, counting
 
 if TYPE_CHECKING:
@@ -41,7 +41,12 @@ class ArtefactCheck:
     input_layout: str | None = None
 
     def as_dict(self) -> dict[str, object]:
-        return {"artefact": self.artefact, "input_layout": self.input_layout, **self.record.as_dict()}
+        record = self.record.as_dict()
+        clash = {"artefact", "input_layout"} & set(record)
+        if clash:   # what was measured is this verb's to say; a target's record may not overwrite it
+            raise InternalError(f"the check record holds {sorted(clash)}, which check itself reports",
+                                field="check")
+        return {"artefact": self.artefact, "input_layout": self.input_layout, **record}
 
     def render_text(self, console: Console) -> None:
         a = self.artefact

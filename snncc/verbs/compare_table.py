@@ -17,6 +17,9 @@ from snncc.targets.kit.checks import CANNOT, CAUSE_TITLES, CAUSES
 if TYPE_CHECKING:
     from rich.console import Console
 
+    from matplotlib.axes import Axes
+
+    from snncc.targets.kit.profile import Resource
     from snncc.verbs.compare import Comparison, Row
 
 
@@ -177,14 +180,14 @@ def draw(result: Comparison, path: Path) -> None:
     plt.close(fig)
 
 
-def most_used(row: Row):
+def most_used(row: Row) -> Resource | None:
     """The row's resource with the largest share of its chip's limit (None where no resource states a limit)."""
     limited = [r for r in row.resources if r.limit]
     return max(limited, key=lambda r: r.used / float(r.limit or 1), default=None)
 
 
-def _draw_resources(ax, result: Comparison) -> None:  # noqa: ANN001 (a matplotlib Axes)
-    bars = [(r.target, most_used(r)) for r in result.rows if r.kind == "artefact" and most_used(r) is not None]
+def _draw_resources(ax: Axes, result: Comparison) -> None:
+    bars = [(r.target, used) for r in result.rows if r.kind == "artefact" and (used := most_used(r)) is not None]
     if not bars:
         ax.axis("off")
         ax.text(0.5, 0.5, "no target states a limit\nfor what this network uses", ha="center", va="center")
@@ -199,7 +202,7 @@ def _draw_resources(ax, result: Comparison) -> None:  # noqa: ANN001 (a matplotl
     ax.set_title("resources against each chip's limits", fontsize=10)
 
 
-def _draw_energy(ax, result: Comparison) -> None:  # noqa: ANN001 (a matplotlib Axes)
+def _draw_energy(ax: Axes, result: Comparison) -> None:
     energies = [(r.target, r.energy.uj_per_sample) for r in result.rows if r.energy is not None]
     if not energies:
         ax.axis("off")

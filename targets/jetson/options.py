@@ -16,6 +16,6 @@ class JetsonOptions(TargetOptions):
     jetpack: str | None = option(
         "JetPack version of the board (default 4.6); selects the ONNX opset (4.6 -> 13, 5.x/6.0 -> 17, "
         "6.1/6.2 -> 20).", capabilities=("lower",))
-    time_steps: int | None = option("T of the unrolled sequence model (default: recording length / dt).",
+    time_steps: int | None = option("T of the unrolled sequence model (default: the model's recording length / dt, else snncc's 256).",
                                     minimum=1, rule="time steps must be a whole number >= 1", capabilities=("lower",))
     seed: int = 0

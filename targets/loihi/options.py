@@ -53,7 +53,7 @@ class LoihiOptions(TargetOptions):
         default=False, capabilities=("lower", "check", "agree"))
     stream: bool = option("The paper's protocol, one stream with 100 blank steps between samples.",
                           default=False, capabilities=("check",))
-    time_steps: int | None = option("tSample (default: the model's recording length / dt, else 100).",
+    time_steps: int | None = option("tSample (default: the model's recording length / dt, else snncc's 256).",
                                     minimum=1, rule="time steps must be a whole number >= 1", capabilities=("lower",))
 
     @property
