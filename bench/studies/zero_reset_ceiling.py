@@ -17,7 +17,7 @@ windows compared as the copies' mean.
 
 Measured (2 shared CPU cores, 25 min, 7,698 steps of 32 fresh samples): 0.708 at the start, 0.685-0.745 over
 the run, 0.685 at the end; the fine-tuning goal for the Loihi bundle is 0.80. SYNTHETIC inputs. Four times as
-wide (``--copies 4 --jitter 0.1``, 160 hidden neurons): see bench/README.md.
+wide (``--copies 4 --jitter 0.1``, 160 hidden neurons): see bench/studies/README.md.
 """
 
 from __future__ import annotations
