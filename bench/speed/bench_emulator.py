@@ -26,7 +26,7 @@ Figures, measured in one process, side by side (each ``--repeat`` times; best an
 
 Also: the vector registers in the compiled kernel's machine code (``asm``: zmm = 512-bit, ymm =
 256-bit; compiled afresh in a subprocess, since numba cannot show cached code), and each
-performance goal beside its figure and target (``goals``, listed in bench/README.md).
+performance goal beside its figure and target (``goals``, listed in bench/speed/README.md).
 
 Other engineers share the machine: ``machine.load_1min_*`` and ``uptime`` are recorded, and the
 1-minute load before each measured section (``load_1min_at``); a load above the core count
