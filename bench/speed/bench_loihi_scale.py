@@ -84,10 +84,10 @@ def in_process_split(graph_path: Path, dt: float) -> dict:
 
     from snncc.frontends import LoadOptions, load_model
     from snncc.targets.loihi import target
-    from snncc.targets.loihi.lowering import lower
 
     graph = load_model(graph_path, LoadOptions(dt=dt))
-    lower._RECENT.clear()
+    # a full lowering: this process lowers nothing before it (every other compile here is a child process), so
+    # lower_model's in-process cache of recent lowerings holds nothing it could return
     pr = cProfile.Profile()
     c0 = time.process_time()
     pr.enable()
