@@ -100,9 +100,12 @@ def measure(samples: int) -> dict:
             hidden, output = res.spikes["hidden.lif"], res.spikes["lif2"]
             row[name] = {
                 "hidden rate": float(hidden.mean()), "output rate": float(output.mean()),
-                "argmax agreement with braille_zero_2023": float((res.prediction == ref.prediction).float().mean()),
-                "spike entries equal (hidden, output)": [float((hidden == ref.spikes["lif1.lif"]).float().mean()),
-                                                          float((output == ref.spikes["lif2"]).float().mean())]}
+                "argmax agreement with braille_zero_2023": float(np.mean(np.asarray(res.prediction)
+                                                                         == np.asarray(ref.prediction))),
+                "spike entries equal (hidden, output)": [float(np.mean(np.asarray(hidden)
+                                                                       == np.asarray(ref.spikes["lif1.lif"]))),
+                                                          float(np.mean(np.asarray(output)
+                                                                        == np.asarray(ref.spikes["lif2"])))]}
         out["results"].append(row)
     return out
 
