@@ -104,12 +104,14 @@ def build_workspace(directory) -> None:
 
 
 def load_bench(name: str):
-    """The script ``bench/<name>.py`` as a module (benches are scripts, not a package)."""
+    """The script ``bench/<name>.py`` as a module, ``name`` with its folder (``"speed/bench_compile"``,
+    ``"studies/xylo_paired"``): benches are scripts, not a package."""
     import importlib.util
     import sys
     from pathlib import Path
 
-    spec = importlib.util.spec_from_file_location(name, Path(__file__).resolve().parents[1] / "bench" / f"{name}.py")
+    path = Path(__file__).resolve().parents[1] / "bench" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(path.stem, path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod
     spec.loader.exec_module(mod)

@@ -345,10 +345,10 @@ def test_a_failing_or_unmarked_block_fails(tmp_path, monkeypatch, fixture_store)
     doc = ROOT / "docs" / "probe.md"
     cases = {
         "```\nsnncc inspect missing.pt\n```\n": "exited 2",
-        "```\npython bench/run_all.py\n```\n": "mark it not-run",
+        "```\npython bench/speed/run_all.py\n```\n": "mark it not-run",
         "<!-- not-run: a board -->\n```\nsnncc map x.net --no-such-option\n```\n": "No such option",
         "```\nsnncc map rsnn.net [--json]\n```\n": "not a command as written",
-        "<!-- not-run: long -->\n```\npython bench/run_all.py --no-such-option\n```\n": "has no option",
+        "<!-- not-run: long -->\n```\npython bench/speed/run_all.py --no-such-option\n```\n": "has no option",
     }
     for text, message in cases.items():
         with pytest.raises(Exception, match=re.escape(message)):

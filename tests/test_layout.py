@@ -228,3 +228,44 @@ def test_the_name_scan_can_fail(tmp_path):
     planted = tmp_path / "planted.py"
     planted.write_text('def f(target="jetson"):\n    return target\n', encoding="utf-8")
     assert any("'jetson'" in line for line in _names_in(planted))
+
+
+SCRIPTS = ("bench", "examples")     # scripts that use snncc as its users do: public names only
+OWN = ("self", "cls", "os", "sys")  # ``self._x`` is the script's own object; ``os._exit``, ``sys._getframe``: not snncc's
+
+
+def private_uses(path: Path) -> list[str]:
+    """``file:line what`` for every private name a script takes from snncc (its targets included): ``from snncc...
+    import _name``, an import from or of a private module (``snncc.x._mod``), and ``obj._attr`` on anything but
+    ``OWN``."""
+    found = []
+    for node in ast.walk(_parsed(path)):
+        where = f"{path.name}:{getattr(node, 'lineno', 0)}"
+        if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "snncc":
+            if any(part.startswith("_") for part in node.module.split(".")):
+                found.append(f"{where} from {node.module}")
+            found += [f"{where} import {a.name}" for a in node.names if a.name.startswith("_")]
+        elif isinstance(node, ast.Import):
+            found += [f"{where} import {a.name}" for a in node.names
+                      if a.name.split(".")[0] == "snncc" and any(p.startswith("_") for p in a.name.split("."))]
+        elif (isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__")
+              and not (isinstance(node.value, ast.Name) and node.value.id in OWN)):
+            found.append(f"{where} .{node.attr}")
+    return found
+
+
+def test_bench_and_examples_use_public_names_only():
+    """Issue 37: benches, studies and examples break on no internal refactor: no ``_private`` import from snncc or
+    its targets, no private attribute of snncc's objects."""
+    bad = [f"{path.parent.relative_to(REPO)}/{line}" for root in SCRIPTS
+           for path in sorted((REPO / root).rglob("*.py")) for line in private_uses(path)]
+    assert bad == [], "private snncc names in scripts: " + ", ".join(bad)
+
+
+def test_the_private_name_scan_can_fail(tmp_path):
+    planted = tmp_path / "planted.py"
+    planted.write_text("from snncc.targets.xylo.lowering.lower import _fit, lower\nimport snncc.ir._kernel\n"
+                       "from snncc.targets.loihi._chip import LIMITS\nimport numpy._core\n\n\nclass A:\n"
+                       "    def f(self, net):\n        return self._x, net._layers, os._exit\n", encoding="utf-8")
+    assert sorted(private_uses(planted)) == ["planted.py:1 import _fit", "planted.py:2 import snncc.ir._kernel",
+                                             "planted.py:3 from snncc.targets.loihi._chip", "planted.py:9 ._layers"]

@@ -50,7 +50,7 @@ FRAME_PROTOCOLS = (
     FrameProtocol("fullscale_C1", "fullscale", 1.0),  # snncc's protocol before generator version 2
 )
 PRIMARY = FRAME_PROTOCOLS[0].name
-# Measured on request only (bench/calibrate_synth.py --protocols): z-scoring every frame value
+# Measured on request only (bench/studies/calibrate_synth.py --protocols): z-scoring every frame value
 # gives the noise of the resting frames the same weight as the contact (see docs/braille_synthetic.md).
 EXTRA_PROTOCOLS = (
     FrameProtocol("standardised_C1", "standardise", 1.0),

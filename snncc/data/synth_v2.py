@@ -36,7 +36,7 @@ difficulty a real recording has. Per repetition (trial) ``r``:
   (a red + white spectrum whose level varies with the contact), then 8-bit quantisation
   ``raw = clip(round(255 - signal), 0, 255)``.
 
-The defaults were tuned with ``bench/calibrate_synth.py`` (see docs/braille_synthetic.md).
+The defaults were tuned with ``bench/studies/calibrate_synth.py`` (see docs/braille_synthetic.md).
 """
 
 from __future__ import annotations

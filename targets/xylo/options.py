@@ -94,7 +94,7 @@ class XyloStudyKnobs:
     ``density``: spike density of the seeded calibration inputs (default ``DEFAULT_DENSITY``);
     ``emulator``: ``(spec dict, chip inputs) -> output spikes`` that measures the candidates (default: snncc's
     bit-exact emulator); ``rounding``: "none" leaves every weight unrounded (a float spec in chip units that only
-    the float twin runs: what rounding costs, bench/xylo_loss_sources.py; it needs ``emulator``, and such a spec
+    the float twin runs: what rounding costs, bench/studies/xylo_loss_sources.py; it needs ``emulator``, and such a spec
     is neither checked against the chip's rules nor estimated for real time); ``refit``: fit the chosen rule again
     on every calibration sample (default True); ``readout``: only the candidates with the readout on the "output"
     neurons or on "hidden" neurons copied to them (default: every candidate)."""

@@ -1,5 +1,5 @@
 """Calibration of the synthetic generator (version 2) at a reduced size; the full check is
-``python bench/calibrate_synth.py`` (default set, 200 repetitions per letter).
+``python bench/studies/calibrate_synth.py`` (default set, 200 repetitions per letter).
 
 Event statistics are per taxel and sample, so they hardly depend on the set size: the issue's
 tolerances apply (+-25 %; binning loss and short intervals, "near" in the issue, also +-25 %).

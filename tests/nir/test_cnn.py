@@ -150,7 +150,7 @@ def test_cnn_sinabs_compiles_for_both_targets(tmp_path, capsys):
     assert [lay.n for lay in net.layers] == [2312, 4096, 4096, 512, 256, 10]
     assert int(np.count_nonzero(net.layers[2].weight)) < 0.05 * net.layers[2].weight.size   # conv: sparse synapses
     # the bundle emulated on a reduced N-MNIST-shaped input, against the float graph (bounds below the
-    # agreement measured by bench/cnn_sinabs_agreement.py: 8-bit weights, no leak, see docs/conv.md)
+    # agreement measured by bench/studies/cnn_sinabs_agreement.py: 8-bit weights, no leak, see docs/conv.md)
     graph = load_model(CNN, LoadOptions())
     x = _frames(2, 12, 2312, 0.05, seed=8)
     shifts = net.metadata["population_shifts"]

@@ -7,7 +7,7 @@ w_in), no dt. Read as written it never spikes, at the dt the user gave (1e-4) or
 constants imply (1 step per unit). Restoring snnTorch's unit gains alone gives another network;
 restoring them AND exchanging tau_syn with tau_mem gives braille_zero_2023.nir (the same trained
 weights, exported correctly) spike for spike. Neither the gains nor the exchange can be read from the
-file. Inputs: seeded random spike trains (SYNTHETIC). ``bench/legacy_subgraph.py`` prints the figures.
+file. Inputs: seeded random spike trains (SYNTHETIC). ``bench/studies/legacy_subgraph.py`` prints the figures.
 """
 
 from pathlib import Path

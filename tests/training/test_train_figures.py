@@ -1,4 +1,4 @@
-"""bench/train_figures.py: a tiny run writes the record, per epoch and at the end, with verdicts on
+"""bench/studies/train_figures.py: a tiny run writes the record, per epoch and at the end, with verdicts on
 the selected epoch; a reused set (--data) gives the same figures as a freshly generated one."""
 
 import json
@@ -11,7 +11,7 @@ from snncc_test_helpers import load_bench
 @pytest.fixture(scope="module")
 def tiny_run(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("figures")
-    tf = load_bench("train_figures")
+    tf = load_bench("studies/train_figures")
     out = tmp / "fresh.json"
     assert tf.main(["--reps", "5", "--rsnn-epochs", "2", "--lstm-epochs", "1", "--device", "cpu",
                     "--out", str(out)]) == 0
@@ -54,7 +54,7 @@ def test_a_reused_set_gives_the_same_figures(tiny_run, tmp_path):
     (["--data", "NOWHERE"], "no SYNTHETIC.json"),
 ])
 def test_bad_options_are_one_line_and_exit_2_before_anything_runs(args, says, tmp_path, capsys):
-    tf = load_bench("train_figures")
+    tf = load_bench("studies/train_figures")
     out = tmp_path / "r.json"
     argv = [a.replace("NOWHERE", str(tmp_path / "none")) for a in args]
     with pytest.raises(SystemExit) as ex:

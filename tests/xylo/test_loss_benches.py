@@ -1,6 +1,6 @@
-"""bench/xylo_loss_by_layer.py and bench/xylo_loss_sources.py swap one layer or one approximation at a time: where
+"""bench/studies/xylo_loss_by_layer.py and bench/studies/xylo_loss_sources.py swap one layer or one approximation at a time: where
 nothing is swapped they must reproduce the unswapped runs exactly (the first checks it every run). Here on a small
-replicated chain written by ``snncc compile``; and bench/xylo_paired.py's paired comparison."""
+replicated chain written by ``snncc compile``; and bench/studies/xylo_paired.py's paired comparison."""
 
 from __future__ import annotations
 
@@ -31,7 +31,7 @@ def model():
 def test_layer_swaps_reproduce_the_artefact(tmp_path, capsys, model):
     """The float readout driven by the float hidden spikes is the float graph, the chip readout driven by the
     chip's hidden spikes is the emulator (one_seed exits otherwise); every copy of a replicated artefact is read."""
-    bench = load_bench("xylo_loss_by_layer")
+    bench = load_bench("studies/xylo_loss_by_layer")
     path = tmp_path / "chain.snnir"
     save_graph(model, path)
     out = tmp_path / "rep.xylo"
@@ -51,7 +51,7 @@ def test_layer_swaps_reproduce_the_artefact(tmp_path, capsys, model):
 def test_loss_sources_removes_one_approximation_at_a_time(model):
     """Relays 1x finer and uncapped are the twin itself; 100x finer changes the relays' registers only; the twin
     emulator runs an unrounded spec."""
-    bench = load_bench("xylo_loss_sources")
+    bench = load_bench("studies/xylo_loss_sources")
     low = lower_with(model, dict(QUICK, rule="relayed", replicas=2))
     x = spikes(np.random.default_rng(4), 16, 40, 6, 0.15)
     assert np.array_equal(twin_counts(bench.finer_relays(low, 1.0), low.timing, x),
@@ -69,9 +69,9 @@ def test_loss_sources_removes_one_approximation_at_a_time(model):
 
 
 def test_paired_comparison_counts_what_only_one_artefact_gets_right(tmp_path, capsys, model):
-    """bench/xylo_paired.py: an artefact against itself differs on no sample (p = 1); its chip counts are the emulator's
+    """bench/studies/xylo_paired.py: an artefact against itself differs on no sample (p = 1); its chip counts are the emulator's
     read in the manifest's window; the exact McNemar p of a lopsided split is small, of an even one 1."""
-    bench = load_bench("xylo_paired")
+    bench = load_bench("studies/xylo_paired")
     assert bench.mcnemar(0, 0) == 1.0 and bench.mcnemar(5, 5) == 1.0 and bench.mcnemar(20, 2) < 0.001
     path = tmp_path / "chain.snnir"
     save_graph(model, path)

@@ -1,4 +1,4 @@
-"""bench/bench_xylo_finetune.py compares the fast paths with the former ones; its baselines must compute what the
+"""bench/speed/bench_xylo_finetune.py compares the fast paths with the former ones; its baselines must compute what the
 library computes (identical integers, normal equations equal to float rounding), or its ratios mean nothing."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from snncc_test_helpers import load_bench
 
 
 def test_the_baselines_compute_what_the_library_computes():
-    bench = load_bench("bench_xylo_finetune")
+    bench = load_bench("speed/bench_xylo_finetune")
     ro = bench.rounding(Namespace(forms=4, coefficients=15, repeat=1))
     assert ro["identical_integers"] and ro["speedup"] > 0
     rng = np.random.default_rng(3)
@@ -30,7 +30,7 @@ def test_the_baselines_compute_what_the_library_computes():
 
 
 def test_the_former_arithmetic_is_patched_in_and_restored():
-    bench = load_bench("bench_xylo_finetune")
+    bench = load_bench("speed/bench_xylo_finetune")
     from snncc.targets.xylo.lowering import integers
 
     current = identify.hidden_normal_equations, integers.round_with_feedback

@@ -3,7 +3,7 @@
 spikes, currents and voltages in every layer at every step. Stated once, here.
 
 ``netx_runnable(network)`` lists why a network is not portable (empty: portable). The rules are the
-ones ``bench/lava_netx_agreement.py`` measured (netx 0.6 + Lava fixed_pt against snncc's emulator,
+ones ``bench/studies/lava_netx_agreement.py`` measured (netx 0.6 + Lava fixed_pt against snncc's emulator,
 every feature probed on its own; the definition predicted all 94 bundles it ran):
 
     every wgtExp / wgtExpRec is 0         netx ignores weight exponents (every weight runs at 0)

@@ -17,7 +17,7 @@ of the neuron's presynaptic signals as its membrane sees them: the float teacher
 previous population, its own population one step late, the always-on sources of its current biases)
 filtered by the neuron's chip decays,
 z = (1 - beta q^-1)^-1 (1 - alpha q^-1)^-1 pre. Label-free: only the teacher's spikes on the inputs
-given. Measured on braille_zero_2023 (per-layer, 1,000 held-out random inputs, bench/loihi_precision.py):
+given. Measured on braille_zero_2023 (per-layer, 1,000 held-out random inputs, bench/studies/loihi_precision.py):
 0.846 as lowered, 0.889 with a scale per neuron, 0.903 with error-feedback rounding too, 0.896 with at most
 8 scales per layer; ``fine`` 0.920 (docs/finetune.md).
 """

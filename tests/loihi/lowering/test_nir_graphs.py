@@ -20,7 +20,7 @@ from snncc.targets.loihi.emulation.emulator import emulate, reference_run
 from snncc.targets.loihi.checks.exactness import pad  # noqa: E402
 
 SAMPLES, STEPS = 200, 100
-BIASED_AGREEMENT_BOUND = 0.85   # measured 0.885 on this near-chaotic random graph (see bench/nir_loihi_agreement.py)
+BIASED_AGREEMENT_BOUND = 0.85   # measured 0.885 on this near-chaotic random graph (see bench/studies/nir_loihi_agreement.py)
 
 
 def _braille(tmp_path, outliers=False, bias=False, name="g.nir"):
@@ -79,7 +79,7 @@ def test_braille_sized_with_recurrent_outliers(tmp_path, capsys):
     exponents (outliers in a coarse synapse format, the bulk in a fine one) keep them.
 
     This random graph is near-chaotic: the float model against itself with 1 % weight noise agrees
-    on only 0.81 of these inputs, so no 8-bit deployment can reach 0.95 here (bench/README.md).
+    on only 0.81 of these inputs, so no 8-bit deployment can reach 0.95 here (bench/studies/README.md).
     Measured (200 samples): global 0.63, per-layer 0.74, split 0.82, fine 0.885. auto keeps to the rules
     netx runs as written (portable: global, per-layer) and takes the better measured of them; split and
     fine, which netx cannot express, are used when asked for."""

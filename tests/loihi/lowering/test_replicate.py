@@ -174,7 +174,7 @@ def test_replicas_refused_for_a_bundle_in_map(tmp_path, capsys):
 
 def test_replicas_make_the_per_neuron_start_agree_better():
     """The point of it: fine-tuning's per-neuron start (rescale.py) on braille_zero, 4 copies against none,
-    on the same seeded held-out inputs (measured by bench/finetune_goals.py at full size: 0.90 -> 0.94)."""
+    on the same seeded held-out inputs (measured by bench/studies/finetune_goals.py at full size: 0.90 -> 0.94)."""
     from snncc.finetune.inputs import split_inputs
     from snncc.targets.loihi.finetune.run import network_counts
     from snncc.targets.loihi.lowering.lower import lower_model

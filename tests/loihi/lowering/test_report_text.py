@@ -33,7 +33,7 @@ def test_compile_report_counts_the_cores_of_the_recorded_map():
 
 
 def test_per_neuron_registers_alone_do_not_say_lava_runs_the_bundle_differently():
-    """Lava's CPU model runs per-neuron vThMant / iDecay / vDecay arrays as written (bench/lava_netx_agreement.py's
+    """Lava's CPU model runs per-neuron vThMant / iDecay / vDecay arrays as written (bench/studies/lava_netx_agreement.py's
     probes): the report lists them, but says netx would run the bundle differently only for a field it ignores."""
     art = target.lower(small_graph(seed=1), {"scale": "global"})
     s = art.summary()

@@ -175,7 +175,7 @@ def test_relayed_rule_is_refused_in_one_line_where_it_cannot_fit(model):
 
 
 def test_an_unrounded_lowering_changes_only_the_weights(model):
-    """rounding="none" (bench/xylo_loss_sources.py measures what rounding costs with it): the same rule, dashes,
+    """rounding="none" (bench/studies/xylo_loss_sources.py measures what rounding costs with it): the same rule, dashes,
     thresholds, biases, shifts and relays as the written spec; every weight the float chip units it was rounded from
     (error feedback moves some by a few steps); refused without a float emulator."""
     from snncc.targets.xylo.lowering.twin import spec_graph
