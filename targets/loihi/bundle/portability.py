@@ -105,6 +105,6 @@ def portability_line(gaps: list[NetxGap]) -> str:
     """The one line a report prints."""
     if not gaps:
         return ("portable: lava-dl netx 0.6 and Lava's fixed-point simulation run this bundle as written "
-                "(measured rules: bench/lava_netx_agreement.py)")
+                "(measured rules: bench/studies/lava_netx_agreement.py)")
     features = list(dict.fromkeys(g.feature.split(" (")[0] for g in gaps))
     return f"{NOT_RUNNABLE}: {', '.join(features)} ({'; '.join(str(g) for g in gaps)})"

@@ -44,7 +44,7 @@ def netx_compat(network: LoihiNetwork) -> list[str]:
         if per_neuron:
             notes.append(f"/layer/{i}/neuron/{{{', '.join(per_neuron)}}}: {PER_NEURON_NOTE} (compartment profiles; "
                          "Lava's LIF declares one value per layer, its CPU simulation runs the arrays as written: "
-                         "measured by bench/lava_netx_agreement.py, not Lava's stated interface)")
+                         "measured by bench/studies/lava_netx_agreement.py, not Lava's stated interface)")
         if lay.always_on:
             notes.append(f"/layer/{i}/alwaysOn = {lay.always_on}: the last {lay.always_on} compartment(s) are bias "
                          "sources for the next layer, timed by refDelay")

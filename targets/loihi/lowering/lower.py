@@ -339,8 +339,9 @@ def portability_record(network: LoihiNetwork, quant) -> dict[str, Any]:
             "best_netx_rule": calib.get("best_netx_rule"),
             "chosen_error": (calib.get("errors") or {}).get(chosen) if chosen else None,
             "chosen_agreement": calib.get("chosen_agreement"),
-            "rule": "netx_runnable (targets/loihi/bundle/portability.py): the rules bench/lava_netx_agreement.py "
-                    "measured in lava-dl netx 0.6 + Lava's Loihi 1 fixed-point simulation"}
+            "rule": "netx_runnable (targets/loihi/bundle/portability.py): the rules "
+                    "bench/studies/lava_netx_agreement.py measured in lava-dl netx 0.6 + Lava's Loihi 1 fixed-point "
+                    "simulation"}
 
 
 __all__ = ["LoihiArtefact", "LoihiNetwork", "lower_model", "lower_artefact"]
