@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from snncc.targets.jetson.manifest import JETSON_FORMAT, listed_files
+from snncc.targets.jetson.artefact_format import JETSON_FORMAT, listed_files
 from snncc.targets.kit import SnnccError
 from snncc.targets.kit.artefact import ArtefactIdentity
 
