@@ -78,6 +78,7 @@ if TYPE_CHECKING:
 
     from snncc.artefacts import ArtefactIdentity
     from snncc.frontends.buffered import BufferedModel
+    from snncc.ir.liveness import SpikeActivity
     from snncc.ir.graph import Graph
 
     Model = Union[Graph, BufferedModel]   # what ``lower`` receives (a record of ``model_kinds``)
@@ -385,6 +386,16 @@ class Artefact(Protocol):
 
     def summary(self) -> Mapping[str, object]:
         """Plain-data record of what was built (printed as text or JSON)."""
+
+
+@runtime_checkable
+class KnowsFloatActivity(Protocol):
+    """Optional on an ``Artefact``: the float model's activity on compile's calibration inputs, where lowering
+    already ran the float model on them (``snncc.ir.liveness.calibration_spikes`` at ``steps`` steps), so that
+    compile's silence warning does not run it again. ``float_calibration_activity(steps)``: population name ->
+    ``snncc.ir.liveness.SpikeActivity`` of the model as given, or None where it was not run on those inputs."""
+
+    def float_calibration_activity(self, steps: int) -> Mapping[str, SpikeActivity] | None: ...
 
 
 class HasArrays(Protocol):

@@ -123,13 +123,19 @@ def silence_warning(graph: Graph, activity: Mapping[str, SpikeActivity], inputs:
     return f"{head}; {cause}. The artefact reproduces a silent model, so its exactness says nothing about it"
 
 
-def calibration_warning(graph: Graph, steps: int) -> str | None:
+def calibration_warning(graph: Graph, steps: int, known: Mapping[str, SpikeActivity] | None = None) -> str | None:
     """``silence_warning`` on the calibration inputs of ``steps`` steps; None for a graph that is not one
-    spike Input feeding spiking populations (LSTMs, analog inputs)."""
+    spike Input feeding spiking populations (LSTMs, analog inputs). ``known``: the float activity on those
+    inputs where a target already measured it (``targets.base.KnowsFloatActivity``): a model none of whose
+    populations is silent there needs no run (no warning); otherwise the float model runs for the figures."""
     from snncc.ir.nodes import Input
 
     inputs = graph.of_kind(Input)
-    if len(inputs) != 1 or graph.node(inputs[0]).signal != "spikes" or not spiking_populations(graph):
+    populations = spiking_populations(graph)
+    if len(inputs) != 1 or graph.node(inputs[0]).signal != "spikes" or not populations:
+        return None
+    if known is not None and all(p in known and not known[p].silent and known[p].steps == steps
+                                 and known[p].samples == CALIBRATION_BATCH for p in populations):
         return None
     x = calibration_spikes(graph.node(inputs[0]).width, steps)
     return silence_warning(graph, population_activity(graph, x), calibration_text(steps), steps)

@@ -133,8 +133,12 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
         from snncc.ir.liveness import calibration_warning
         from snncc.ir.timebase import sample_steps
 
+        from snncc.targets.base import KnowsFloatActivity
+
         steps = getattr(settings, "time_steps", None)      # the target's steps option, where it declares one
-        silent = calibration_warning(loaded, sample_steps(loaded, steps if isinstance(steps, int) else None)[0])
+        t = sample_steps(loaded, steps if isinstance(steps, int) else None)[0]
+        known = artefact.float_calibration_activity(t) if isinstance(artefact, KnowsFloatActivity) else None
+        silent = calibration_warning(loaded, t, known)
         warnings += [silent] if silent else []
     adapted = None
     if tuning and tuned_out is not None:     # built first: a graph NIR cannot hold is refused before any write

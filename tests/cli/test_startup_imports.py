@@ -46,7 +46,8 @@ def test_every_verb_is_registered():
 
 
 def test_bundle_verbs_import_no_torch_or_sklearn(tmp_path, small_rsnn_checkpoint, capsys):
-    """emulate / map / report on a bundle need numpy, numba and h5py only (not the compiler's stack)."""
+    """emulate / map / report on a bundle need numpy, numba and h5py only (not the compiler's stack); a small
+    emulate run not numba either (``run_bundle.STATEMENT_WORK``)."""
     import numpy as np
 
     from snncc_test_helpers import run_cli
@@ -63,6 +64,8 @@ def test_bundle_verbs_import_no_torch_or_sklearn(tmp_path, small_rsnn_checkpoint
         # networkx too: asking every target whether the path is its artefact loads no compiler (the IR's graph)
         assert not set(record["heavy"]) & {"torch", "sklearn", "pandas", "onnx", "onnxruntime", "matplotlib",
                                            "networkx"}, record
+        if args[0] == "emulate":   # a small run takes the numpy statement: numba is not even imported
+            assert "numba" not in record["heavy"], record
 
 
 def test_a_verb_builds_only_its_own_command():

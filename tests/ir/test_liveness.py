@@ -69,3 +69,31 @@ def test_compile_warns_once_and_records_the_warning(tmp_path, capsys):
     code, stdout, err = run_cli(["compile", DATA / "braille_zero_2023.nir", "--dt", "1e-4", "-o", out, "--json"],
                                 capsys)
     assert code == 0 and "snncc: warning:" not in err and json.loads(stdout)["warnings"] == []
+
+
+def test_a_target_that_ran_the_float_model_spares_compile_the_run(monkeypatch):
+    """Loihi's lowering runs the float model on the calibration inputs (its scale rule is measured there): its
+    figures equal the IR's, and compile's warning reads them instead of running the float model again."""
+    import dataclasses
+
+    import snncc.ir.liveness as liveness
+    from snncc.targets import get_target
+    from snncc.targets.base import KnowsFloatActivity
+
+    g = _graph("braille_zero_2023.nir", 1e-4)
+    artefact = get_target("loihi").lower(g, {})
+    assert isinstance(artefact, KnowsFloatActivity)
+    known = artefact.float_calibration_activity(256)
+    assert artefact.float_calibration_activity(100) is None          # figures of another length are not used
+    ir = population_activity(g, calibration_spikes(12, 256))
+    assert {k: (a.spikes, a.silent_neurons, a.saturated_neurons) for k, a in known.items()} == \
+        {k: (a.spikes, a.silent_neurons, a.saturated_neurons) for k, a in ir.items()}
+    monkeypatch.setattr(liveness, "population_activity", lambda *a: (_ for _ in ()).throw(AssertionError("ran")))
+    assert calibration_warning(g, 256, known) is None
+    silent = {**known, "lif2": dataclasses.replace(known["lif2"], spikes=0)}
+    try:
+        calibration_warning(g, 256, silent)                          # a silent population: the float model runs
+    except AssertionError as ran:
+        assert str(ran) == "ran"
+    else:
+        raise AssertionError("a silent population in the known figures must run the float model")

@@ -26,8 +26,16 @@ from snncc.targets.loihi.lowering.registers import ChainLayer, float_twin
 from snncc.targets.loihi.network import LoihiNetwork
 
 
+VALIDATION_RATE, VALIDATION_SEED = 0.05, 0
+
+
 def random_spikes(batch: int, steps: int, width: int, rate: float, seed: int) -> np.ndarray:
     return (np.random.default_rng(seed).random((batch, steps, width)) < rate).astype(np.uint8)
+
+
+def validation_spikes(batch: int, steps: int, width: int) -> np.ndarray:
+    """The validation's inputs: ``batch`` seeded random spike trains (p = VALIDATION_RATE, seed VALIDATION_SEED)."""
+    return random_spikes(batch, steps, width, VALIDATION_RATE, VALIDATION_SEED)
 
 
 def ir_spikes(graph: Graph, x: np.ndarray, names: list[str]) -> dict[str, np.ndarray]:
@@ -91,19 +99,43 @@ def twin_spikes(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer], x
     return loihi_spikes(twin, twin_net, layers, shifts, steps)
 
 
+def twin_structure(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer]) -> str:
+    """SHA-256 of what ``float_twin`` takes from ``network`` (sizes, delays, refractory periods, the always-on bias
+    sources' registers): networks with equal digests have the same float twin of ``graph``, so one twin run serves
+    them all (the scale candidates', the written bundle's)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for c, lay in zip(layers, network.layers[1:]):
+        n = graph.node(c.lif).n
+        h.update(repr((lay.name, lay.kind, lay.n, np.shape(lay.weight), lay.ref_delay, lay.always_on,
+                       np.shape(lay.weight_rec), lay.bias_exp if lay.always_on else None)).encode())
+        for a in (lay.delay, lay.delay_rec):
+            h.update(np.ascontiguousarray(np.asarray(a, np.int64)).tobytes() if a is not None else b"-")
+        for a in (lay.i_decay, lay.v_decay, lay.v_th_mant, lay.bias):
+            h.update(b"-" if a is None else np.ascontiguousarray(
+                np.broadcast_to(np.asarray(a, np.float64), (lay.n,))[n:]).tobytes())
+    return h.hexdigest()
+
+
 def _check_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer], xp: np.ndarray, shifts: dict[str, int],
-                steps: int, expected: dict[str, np.ndarray], field: str, what: str) -> None:
-    """Run ``network`` with ``graph``'s float parameters (``float_twin``); any spike unlike ``expected`` is an error."""
-    problem = _same(twin_spikes(network, graph, layers, xp, shifts, steps), expected)
+                steps: int, expected: dict[str, np.ndarray], field: str, what: str,
+                twin: dict[str, np.ndarray] | None = None) -> None:
+    """Run ``network`` with ``graph``'s float parameters (``float_twin``; ``twin``: that run's spikes, where they
+    were already computed); any spike unlike ``expected`` is an error."""
+    problem = _same(twin if twin is not None else twin_spikes(network, graph, layers, xp, shifts, steps), expected)
     if problem:
         raise InternalError(f"check failed: {what} ({problem})", field=field)
 
 
 def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: LoihiNetwork, layers: list[ChainLayer],
                       shifts: dict[str, int], output_shift: int, *, batch: int = 4, steps: int | None = None,
-                      rate: float = 0.05, seed: int = 0, prepared=None) -> ValidationRecord:
+                      rate: float = VALIDATION_RATE, seed: int = VALIDATION_SEED, prepared=None,
+                      order_twin: dict[str, np.ndarray] | None = None) -> ValidationRecord:
     """The three exact checks (module docstring) on ``batch`` seeded random inputs; ``prepared``: ``network``
-    already flattened for the kernel (``emulator.PreparedNetwork``), else it is flattened here."""
+    already flattened for the kernel (``emulator.PreparedNetwork``), else it is flattened here; ``order_twin``:
+    ``twin_spikes(network, order, ...)`` on these inputs where lowering already ran it (it is the same run: the
+    float twin takes its structure from ``network``'s timing, which every scale rule shares)."""
     steps = int(steps or network.t_sample - output_shift)
     x = random_spikes(batch, steps, network.input_width, rate, seed)
     xp = pad(x, lead_steps(shifts, output_shift))
@@ -115,7 +147,7 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
     record.trained_vs_loihi_order = agreement(ir_order, ir_trained)
 
     _check_twin(network, order, layers, xp, shifts, steps, ir_order, "timing",
-                "the lowered timing does not reproduce the IR in float")
+                "the lowered timing does not reproduce the IR in float", twin=order_twin)
     record.timing_exact = True
     _check_twin(network, quantized, layers, xp, shifts, steps, ir_quant, "quantization",
                 "quantized registers do not reproduce the quantized IR")

@@ -74,57 +74,75 @@ def _as_delay(delay, shape: tuple[int, int]) -> np.ndarray:
     return np.broadcast_to(np.asarray(delay, np.int64), shape)
 
 
-def _by_delay(weight: np.ndarray, delay) -> list[tuple[int, np.ndarray]]:
-    """Split a projection into (delay d, weights that have delay d) pairs, as float64 (w.T).
+def _by_delay(weight: np.ndarray, delay) -> list[tuple[int, "_Product"]]:
+    """Split a projection into (delay d, the product by the weights that have delay d) pairs.
 
     Sums of integer chip weights over 0/1 spikes stay far below 2**53, so a float64 matrix
     product (BLAS) gives the exact integer q; it is converted back to int64 below.
     """
     if np.ndim(delay) == 0 or np.asarray(delay).size == 1:
-        return [(int(np.asarray(delay).reshape(-1)[0]), _matrix_t(np.asarray(weight)))]
+        return [(int(np.asarray(delay).reshape(-1)[0]), _Product(np.asarray(weight)))]
     d = _as_delay(delay, weight.shape)
-    return [(int(v), _matrix_t(np.where(d == v, weight, 0))) for v in np.unique(d)]
+    return [(int(v), _Product(np.where(d == v, weight, 0))) for v in np.unique(d)]
 
 
 SPARSE_MIN_SIZE = 1 << 20      # weight matrices this large and at most SPARSE_MAX_DENSITY full are
 SPARSE_MAX_DENSITY = 0.25      # multiplied as sparse matrices (the same exact integer sums, less work)
+FLOAT32_EXACT = 1 << 24        # integers below this are exact in float32, and so is every sum that stays below it
 
 
-def _matrix_t(w: np.ndarray):
-    """w.T as float64: dense, or scipy CSR for a large, mostly-zero matrix (a folded convolution), built from its
-    nonzero entries (one scan; no dense float copy)."""
-    if w.size >= SPARSE_MIN_SIZE:
-        rows, cols = np.nonzero(w)
-        if rows.size <= SPARSE_MAX_DENSITY * w.size:
+class _Product:
+    """(B, n_pre) 0/1 spikes -> (B, n) = spikes @ w.T, exact for integer weights, float64 for float ones.
+
+    The matrix is held as w.T: scipy CSR for a large, mostly-zero matrix (a folded convolution, built from
+    its nonzero entries in one scan, no dense float copy); else dense, in float32 for integer weights whose
+    every partial sum is an integer below 2**24 in units of their common power of two g (max_j sum_i |w_ji|
+    / g < 2**24: each sum, in any order, is exact, and half the memory is read per step), else float64."""
+
+    def __init__(self, w: np.ndarray):
+        self.scale = 1.0
+        self.w_t = None
+        if w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size:
             import scipy.sparse as sp
 
-            return sp.csr_matrix((np.asarray(w[rows, cols], np.float64), (cols, rows)), shape=(w.shape[1], w.shape[0]))
-    return np.ascontiguousarray(w.T, dtype=np.float64)
+            rows, cols = np.nonzero(w)
+            self.w_t = sp.csr_matrix((np.asarray(w[rows, cols], np.float64), (cols, rows)), shape=(w.shape[1], w.shape[0]))
+        elif w.dtype.kind in "iu" and w.size:
+            magnitude = np.abs(w.astype(np.int64, copy=False))
+            bits = int(np.bitwise_or.reduce(magnitude, axis=None))
+            g = bits & -bits if bits else 1                  # the largest power of two dividing every weight
+            if int(magnitude.sum(axis=1).max()) // g < FLOAT32_EXACT:
+                self.w_t, self.scale = np.ascontiguousarray((w // g).T, dtype=np.float32), float(g)
+        if self.w_t is None:
+            self.w_t = np.ascontiguousarray(w.T, dtype=np.float64)
+
+    def of(self, spikes: np.ndarray) -> np.ndarray:
+        """(B, n) float64: over the spikes only where they are few (the work follows them, not n_pre x n), else
+        a dense product."""
+        w_t = self.w_t
+        rows, cols = np.nonzero(spikes)
+        if rows.size == 0:
+            return np.zeros((spikes.shape[0], w_t.shape[1]))
+        if rows.size > SPARSE_MAX_DENSITY * spikes.size:
+            out = np.asarray(spikes.astype(w_t.dtype) @ w_t)
+        else:
+            import scipy.sparse as sp
+
+            indptr = np.searchsorted(rows, np.arange(spikes.shape[0] + 1))
+            s = sp.csr_matrix((np.ones(rows.size, w_t.dtype), cols, indptr), shape=spikes.shape)
+            out = s @ w_t
+            out = out.toarray() if sp.issparse(out) else np.asarray(out)
+        out = out.astype(np.float64, copy=False)
+        return out * self.scale if self.scale != 1.0 else out
 
 
-def _spikes_times(spikes: np.ndarray, w_t) -> np.ndarray:
-    """(B, n) = spikes (B, n_pre) 0/1 @ w_t (n_pre, n), as float64: over the spikes only (a sparse product:
-    spikes are few, so the work follows them, not n_pre x n), else a dense product for dense spike rows."""
-    rows, cols = np.nonzero(spikes)
-    if rows.size == 0:
-        return np.zeros((spikes.shape[0], w_t.shape[1]))
-    if rows.size > SPARSE_MAX_DENSITY * spikes.size:
-        return np.asarray(spikes.astype(np.float64) @ w_t)
-    import scipy.sparse as sp
-
-    indptr = np.searchsorted(rows, np.arange(spikes.shape[0] + 1))
-    s = sp.csr_matrix((np.ones(rows.size), cols, indptr), shape=spikes.shape)
-    out = s @ w_t
-    return out.toarray() if sp.issparse(out) else np.asarray(out)
-
-
-def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, np.ndarray]], zero: np.ndarray) -> np.ndarray:
+def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, _Product]], zero: np.ndarray) -> np.ndarray:
     """sum_i w[j, i] * s_i[t - 1 - delay[j, i]] for every post neuron j (spikes before t = 0 are 0)."""
     total = zero.copy()
-    for d, w_t in parts:
+    for d, product in parts:
         src = t - 1 - d
         if src >= 0:
-            part = _spikes_times(history[src], w_t)
+            part = product.of(history[src])
             total = total + (part if zero.dtype.kind == "f" else np.rint(part).astype(np.int64))
     return total
 
@@ -333,9 +351,13 @@ class PreparedNetwork:
         self.flat = Flat(program(network))
 
     def _check_size(self, total_steps: int, record: str) -> None:
+        self.check_size(self.network, total_steps, record)
+
+    @staticmethod
+    def check_size(network: LoihiNetwork, total_steps: int, record: str) -> None:
         """What the run records must fit in memory: 1 byte per spike, 8 per recorded u and v."""
-        units = sum(lay.n for lay in self.network.layers)
-        per_step = self.network.layers[-1].n + (units * 17 if record == "all" else 0) + units * 16
+        units = sum(lay.n for lay in network.layers)
+        per_step = network.layers[-1].n + (units * 17 if record == "all" else 0) + units * 16
         check_memory(total_steps * per_step, f"emulating {total_steps:,} steps of {units:,} units (record {record!r})",
                      field="input")
 

@@ -39,6 +39,17 @@ class LoihiArtefact:
             extra["model"] = self.model
         write_bundle(self.network, path, extra=extra)
 
+    def float_calibration_activity(self, steps: int) -> dict[str, Any] | None:
+        """``targets.base.KnowsFloatActivity``: the liveness record's float figures (the model as given, or its
+        exact replica, whose population names then differ) on the calibration inputs, where they ran ``steps``."""
+        from snncc.ir.liveness import SpikeActivity, calibration_text
+
+        if self.liveness.get("inputs") != calibration_text(steps) or "float" not in self.liveness:
+            return None
+        fields = set(SpikeActivity.__dataclass_fields__)
+        return {name: SpikeActivity(**{k: v for k, v in figures.items() if k in fields})
+                for name, figures in self.liveness["float"].items()}
+
     def summary(self) -> dict[str, Any]:
         net = self.network
         q = self.quantization

@@ -57,6 +57,8 @@ class LoweredModel:
     deployed: Graph | None = None   # ``trained`` with only the reset change (None: same as ``trained``)
     notes: list[str] = field(default_factory=list)
     calibration_float: dict | None = None   # ``order``'s float spikes on the calibration inputs (None: not run)
+    validation_float: dict | None = None    # the same on the validation's inputs (``checks.exactness``)
+    twin_structure: str = ""                # ``exactness.twin_structure`` of the network those two ran on
 
 
 _RECENT: OrderedDict[str, LoweredModel] = OrderedDict()   # graph content + options -> lowering (this process)
@@ -108,7 +110,8 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
                  t_sample: int | None = None) -> LoweredModel:
     from snncc.ir.liveness import calibration_spikes, calibration_text
     from snncc.targets.loihi.lowering import scaling
-    from snncc.targets.loihi.checks.exactness import lead_steps, loihi_spikes, pad, twin_spikes
+    from snncc.targets.loihi.checks.exactness import (lead_steps, loihi_spikes, pad, twin_spikes, twin_structure,
+                                                      validation_spikes)
 
     timing_mode = options.timing_mode
     rule = options.scale_rule
@@ -129,6 +132,7 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
 
     names = [c.lif for c in layers]
     calib = calibration_spikes(graph.node(layers[0].pre).width, steps)   # the inputs compile's liveness warning uses
+    validation_inputs = validation_spikes(VALIDATION_BATCH, steps, graph.node(layers[0].pre).width)
     reference: dict[str, Any] = {}
 
     def measure(gq: Graph, rq) -> scaling.CandidateMeasure:
@@ -139,9 +143,16 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         from snncc.targets.loihi.emulation.emulator import emulate
 
         net = build_network(order, layers, rq, trec, steps + trec.output_shift, {})
-        xp = pad(calib, lead_steps(trec.shifts, trec.output_shift))
-        if "spikes" not in reference:   # the float model in Loihi's order: its float twin (every rule's structure)
-            reference["spikes"] = twin_spikes(net, order, layers, xp, trec.shifts, steps)
+        lead = lead_steps(trec.shifts, trec.output_shift)
+        xp = pad(calib, lead)
+        if "spikes" not in reference:
+            # the float model in Loihi's order: its float twin (every rule's structure), on the calibration inputs
+            # and, in the same run, on the validation's (the bundle's check 1 uses them: one run, not two)
+            both = twin_spikes(net, order, layers, np.concatenate([xp, pad(validation_inputs, lead)]), trec.shifts,
+                               steps)
+            reference["spikes"] = {k: v[:len(calib)] for k, v in both.items()}
+            reference["validation"] = {k: v[len(calib):] for k, v in both.items()}
+            reference["structure"] = twin_structure(net, order, layers)
         emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
         float_silent = not reference["spikes"][names[-1]].any()
         error = None if float_silent else float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
@@ -217,7 +228,8 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
     return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
                         deployed=None if deployed is graph else deployed, notes=fold.notes(),
-                        calibration_float=reference.get("spikes"))
+                        calibration_float=reference.get("spikes"), validation_float=reference.get("validation"),
+                        twin_structure=reference.get("structure", ""))
 
 
 def count_error(emulated, reference) -> float:
@@ -247,7 +259,8 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
     check the bundle against the IR reference (``checks/exactness.py``); ``progress(done, total,
     phase)`` through the scale candidates' measurements and the validation."""
     from snncc.targets.loihi.mapping.relays import needs_relays, relay_agreement, relay_network
-    from snncc.targets.loihi.checks.exactness import lead_steps, pad, random_spikes, validate_lowering
+    from snncc.targets.loihi.checks.exactness import (lead_steps, pad, twin_structure, validate_lowering,
+                                                      validation_spikes)
 
     lowered = lower_model(graph, options, progress)
     notes: list[str] = list(lowered.notes)
@@ -264,14 +277,17 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
     from snncc.targets.loihi.emulation.emulator import PreparedNetwork
 
     prepared = PreparedNetwork(lowered.network)          # flattened once: the validation's and liveness' runs
+    same_twin = (lowered.validation_float is not None
+                 and lowered.twin_structure == twin_structure(lowered.network, lowered.order, lowered.layers))
     record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
                                lowered.timing_record.shifts, lowered.timing_record.output_shift,
-                               batch=VALIDATION_BATCH, prepared=prepared)
+                               batch=VALIDATION_BATCH, prepared=prepared,
+                               order_twin=lowered.validation_float if same_twin else None)
     validation = record.as_dict()
     if plan is not None:
         trec = lowered.timing_record
-        x = random_spikes(VALIDATION_BATCH, lowered.network.t_sample - trec.output_shift,
-                          lowered.network.input_width, 0.05, seed=0)
+        x = validation_spikes(VALIDATION_BATCH, lowered.network.t_sample - trec.output_shift,
+                              lowered.network.input_width)
         validation["relays"] = relay_agreement(lowered.network, network, plan,
                                                pad(x, lead_steps(trec.shifts, trec.output_shift)))
         notes += plan.notes()
