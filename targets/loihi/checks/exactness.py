@@ -131,13 +131,15 @@ def _check_twin(network: LoihiNetwork, graph: Graph, layers: list[ChainLayer], x
 def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: LoihiNetwork, layers: list[ChainLayer],
                       shifts: dict[str, int], output_shift: int, *, batch: int = 4, steps: int | None = None,
                       rate: float = VALIDATION_RATE, seed: int = VALIDATION_SEED, prepared=None,
-                      order_twin: dict[str, np.ndarray] | None = None) -> ValidationRecord:
+                      order_twin: tuple[np.ndarray, dict[str, np.ndarray]] | None = None) -> ValidationRecord:
     """The three exact checks (module docstring) on ``batch`` seeded random inputs; ``prepared``: ``network``
     already flattened for the kernel (``emulator.PreparedNetwork``), else it is flattened here; ``order_twin``:
-    ``twin_spikes(network, order, ...)`` on these inputs where lowering already ran it (it is the same run: the
-    float twin takes its structure from ``network``'s timing, which every scale rule shares)."""
+    (inputs, ``twin_spikes(network, order, ...)`` on them) where lowering already ran it (the same run: the float
+    twin takes its structure from ``network``'s timing, which every scale rule shares), used when those inputs
+    are this check's."""
     steps = int(steps or network.t_sample - output_shift)
     x = random_spikes(batch, steps, network.input_width, rate, seed)
+    known_twin = order_twin[1] if order_twin is not None and np.array_equal(order_twin[0], x) else None
     xp = pad(x, lead_steps(shifts, output_shift))
     names = [c.lif for c in layers]
     record = ValidationRecord(inputs=f"{batch} seeded random spike trains (p={rate}, seed {seed}), {steps} steps")
@@ -147,7 +149,7 @@ def validate_lowering(trained: Graph, order: Graph, quantized: Graph, network: L
     record.trained_vs_loihi_order = agreement(ir_order, ir_trained)
 
     _check_twin(network, order, layers, xp, shifts, steps, ir_order, "timing",
-                "the lowered timing does not reproduce the IR in float", twin=order_twin)
+                "the lowered timing does not reproduce the IR in float", twin=known_twin)
     record.timing_exact = True
     _check_twin(network, quantized, layers, xp, shifts, steps, ir_quant, "quantization",
                 "quantized registers do not reproduce the quantized IR")

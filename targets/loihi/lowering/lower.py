@@ -57,7 +57,7 @@ class LoweredModel:
     deployed: Graph | None = None   # ``trained`` with only the reset change (None: same as ``trained``)
     notes: list[str] = field(default_factory=list)
     calibration_float: dict | None = None   # ``order``'s float spikes on the calibration inputs (None: not run)
-    validation_float: dict | None = None    # the same on the validation's inputs (``checks.exactness``)
+    validation_float: tuple | None = None   # (the validation's inputs, ``order``'s float spikes on them)
     twin_structure: str = ""                # ``exactness.twin_structure`` of the network those two ran on
 
 
@@ -151,7 +151,7 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
             both = twin_spikes(net, order, layers, np.concatenate([xp, pad(validation_inputs, lead)]), trec.shifts,
                                steps)
             reference["spikes"] = {k: v[:len(calib)] for k, v in both.items()}
-            reference["validation"] = {k: v[len(calib):] for k, v in both.items()}
+            reference["validation"] = (validation_inputs, {k: v[len(calib):] for k, v in both.items()})
             reference["structure"] = twin_structure(net, order, layers)
         emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
         float_silent = not reference["spikes"][names[-1]].any()

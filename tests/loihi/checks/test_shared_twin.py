@@ -1,0 +1,58 @@
+"""Lowering runs the float twin once for the scale rule's calibration and the bundle's timing check (one
+concatenated batch): the check uses those spikes only for its own inputs and a bundle of the same twin."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from snncc.frontends import LoadOptions, load_model
+from snncc.targets.kit import InternalError
+from snncc.targets.loihi import lower_model
+from snncc.targets.loihi.checks.exactness import (lead_steps, pad, twin_spikes, twin_structure, validate_lowering,
+                                                  validation_spikes)
+from snncc.targets.loihi.lowering.lower import VALIDATION_BATCH
+from snncc.targets.loihi.options import LoihiOptions
+
+NIR = Path(__file__).resolve().parents[2] / "data" / "nir"
+
+
+@pytest.fixture(scope="module")
+def lowered():
+    graph = load_model(NIR / "braille_noDelay_noBias_subtract.nir", LoadOptions(dt=1e-4, reset="subtract"))
+    return lower_model(graph, LoihiOptions(allow_reset_change=True))
+
+
+def _validate(low, order_twin):
+    trec = low.timing_record
+    return validate_lowering(low.trained, low.order, low.quantized, low.network, low.layers, trec.shifts,
+                             trec.output_shift, batch=VALIDATION_BATCH, order_twin=order_twin)
+
+
+def test_the_shared_run_equals_a_run_of_its_own(lowered):
+    inputs, spikes = lowered.validation_float
+    trec, steps = lowered.timing_record, int(lowered.network.metadata["steps"])
+    assert np.array_equal(inputs, validation_spikes(VALIDATION_BATCH, steps, lowered.network.input_width))
+    alone = twin_spikes(lowered.network, lowered.order, lowered.layers,
+                        pad(inputs, lead_steps(trec.shifts, trec.output_shift)), trec.shifts, steps)
+    assert spikes.keys() == alone.keys() and all(np.array_equal(spikes[k], alone[k]) for k in spikes)
+    assert lowered.twin_structure == twin_structure(lowered.network, lowered.order, lowered.layers)
+    assert _validate(lowered, lowered.validation_float).timing_exact
+
+
+def test_given_spikes_are_used_for_the_check_inputs_only(lowered):
+    inputs, spikes = lowered.validation_float
+    wrong = {k: 1 - v for k, v in spikes.items()}
+    with pytest.raises(InternalError, match="timing"):      # used: the check compares them with the IR
+        _validate(lowered, (inputs, wrong))
+    assert _validate(lowered, (1 - inputs, wrong)).timing_exact   # other inputs: the twin runs again
+
+
+def test_a_bundle_with_another_twin_does_not_reuse_it():
+    """braille_zero_2023's auto rule ('fine') gives its always-on bias source other decay registers than the
+    first candidate measured: another float twin, so the timing check runs its own."""
+    low = lower_model(load_model(NIR / "braille_zero_2023.nir", LoadOptions(dt=1e-4)), LoihiOptions())
+    assert low.validation_float is not None
+    assert low.twin_structure != twin_structure(low.network, low.order, low.layers)
