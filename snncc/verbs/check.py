@@ -121,25 +121,24 @@ def check_model(model: str | Path, *, artefact: str | Path | None = None, target
     else:
         agree = capability(tgt, "agree", rule=f"target '{tgt.name}' {AGREEMENT_RULE}")
     layout = None
+    # the data read (and refused) before any compile: a bad file costs no lowering
+    inputs = labels = None
+    meta: object = None
+    if where is not None:
+        inputs, labels, meta = load_check_data(where, graph, limit, labels=labelled)
+        found = meta.get("input_layout") if isinstance(meta, dict) else None
+        layout = found if isinstance(found, str) else None
     with written as path:
         if identity is None:
             identity = identify_own(tgt, path) or ArtefactIdentity(tgt.name, str(path))
         sha, rule = artefact_sha256(path, identity.files or None)
         if labelled:
-            assert where is not None
-            inputs, labels, meta = load_check_data(where, graph, limit)
-            assert labels is not None
-            found = meta.get("input_layout") if isinstance(meta, dict) else None
-            layout = found if isinstance(found, str) else None
+            assert where is not None and inputs is not None and labels is not None
             record: Record = check(graph, inputs, labels, split.target, artefact=path, data=str(where),
                                      synthetic=bool(isinstance(meta, dict) and meta.get("synthetic")),
                                      progress=counting(progress, len(labels), "checking"))
         else:
-            x = None
-            if where is not None:
-                x, _, meta = load_check_data(where, graph, limit, labels=False)
-                found = meta.get("input_layout")
-                layout = found if isinstance(found, str) else None
+            x = inputs
             how = split.of(AgreementOptions)
             total = len(x) if x is not None else (how.samples or 0)
             record = agree(graph, x, split.target, how, artefact=path,

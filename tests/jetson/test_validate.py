@@ -85,13 +85,17 @@ def test_check_reports_accuracy_agreement_and_fp16(graphs):
     assert "output spike agreement" in console.export_text()
 
 
-def test_check_names_its_data_and_says_when_it_is_synthetic(graphs):
-    """``check(data=, synthetic=)`` are honoured: a data error names the file, synthetic data is said so."""
+def test_check_names_its_data_and_says_when_it_is_synthetic(graphs, tmp_path):
+    """``check(data=, synthetic=)`` are honoured: a data error names the file, synthetic data is said so (one
+    artefact compiled for the three checks)."""
     g = graphs["rsnn"]
     x = seeded_inputs(g, 4, 12, seed=5)
-    rec = target.check(g, x, np.arange(4) % 5, {}, data="d.npz", synthetic=True)
+    written = tmp_path / "rsnn_j"
+    target.lower(g, {}).write(written)
+    rec = target.check(g, x, np.arange(4) % 5, {}, artefact=written, data="d.npz", synthetic=True)
     assert "the data set is synthetic: these accuracies are not the paper's" in rec.notes
-    assert not any("synthetic" in n for n in target.check(g, x, np.arange(4) % 5, {}, data="d.npz").notes)
+    assert not any("synthetic" in n for n in
+                   target.check(g, x, np.arange(4) % 5, {}, artefact=written, data="d.npz").notes)
     with pytest.raises(SnnccError) as err:
-        target.check(g, x, np.arange(3), {}, data="d.npz")
+        target.check(g, x, np.arange(3), {}, artefact=written, data="d.npz")
     assert err.value.line() == "d.npz: labels: 3 labels for 4 samples"
