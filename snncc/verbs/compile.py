@@ -132,7 +132,6 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
     if not isinstance(loaded, BufferedModel) and name != "ir":   # a lowered artefact claims exactness
         from snncc.ir.liveness import calibration_warning
         from snncc.ir.timebase import sample_steps
-
         from snncc.targets.base import KnowsFloatActivity
 
         steps = getattr(settings, "time_steps", None)      # the target's steps option, where it declares one

@@ -18,6 +18,7 @@ and an out-of-tree test target proves a third party needs nothing else. Each mod
     kit.search      a search trial's figures (``SearchCosts``: objectives, columns, front, published)
     kit.compute     one compute thread, rounding with error feedback, Ctrl-C around numba, memory bounds
     kit.inputs      arrays a user feeds an artefact: checked, laid out, seeded random spikes
+    kit.emulation   what an emulation derives from its output spikes (samples, steps, counts, prediction)
     kit.timebase    the one time base: how many steps a sample lasts on every target
     kit.graphs      pure Graph -> Graph passes (linear folding, current biases, reset change)
     kit.models      model records other than a graph (a buffered classifier)

@@ -21,6 +21,7 @@ from snncc.targets.kit import SNNCC_VERSION, SnnccError
 from snncc.targets.kit.agreement import argmax_agreement, count_correlation, random_inputs
 from snncc.targets.kit.artefact import model_record, sha256_bytes
 from snncc.targets.kit.checks import accuracy_pair, ceiling_record, report_from, stage
+from snncc.targets.kit.emulation import OutputSpikes
 from snncc.targets.kit.inputs import check_batch
 from snncc.targets.kit.manifest import ManifestFormat, manifest_bytes, source_identity
 from snncc.targets.kit.measured import artefact_to_measure
@@ -53,24 +54,9 @@ class F32Artefact:
 
 
 @dataclass
-class F32Emulation:
-    output_spikes: np.ndarray
-
-    @property
-    def samples(self) -> int:
-        return int(self.output_spikes.shape[0])
-
-    @property
-    def steps(self) -> int:
-        return int(self.output_spikes.shape[1])
-
-    @property
-    def prediction(self) -> np.ndarray:
-        return np.argmax(self.output_spikes.sum(axis=1), axis=1)
-
+class F32Emulation(OutputSpikes):
     def arrays(self) -> dict:
-        return {"output_spikes": self.output_spikes, "counts": self.output_spikes.sum(axis=1, dtype=np.int64),
-                "prediction": self.prediction}
+        return self.output_arrays()
 
     def summary(self) -> dict:
         return {"precision": "float32"}

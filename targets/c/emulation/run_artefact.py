@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from snncc.targets.kit import SnnccError
+from snncc.targets.kit.emulation import OutputSpikes
 
 DEFAULT_GAP = 100
 
@@ -57,10 +58,9 @@ def check_gap(gap: int | None, stream: bool) -> int:
 
 
 @dataclass
-class CEmulation:
+class CEmulation(OutputSpikes):
     """What ``emulate`` (and, with ``backend``, ``run``) returns (``snncc.targets.base.Emulation``)."""
 
-    output_spikes: np.ndarray
     extra: dict[str, np.ndarray] = field(default_factory=dict)
     saturated: dict[str, int] = field(default_factory=dict)
     layout_note: str | None = None
@@ -70,25 +70,8 @@ class CEmulation:
     program: str = ""
     timing: dict[str, Any] | None = None        # the Cortex-M4 build in QEMU: instructions per step
 
-    @property
-    def samples(self) -> int:
-        return int(self.output_spikes.shape[0])
-
-    @property
-    def steps(self) -> int:
-        return int(self.output_spikes.shape[1])
-
-    @property
-    def counts(self) -> np.ndarray:
-        return self.output_spikes.sum(axis=1, dtype=np.int64)
-
-    @property
-    def prediction(self) -> np.ndarray:
-        return np.argmax(self.counts, axis=1).astype(np.int64)
-
     def arrays(self) -> dict[str, np.ndarray]:
-        return {"output_spikes": self.output_spikes, "counts": self.counts, "prediction": self.prediction,
-                **self.extra}
+        return {**self.output_arrays(), **self.extra}
 
     def summary(self) -> dict[str, Any]:
         return {"backend": self.backend, "artefact_sha256": self.sha256, "saturated": dict(self.saturated),

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from snncc.targets.kit import SnnccError
+from snncc.targets.kit.emulation import OutputSpikes
 from snncc.targets.xylo.artefact.read import WrittenXylo, read_artefact
 from snncc.targets.xylo.emulation.result import STATE_NAMES
 
@@ -25,24 +26,11 @@ DEFAULT_GAP = 100
 
 
 @dataclass
-class XyloEmulation:
-    output_spikes: np.ndarray
+class XyloEmulation(OutputSpikes):
     states: dict[str, np.ndarray] = field(default_factory=dict)
     input_pad: int = 0
     output_lag: int = 0
     clipped_inputs: int = 0
-
-    @property
-    def samples(self) -> int:
-        return int(self.output_spikes.shape[0])
-
-    @property
-    def steps(self) -> int:
-        return int(self.output_spikes.shape[1])
-
-    @property
-    def prediction(self) -> np.ndarray:
-        return np.argmax(self.output_spikes.sum(axis=1, dtype=np.int64), axis=1)
 
     @property
     def overflow(self) -> dict[str, int]:
@@ -59,8 +47,7 @@ class XyloEmulation:
         return []
 
     def arrays(self) -> dict[str, np.ndarray]:
-        return {"output_spikes": self.output_spikes, "counts": self.output_spikes.sum(axis=1, dtype=np.int64),
-                "prediction": self.prediction, **self.states}
+        return {**self.output_arrays(), **self.states}
 
 
 def artefact_inputs(x: np.ndarray, n_in: int, source: str | None) -> np.ndarray:
