@@ -26,6 +26,7 @@ import networkx as nx
 import numpy as np
 
 from snncc.errors import SnnccError
+from snncc.exact_products import ExactProduct
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LINEAR, LSTM, Conv, Dense, Input, Output, Readout
 
@@ -101,11 +102,13 @@ def _static_nodes(g: Graph) -> set[str]:
 
 SPARSE_MIN_SIZE = 1 << 20      # Dense weights this large and at most a quarter nonzero run as sparse
 SPARSE_MAX_DENSITY = 0.25      # products (same sums, another summation order)
+EXACT_MIN_SIZE = 1 << 16       # float64 weights this large that are integers times a power of two multiply
+                               # spikes in float32 (``snncc.exact_products``: the same bits, half the memory read)
 
 
 def _weight_matrix(op, dtype: np.dtype):
-    """The node's weight as the matrix y = x @ W.T uses: dense, or scipy CSR where large and sparse (and always
-    for a Conv, its connection matrix)."""
+    """The node's weight as the matrix y = x @ W.T uses: dense, scipy CSR where large and sparse (and always
+    for a Conv, its connection matrix), or an ``ExactProduct`` where large and integer times a power of two."""
     if isinstance(op, Conv):
         from snncc.ir.conv import conv_matrix
 
@@ -115,6 +118,10 @@ def _weight_matrix(op, dtype: np.dtype):
         import scipy.sparse as sp
 
         return sp.csr_matrix(w)
+    if dtype == np.float64 and w.size >= EXACT_MIN_SIZE:
+        product = ExactProduct(w)
+        if product.units_t is not None:
+            return product
     return w
 
 
@@ -170,6 +177,8 @@ class _Runner:
         w, b = self.p[name]
         if isinstance(w, np.ndarray):
             y = x @ w.T
+        elif isinstance(w, ExactProduct):      # float32 where that sums exactly, else float64
+            y = w.of(x)
         else:                                  # y^T = W x^T, W sparse (a convolution, a folded one)
             flat = x.reshape(-1, x.shape[-1])
             y = np.asarray((w @ flat.T).T).reshape(tuple(x.shape[:-1]) + (w.shape[0],))

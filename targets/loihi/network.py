@@ -88,3 +88,19 @@ class LoihiNetwork:
     @property
     def n_outputs(self) -> int:
         return self.layers[-1].n
+
+
+def same_registers(a: LoihiNetwork, b: LoihiNetwork) -> bool:
+    """Whether two networks hold the same layers, register for register (what the emulator runs; the metadata and
+    core map aside)."""
+    from dataclasses import fields
+
+    if a.t_sample != b.t_sample or len(a.layers) != len(b.layers):
+        return False
+    for la, lb in zip(a.layers, b.layers):
+        for f in fields(LoihiLayer):
+            x, y = getattr(la, f.name), getattr(lb, f.name)
+            if (x is None) != (y is None) or (x is not None and not np.array_equal(np.asarray(x), np.asarray(y))):
+                return False
+    return True
+

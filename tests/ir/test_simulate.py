@@ -208,3 +208,36 @@ def test_input_width_and_nan_are_refused():
 def test_subtract_reset_integrator_with_infinite_threshold_stays_finite():
     _, vol, spk = trace(one_neuron(w=0.5, threshold=np.inf, reset="subtract"), [1, 1, 0])
     assert np.all(np.isfinite(vol)) and spk.sum() == 0
+
+
+def test_integer_unit_weights_take_float32_products_with_the_same_bits(monkeypatch):
+    """Weights that are integers times 2**-7 (as a graph quantized in chip units) and a recurrent layer large enough
+    for ``EXACT_MIN_SIZE`` multiply their spikes in float32 (``snncc.exact_products``): every record equals the
+    float64 run's bit for bit; the input layer's inputs (not spikes: 0.5) and float32 runs keep their own path."""
+    import importlib
+
+    sim = importlib.import_module("snncc.ir.simulate")     # the module, not the function snncc.ir exports
+
+    rng = np.random.default_rng(3)
+    g = Graph(0.001)
+    g.add("x", Input(40))
+    g.add("w", Dense(rng.integers(-60, 61, (300, 40)) * 2.0 ** -7))
+    g.add("n", LIF(300, 0.005, 0.02, 1.0, reset="subtract"))
+    g.add("r", Dense(rng.integers(-20, 21, (300, 300)) * 2.0 ** -7))
+    g.add("o", Output(300))
+    g.connect("x", "w")
+    g.connect("w", "n")
+    g.connect("n", "r", delay=1)
+    g.connect("r", "n")
+    g.connect("n", "o")
+    validate(g)
+    x = (rng.random((3, 60, 40)) < 0.3) * np.where(rng.random((3, 60, 40)) < 0.5, 1.0, 0.5)
+    taken = sim._Runner(g, np.dtype(np.float64), "all").p["r"][0]
+    assert isinstance(taken, sim.ExactProduct) and taken.units_t is not None
+    fast = simulate(g, x, record="all")
+    monkeypatch.setattr(sim, "EXACT_MIN_SIZE", 1 << 40)
+    plain = simulate(g, x, record="all")
+    assert fast.spikes["n"].any() and not fast.spikes["n"].all()
+    for a, b in [(fast.spikes, plain.spikes), (fast.voltage, plain.voltage), (fast.current, plain.current),
+                 (fast.outputs, plain.outputs)]:
+        assert all(a[k].tobytes() == b[k].tobytes() for k in b)

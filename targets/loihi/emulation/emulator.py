@@ -24,7 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from snncc.targets.kit import SnnccError
-from snncc.targets.kit.compute import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, whole_number
+from snncc.targets.kit.compute import (FLOAT32_EXACT, MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, integer_units,
+                                      whole_number)
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.emulation.result import EmulationResult, SparseBlock, _prediction  # noqa: F401  (re-exported)
 from snncc.targets.loihi.network import LoihiNetwork
@@ -74,60 +75,64 @@ def _as_delay(delay, shape: tuple[int, int]) -> np.ndarray:
     return np.broadcast_to(np.asarray(delay, np.int64), shape)
 
 
-def _by_delay(weight: np.ndarray, delay) -> list[tuple[int, "_Product"]]:
-    """Split a projection into (delay d, the product by the weights that have delay d) pairs.
+def _by_delay(weight: np.ndarray, delay, factor=1) -> list[tuple[int, "_Product"]]:
+    """Split a projection ``weight * factor`` (factor a power of two) into (delay d, the product by the weights
+    that have delay d) pairs.
 
     Sums of integer chip weights over 0/1 spikes stay far below 2**53, so a float64 matrix
     product (BLAS) gives the exact integer q; it is converted back to int64 below.
     """
     if np.ndim(delay) == 0 or np.asarray(delay).size == 1:
-        return [(int(np.asarray(delay).reshape(-1)[0]), _Product(np.asarray(weight)))]
+        return [(int(np.asarray(delay).reshape(-1)[0]), _Product(np.asarray(weight), factor))]
     d = _as_delay(delay, weight.shape)
-    return [(int(v), _Product(np.where(d == v, weight, 0))) for v in np.unique(d)]
+    return [(int(v), _Product(np.where(d == v, weight, 0), factor)) for v in np.unique(d)]
 
 
 SPARSE_MIN_SIZE = 1 << 20      # weight matrices this large and at most SPARSE_MAX_DENSITY full are
 SPARSE_MAX_DENSITY = 0.25      # multiplied as sparse matrices (the same exact integer sums, less work)
-FLOAT32_EXACT = 1 << 24        # integers below this are exact in float32, and so is every sum that stays below it
+FLOAT_UNITS_MIN_SIZE = 1 << 16  # float weights this large are searched for integer units (float32 products)
 
 
 class _Product:
-    """(B, n_pre) 0/1 spikes -> (B, n) = spikes @ w.T, exact for integer weights, float64 for float ones.
+    """(B, n_pre) 0/1 spikes -> (B, n) = spikes @ (w * factor).T, exact for integer weights, float64 for float ones
+    (``factor``: a power of two, w_chip's 2**(6 + wgtExp), applied without a scaled copy of ``w``).
 
     The matrix is held as w.T: scipy CSR for a large, mostly-zero matrix (a folded convolution, built from
-    its nonzero entries in one scan, no dense float copy); else dense, in float32 for integer weights whose
-    every partial sum is an integer below 2**24 in units of their common power of two g (max_j sum_i |w_ji|
-    / g < 2**24: each sum, in any order, is exact, and half the memory is read per step), else float64."""
+    its nonzero entries in one scan, no dense float copy); else dense, in float32 for weights that are integers
+    times a common power of two g whose every partial sum is an integer below 2**24 in units of g
+    (max_j sum_i |w_ji| / g < 2**24: each sum, in any order, is exact -- the same bits as float64 -- and half the
+    memory is read per step; chip weights, and the float twin of a graph quantized in chip units:
+    ``kit.compute.integer_units``), else float64."""
 
-    def __init__(self, w: np.ndarray):
+    def __init__(self, w: np.ndarray, factor=1):
         self.scale = 1.0
         self.w_t = None
         if w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size:
             import scipy.sparse as sp
 
             rows, cols = np.nonzero(w)
-            self.w_t = sp.csr_matrix((np.asarray(w[rows, cols], np.float64), (cols, rows)), shape=(w.shape[1], w.shape[0]))
-        elif w.dtype.kind in "iu" and w.size:
-            magnitude = np.abs(w.astype(np.int64, copy=False))
-            bits = int(np.bitwise_or.reduce(magnitude, axis=None))
-            g = bits & -bits if bits else 1                  # the largest power of two dividing every weight
-            if int(magnitude.sum(axis=1).max()) // g < FLOAT32_EXACT:
-                self.w_t, self.scale = np.ascontiguousarray((w // g).T, dtype=np.float32), float(g)
+            values = np.asarray(w[rows, cols], np.float64) * float(factor)
+            self.w_t = sp.csr_matrix((values, (cols, rows)), shape=(w.shape[1], w.shape[0]))
+        elif w.size and (w.dtype.kind in "iu" or (w.dtype.kind == "f" and w.size >= FLOAT_UNITS_MIN_SIZE)):
+            found = integer_units(w)
+            if found is not None:
+                self.w_t, self.scale = found[0], found[1] * float(factor)
         if self.w_t is None:
-            self.w_t = np.ascontiguousarray(w.T, dtype=np.float64)
+            self.w_t = np.ascontiguousarray((np.asarray(w, np.float64) * float(factor)).T)
 
     def of(self, spikes: np.ndarray) -> np.ndarray:
         """(B, n) float64: over the spikes only where they are few (the work follows them, not n_pre x n), else
         a dense product."""
         w_t = self.w_t
-        rows, cols = np.nonzero(spikes)
-        if rows.size == 0:
+        active = np.count_nonzero(spikes)
+        if active == 0:
             return np.zeros((spikes.shape[0], w_t.shape[1]))
-        if rows.size > SPARSE_MAX_DENSITY * spikes.size:
+        if active > SPARSE_MAX_DENSITY * spikes.size:
             out = np.asarray(spikes.astype(w_t.dtype) @ w_t)
         else:
             import scipy.sparse as sp
 
+            rows, cols = np.nonzero(spikes)
             indptr = np.searchsorted(rows, np.arange(spikes.shape[0] + 1))
             s = sp.csr_matrix((np.ones(rows.size, w_t.dtype), cols, indptr), shape=spikes.shape)
             out = s @ w_t
@@ -170,12 +175,18 @@ def reference_run(network: LoihiNetwork, inputs, *, arithmetic: str = "int", rec
         state.append({"u": z.copy(), "v": z.copy(), "ref": np.zeros((batch, layer.n), np.int64)})
         hist.append([])
         rec_s[i], rec_u[i], rec_v[i] = hist[i], [], []
-    def w_chip(weight, exp):  # w_chip = w * 2**(6 + wgtExp); wgtExp an int or one per synapse
+    def products(weight, exp, delay):   # w_chip = w * 2**(6 + wgtExp); wgtExp an int or one per synapse
         exp = np.asarray(exp, np.int64) + chip.WEIGHT_SHIFT
-        return np.asarray(weight, dt) * (2.0 ** exp if as_float else np.int64(1) << exp)
+        factor = 2.0 ** exp if as_float else np.int64(1) << exp
+        w = np.asarray(weight)
+        if w.dtype.kind != ("f" if as_float else "i"):
+            w = w.astype(dt)
+        if exp.size == 1:                  # one power of two: applied to the product, no scaled copy
+            return _by_delay(w, delay, factor.reshape(-1)[0].item())
+        return _by_delay(w * factor, delay)
 
-    ff = [None] + [_by_delay(w_chip(lay.weight, lay.wgt_exp), lay.delay) for lay in layers[1:]]
-    rec = [None] + [None if lay.weight_rec is None else _by_delay(w_chip(lay.weight_rec, lay.wgt_exp_rec), lay.delay_rec)
+    ff = [None] + [products(lay.weight, lay.wgt_exp, lay.delay) for lay in layers[1:]]
+    rec = [None] + [None if lay.weight_rec is None else products(lay.weight_rec, lay.wgt_exp_rec, lay.delay_rec)
                     for lay in layers[1:]]
     for t in range(steps):
         for i, layer in enumerate(layers[1:], start=1):

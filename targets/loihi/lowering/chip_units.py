@@ -21,7 +21,10 @@ GRID = 2.0 ** 24     # quantized values are multiples of 2**-24 or coarser once 
 
 def _snap(values: np.ndarray) -> np.ndarray:
     """Undo the float error of (k * 2**e / s) * s: back onto the dyadic grid the chip values lie on."""
-    return np.round(np.asarray(values, np.float64) * GRID) / GRID
+    out = np.asarray(values, np.float64) * GRID        # one array, rounded and divided in place (the same bits)
+    np.round(out, out=out)
+    out /= GRID
+    return out
 
 
 def in_chip_units(quantized: Graph, record) -> Graph:

@@ -44,6 +44,38 @@ VALIDATING = "validating the bundle against the IR reference"
 
 
 @dataclass
+class MeasuredCandidate:
+    """A scale candidate's network as ``_lower_model`` measured it: flattened for the kernel, and its run on the
+    calibration inputs (``xp``, padded), for ``lower_artefact`` to reuse when it writes the same registers."""
+
+    network: LoihiNetwork
+    prepared: Any            # emulator.PreparedNetwork
+    xp: np.ndarray
+    run: Any                 # its EmulationResult on ``xp``, record "all"
+
+
+# The candidates the latest ``_lower_model`` measured (cleared when the next one starts; ``lower_artefact`` takes the
+# one with the written bundle's registers, ``reuse_measured``, and clears the rest)
+_MEASURED: list[MeasuredCandidate] = []
+
+
+def reuse_measured(network: LoihiNetwork) -> MeasuredCandidate | None:
+    """The measured candidate whose registers are ``network``'s (``same_registers``: compared, not assumed), its
+    prepared kernel rebound to ``network``; None when none is. Empties the list either way."""
+    import copy
+
+    from snncc.targets.loihi.network import same_registers
+
+    found = next((m for m in _MEASURED if same_registers(m.network, network)), None)
+    _MEASURED.clear()
+    if found is None:
+        return None
+    prepared = copy.copy(found.prepared)
+    prepared.network = network
+    return MeasuredCandidate(network, prepared, found.xp, found.run)
+
+
+@dataclass
 class LoweredModel:
     """Everything lowering produced, for checks: the graphs at each stage and the network."""
 
@@ -115,6 +147,7 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
 
     timing_mode = options.timing_mode
     rule = options.scale_rule
+    _MEASURED.clear()
     frame = frame_shape(graph)           # the input frame (C, H, W) before convolutions are folded
     graph, fold = fold_linear(graph)     # Conv -> connection matrix; linear chains -> one projection
     copies = 1 if options.replicas is None else int(options.replicas)     # --replicas (replicate.py)
@@ -140,7 +173,7 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
         the outputs are silent, and what netx lacks to run the candidate as written."""
         from snncc.targets.kit.agreement import argmax_agreement
         from snncc.targets.loihi.bundle.portability import netx_runnable
-        from snncc.targets.loihi.emulation.emulator import emulate
+        from snncc.targets.loihi.emulation.emulator import PreparedNetwork
 
         net = build_network(order, layers, rq, trec, steps + trec.output_shift, {})
         lead = lead_steps(trec.shifts, trec.output_shift)
@@ -153,7 +186,10 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
             reference["spikes"] = {k: v[:len(calib)] for k, v in both.items()}
             reference["validation"] = (validation_inputs, {k: v[len(calib):] for k, v in both.items()})
             reference["structure"] = twin_structure(net, order, layers)
-        emu = loihi_spikes(emulate(net, xp, record="all"), net, layers, trec.shifts, steps)
+        prepared = PreparedNetwork(net)
+        run = prepared.run(xp, record="all")
+        _MEASURED.append(MeasuredCandidate(net, prepared, xp, run))
+        emu = loihi_spikes(run, net, layers, trec.shifts, steps)
         float_silent = not reference["spikes"][names[-1]].any()
         error = None if float_silent else float(sum(count_error(emu[n], reference["spikes"][n]) for n in names) / len(names))
         agreement = argmax_agreement(reference["spikes"][names[-1]].sum(axis=1), emu[names[-1]].sum(axis=1))
@@ -276,7 +312,9 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
         progress(0, 1, VALIDATING)
     from snncc.targets.loihi.emulation.emulator import PreparedNetwork
 
-    prepared = PreparedNetwork(lowered.network)          # flattened once: the validation's and liveness' runs
+    measured = reuse_measured(lowered.network)           # the scale rule's measurement of these registers, if any
+    # flattened once: the measurement's, the validation's and liveness' runs
+    prepared = measured.prepared if measured is not None else PreparedNetwork(lowered.network)
     same_twin = (lowered.validation_float is not None
                  and lowered.twin_structure == twin_structure(lowered.network, lowered.order, lowered.layers))
     record = validate_lowering(lowered.trained, lowered.order, lowered.quantized, lowered.network, lowered.layers,
@@ -297,7 +335,8 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
                      + f"; predictions {100 * validation['relays']['prediction_agreement']:.1f}%"
                      + ("" if plan.exact else " (rate relays are lossy; `snncc check` measures the cost)"))
     # a replicated graph's relays and copies are populations of their own
-    liveness = calibration_liveness(lowered.trained if replication is not None else graph, lowered, prepared)
+    liveness = calibration_liveness(lowered.trained if replication is not None else graph, lowered, prepared,
+                                    known_run=None if measured is None else (measured.xp, measured.run))
     portability = portability_record(network, lowered.quant_record)
     if progress is not None:
         progress(1, 1, VALIDATING)
@@ -313,10 +352,13 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
                          liveness=liveness, portability=portability, model=model_record(graph))
 
 
-def calibration_liveness(graph: Graph, lowered: LoweredModel, prepared=None) -> dict[str, Any]:
+def calibration_liveness(graph: Graph, lowered: LoweredModel, prepared=None,
+                         known_run: tuple | None = None) -> dict[str, Any]:
     """Every population's activity on the calibration inputs (``snncc.ir.liveness.calibration_spikes``),
     in float (the model as given) and on Loihi (the lowered network, bit-exact), the silent or saturated
-    ones named. (The one-line warning for a model silent in float is compile's: ``calibration_warning``.)"""
+    ones named. (The one-line warning for a model silent in float is compile's: ``calibration_warning``.)
+    ``known_run``: (padded inputs, the network's emulation on them, record "all"), used when those inputs are
+    these."""
     from snncc.ir import liveness
     from snncc.targets.loihi.checks.exactness import ir_spikes, lead_steps, loihi_spikes, pad, twin_spikes
     from snncc.targets.loihi.emulation.emulator import emulate
@@ -334,7 +376,10 @@ def calibration_liveness(graph: Graph, lowered: LoweredModel, prepared=None) -> 
             floats = twin_spikes(net, lowered.order, lowered.layers, xp, trec.shifts, steps)
     else:
         floats = ir_spikes(graph, x, names)
-    run = emulate(net, xp, record="all") if prepared is None else prepared.run(xp, record="all")
+    if known_run is not None and np.array_equal(known_run[0], xp):
+        run = known_run[1]
+    else:
+        run = emulate(net, xp, record="all") if prepared is None else prepared.run(xp, record="all")
     chip_run = loihi_spikes(run, net, lowered.layers, trec.shifts, steps)
     f_act = liveness.activity(floats, liveness.graph_refractory(graph))
     l_act = liveness.activity(chip_run, {c.lif: int(net.layers[i].ref_delay) for i, c in enumerate(lowered.layers, 1)})

@@ -3,6 +3,7 @@ concatenated batch): the check uses those spikes only for its own inputs and a b
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 
 import numpy as np
@@ -56,3 +57,28 @@ def test_a_bundle_with_another_twin_does_not_reuse_it():
     low = lower_model(load_model(NIR / "braille_zero_2023.nir", LoadOptions(dt=1e-4)), LoihiOptions())
     assert low.validation_float is not None
     assert low.twin_structure != twin_structure(low.network, low.order, low.layers)
+
+
+def test_the_measured_candidate_is_reused_only_for_its_registers():
+    """The scale rule's measurement of a candidate (its flattened kernel and its run on the calibration inputs) serves
+    the written bundle only when the registers are the same, compared field by field; taken once."""
+    from snncc.targets.loihi.emulation.emulator import PreparedNetwork
+    from snncc.targets.loihi.lowering import lower
+    from snncc.targets.loihi.network import same_registers
+
+    graph = load_model(NIR / "braille_noDelay_noBias_subtract.nir", LoadOptions(dt=1e-4, reset="subtract"))
+    lower._RECENT.clear()                      # measure afresh (lower_model keeps recent results by content)
+    low = lower_model(graph, LoihiOptions(allow_reset_change=True))
+    measured = lower.reuse_measured(low.network)
+    assert measured is not None and measured.prepared.network is low.network
+    again = PreparedNetwork(low.network).run(measured.xp, record="all")
+    for i in again.spikes:
+        assert np.array_equal(again.spikes[i], measured.run.spikes[i])
+    assert lower.reuse_measured(low.network) is None              # taken once: the list is emptied
+
+    lower._MEASURED.append(lower.MeasuredCandidate(low.network, measured.prepared, measured.xp, measured.run))
+    other = copy.deepcopy(low.network)
+    other.layers[1].weight = other.layers[1].weight.copy()
+    other.layers[1].weight[0, 0] += 2
+    assert not same_registers(other, low.network)
+    assert lower.reuse_measured(other) is None
