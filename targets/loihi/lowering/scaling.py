@@ -187,13 +187,20 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
     planned = [int(sc.global_possible) + 1]          # the portable rules; more when the rest are measured
     considered = [0]
 
+    made: dict[str, tuple[Graph, QuantizationRecord]] = {}     # the first candidate's graph and record
+
     def consider(name: str, make: Make) -> None:
         """Quantize and measure a candidate; one that cannot be lowered (a register out of range) is left out.
-        Only its record is kept (its quantized graph is made again for the one chosen)."""
+        The first candidate keeps its quantized graph (the paper's rule, most often the one chosen); of the others
+        only the record is kept (the quantized graph is made again if one of them is chosen)."""
         try:
-            _, r = make(False)
-            candidates.append((name, make, r, measure(None, r)))
-            r.forget()
+            keep = not made
+            gq, r = make(keep)
+            candidates.append((name, make, r, measure(gq, r)))
+            if keep:
+                made[name] = (gq, r)
+            else:
+                r.forget()
         except SnnccError as ex:
             refused[name] = ex.line()
         considered[0] += 1
@@ -309,7 +316,9 @@ def choose(graph: Graph, rule: str, measure: ErrorFn, calibration: str,
         if name.startswith("fine"):
             why += ("; the fine rule rounds the decay registers to nearest (the paper truncates: "
                     "int(4096 * (1 - exp(-dt / tau))))")
-    g, r = make(True)          # the chosen candidate's quantized graph (the same record, made again)
+    # the chosen candidate's quantized graph: kept, or made again (the same record)
+    g, r = made[name] if name in made else make(True)
+    made.clear()
     if silent:
         why += "; left out (outputs silent on the calibration inputs): " + ", ".join(silent)
     if refused:
