@@ -21,6 +21,13 @@ import signal
 import sys
 import warnings
 
+# numpy asks the kernel for transparent huge pages on every large array (read once, when numpy is first imported).
+# Where the kernel then compacts memory to find them (THP defrag "madvise", a common default), a command that makes
+# many large temporaries spends seconds of system time in it: compiling a 13-million-synapse network for Loihi
+# took 2.6-3.1 s of system CPU with them and 1.9-2.0 s without, the user time 0.2 s longer, other commands
+# unchanged (bench/speed/README.md). A value the user set is kept.
+os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
+
 # Each module registers its verb(s) on the typer app when imported; they import only typer,
 # rich and the standard library at module level, so ``snncc --help`` starts at once.
 VERB_MODULES = (

@@ -69,7 +69,7 @@ def population_activity(graph: Graph, inputs: np.ndarray) -> dict[str, SpikeActi
     if not names:
         return {}
     with one_thread():
-        res = simulate(graph, inputs, record="all")
+        res = simulate(graph, inputs, record="voltage")
     refractory = graph_refractory(graph)
     out = {}
     for name in names:

@@ -30,7 +30,7 @@ from snncc.exact_products import ExactProduct
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LINEAR, LSTM, Conv, Dense, Input, Output, Readout
 
-RECORD_CHOICES = ("outputs", "spikes", "all")
+RECORD_CHOICES = ("outputs", "spikes", "voltage", "all")
 
 
 @dataclass
@@ -100,8 +100,10 @@ def _static_nodes(g: Graph) -> set[str]:
     return static
 
 
-SPARSE_MIN_SIZE = 1 << 20      # Dense weights this large and at most a quarter nonzero run as sparse
-SPARSE_MAX_DENSITY = 0.25      # products (same sums, another summation order)
+SPARSE_MIN_SIZE = 1 << 16      # Dense weights this large and at most 1/16 nonzero run as sparse products (same
+SPARSE_MAX_DENSITY = 1 / 16    # sums, another summation order): below that density scipy's product by the
+                               # nonzeros beats BLAS on the whole matrix at every size and batch measured (256 to
+                               # 2,048 square, batch 32 and 256: 0.13-0.79x its time), above 1/10 it loses (up to 3.4x)
 EXACT_MIN_SIZE = 1 << 16       # float64 weights this large that are integers times a power of two multiply
                                # spikes in float32 (``snncc.exact_products``: the same bits, half the memory read)
 
@@ -149,9 +151,32 @@ def _sigmoid(x: np.ndarray) -> np.ndarray:
     return 0.5 * (1.0 + np.tanh(0.5 * x))
 
 
+class _Records:
+    """(B, T, ...) series filled step by step: the values and dtype ``np.stack`` of the steps would give (a later
+    step of a wider dtype widens the record, as stack promotes)."""
+
+    def __init__(self, batch: int, steps: int):
+        self.batch, self.steps = batch, steps
+        self.series: dict[tuple[str, str], np.ndarray] = {}
+
+    def put(self, key: tuple[str, str], t: int, value: np.ndarray) -> None:
+        rec = self.series.get(key)
+        if rec is None:
+            rec = self.series[key] = np.empty((self.batch, self.steps) + value.shape[1:], value.dtype)
+        elif np.result_type(rec.dtype, value.dtype) != rec.dtype:
+            rec = self.series[key] = rec.astype(np.result_type(rec.dtype, value.dtype))
+        rec[:, t] = value
+
+    def get(self, key: tuple[str, str], shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
+        """The filled series, or an empty (B, 0, ...) one when there were no steps."""
+        found = self.series.get(key)
+        return found if found is not None else np.zeros((self.batch, 0) + shape, dtype)
+
+
 class _Runner:
-    def __init__(self, g: Graph, dtype: np.dtype, record: str):
+    def __init__(self, g: Graph, dtype: np.dtype, record: str, populations=None):
         self.g, self.dtype, self.record = g, dtype, record
+        self.populations = None if populations is None else set(populations)
         self.order = _schedule(g)
         self.static = _static_nodes(g)
         self.p: dict[str, tuple] = {}  # parameters as arrays of ``dtype``
@@ -220,7 +245,8 @@ class _Runner:
                 static_drive[name] = sum(_shift(full[p], g.delay(p, name)) for p in static_preds)
 
         want_state = self.record == "all"
-        want_spikes = self.record in ("spikes", "all")
+        want_voltage = self.record in ("voltage", "all")
+        want_spikes = self.record in ("spikes", "voltage", "all")
 
         def fetch(src: str, dst: str, t: int) -> np.ndarray | None:
             d = g.delay(src, dst)
@@ -228,7 +254,10 @@ class _Runner:
                 return None  # already in static_drive
             if t - d < 0:
                 return None
-            return hist[(src, g.port(src, dst))][t - d]
+            value = hist[(src, g.port(src, dst))][t - d]
+            if value is None:      # released by the window below: a bug, never an absent input
+                raise RuntimeError(f"step {t - d} of '{src}' was released before the edge to '{dst}' read it")
+            return value
 
         def drive(name: str, t: int, width: int) -> np.ndarray:
             total = static_drive[name][:, t] if name in static_drive else None
@@ -238,7 +267,15 @@ class _Runner:
                     total = v if total is None else total + v
             return total if total is not None else np.zeros((batch, width), dtype=self.dtype)
 
-        per_step: dict[str, dict[str, list[np.ndarray]]] = {n: {} for n in dynamic}
+        # a step's output is kept while an edge may still read it (its longest delay); what the result reports is
+        # copied as it comes into one (B, T, n) record per series (``_Records``): no list of T arrays to stack
+        window = {(n, p): max([g.delay(n, s) for s in g.successors(n) if g.port(n, s) == p], default=0)
+                  for (n, p) in hist}
+        reported = {n for n in dynamic if isinstance(g.node(n), (Output, Readout))
+                    or (isinstance(g.node(n), LIF) and want_spikes
+                        and (self.populations is None or n in self.populations))
+                    or (isinstance(g.node(n), LSTM) and want_state)}
+        records = _Records(batch, steps)
         ports_of = {n: [p for (m, p) in hist if m == n] for n in dynamic}
         for t in range(steps):
             for name in dynamic:
@@ -274,8 +311,9 @@ class _Runner:
                     st["I"], st["V"], st["ref"] = i_new, v_after, ref
                     out = {"spikes": s, "voltage": v_after}
                     if want_state:
-                        per_step[name].setdefault("current", []).append(i_new)
-                        per_step[name].setdefault("voltage", []).append(v_after)
+                        records.put((name, "current"), t, i_new)
+                    if want_voltage:
+                        records.put((name, "voltage"), t, v_after)
                 elif isinstance(op, LSTM):
                     w_ih, w_hh, b = self.p[name]
                     st = state[name]
@@ -289,23 +327,26 @@ class _Runner:
                 else:  # Readout, Output: pass the input through
                     out = {"spikes": drive(name, t, op.size)}
                 for port in ports_of[name]:
-                    hist[(name, port)].append(out[port])
-
-        def stack(seq: list[np.ndarray]) -> np.ndarray:
-            return np.stack(seq, axis=1)
+                    kept = hist[(name, port)]
+                    kept.append(out[port])
+                    if t - window[(name, port)] - 1 >= 0:      # no edge reads it any more, this step or later
+                        kept[t - window[(name, port)] - 1] = None
+                if name in reported:
+                    records.put((name, "spikes"), t, out["spikes"])
 
         result = SimulationResult(outputs={})
         for name, op in g.items():
             series = full.get(name)
-            if series is None and (name, "spikes") in hist:
-                series = stack(hist[(name, "spikes")]) if steps else np.zeros((batch, 0, op.size), dtype=self.dtype)
+            if series is None and name in reported:
+                series = records.get((name, "spikes"), (op.size,), self.dtype)
             if isinstance(op, Output):
                 result.outputs[name] = series
-            elif isinstance(op, LIF) and (want_spikes or want_state):
+            elif isinstance(op, LIF) and want_spikes and name in reported:
                 result.spikes[name] = series
                 if want_state:
-                    result.current[name] = stack(per_step[name]["current"])
-                    result.voltage[name] = stack(per_step[name]["voltage"])
+                    result.current[name] = records.get((name, "current"), (op.n,), self.dtype)
+                if want_voltage:
+                    result.voltage[name] = records.get((name, "voltage"), (op.n,), self.dtype)
             elif isinstance(op, LSTM) and want_state:
                 result.hidden[name] = series
             if isinstance(op, Readout):
@@ -326,16 +367,24 @@ def simulate(
     *,
     dtype: object = np.float64,
     record: str = "outputs",
+    populations=None,
 ) -> SimulationResult:
     """Run the reference semantics of ``g`` on ``inputs``.
 
     ``inputs``: an array (T, C) / (B, T, C) for a graph with one Input, or a dict by Input name.
     ``dtype``: float64 (default) or float32 (a numpy dtype, its name, or a torch dtype).
-    ``record``: "outputs" (outputs and readout only), "spikes" (+ every LIF's spikes) or "all"
-    (+ LIF current and post-reset voltage, LSTM hidden states). Every sample starts from zero state.
+    ``record``: "outputs" (outputs and readout only), "spikes" (+ every LIF's spikes), "voltage" (+ LIF post-reset
+    voltage) or "all" (+ LIF current, LSTM hidden states). ``populations``: the LIF populations whose records are
+    kept (default every one; a (B, T, n) record of a large population costs memory). Every sample starts from
+    zero state.
     """
     if record not in RECORD_CHOICES:
         raise SnnccError(f"record must be one of {RECORD_CHOICES}", field="record")
+    if populations is not None:
+        populations = list(populations)
+        unknown = [p for p in populations if p not in g.of_kind(LIF)]
+        if unknown:
+            raise SnnccError(f"not a LIF population of the graph: {', '.join(map(repr, unknown))}", field="populations")
     real = real_dtype(dtype)
     in_names = g.of_kind(Input)
     if not isinstance(inputs, dict):
@@ -358,4 +407,4 @@ def simulate(
         shape = x.shape[:2]
         arrays[name] = x
     with np.errstate(over="ignore"):       # an unbounded neuron's state may overflow to inf, as torch's did
-        return _Runner(g, real, record).run(arrays)
+        return _Runner(g, real, record, populations).run(arrays)

@@ -65,7 +65,7 @@ def float_counts(graph: Graph, x: np.ndarray, population: str | None = None, *, 
     with one_thread():
         for start in range(0, x.shape[0], step):
             part = x[start:start + step]
-            spikes = np.asarray(simulate(graph, part, record="spikes").spikes[name])
+            spikes = np.asarray(simulate(graph, part, record="spikes", populations=[name]).spikes[name])
             out.append(spikes.sum(axis=1).astype(np.int64))
             if progress is not None:
                 progress(int(part.shape[0]))
@@ -107,7 +107,7 @@ def float_spikes(graph: Graph, x: np.ndarray, populations: Sequence[str] | None 
 
     names = list(populations) if populations is not None else [n for n, op in graph.items() if isinstance(op, LIF)]
     with one_thread():
-        run = simulate(graph, np.asarray(x), record="spikes")
+        run = simulate(graph, np.asarray(x), record="spikes", populations=names)
     return {n: np.asarray(run.spikes[n]).astype(np.uint8) for n in names}
 
 

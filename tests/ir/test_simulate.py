@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import torch
 
+from snncc.errors import SnnccError
 from snncc.ir import LIF, LSTM, Dense, Graph, Input, Output, Readout, simulate, validate
 
 
@@ -241,3 +242,43 @@ def test_integer_unit_weights_take_float32_products_with_the_same_bits(monkeypat
     for a, b in [(fast.spikes, plain.spikes), (fast.voltage, plain.voltage), (fast.current, plain.current),
                  (fast.outputs, plain.outputs)]:
         assert all(a[k].tobytes() == b[k].tobytes() for k in b)
+
+
+def _two_layer_with_delays():
+    """Input -> a (recurrent through a delay-3 edge) -> b, with a also read by b through a delay-2 edge."""
+    rng = np.random.default_rng(5)
+    g = Graph(0.001)
+    g.add("x", Input(6))
+    g.add("wa", Dense(rng.normal(0.6, 0.4, (8, 6))))
+    g.add("a", LIF(8, 0.005, 0.02, 1.0))
+    g.add("ra", Dense(rng.normal(0, 0.5, (8, 8))))
+    g.add("wb", Dense(rng.normal(0.5, 0.4, (5, 8))))
+    g.add("b", LIF(5, 0.005, 0.02, 1.0, reset="subtract"))
+    g.add("o", Output(5))
+    g.connect("x", "wa")
+    g.connect("wa", "a")
+    g.connect("a", "ra", delay=3)
+    g.connect("ra", "a")
+    g.connect("a", "wb", delay=2)
+    g.connect("wb", "b")
+    g.connect("b", "o")
+    return validate(g)
+
+
+def test_voltage_and_population_records_are_the_full_runs_parts():
+    """record "voltage" keeps spikes and post-reset voltages (no currents), ``populations`` keeps only those LIFs:
+    both equal the "all" run's arrays bit for bit (a step is released only after its last delayed reader)."""
+    g = _two_layer_with_delays()
+    x = (np.random.default_rng(6).random((3, 40, 6)) < 0.4).astype(float)
+    full = simulate(g, x, record="all")
+    assert full.spikes["a"].any() and full.spikes["b"].any()
+    part = simulate(g, x, record="voltage")
+    assert part.current == {} and part.voltage.keys() == full.voltage.keys()
+    for k in full.voltage:
+        assert part.voltage[k].tobytes() == full.voltage[k].tobytes()
+        assert part.spikes[k].tobytes() == full.spikes[k].tobytes()
+    only = simulate(g, x, record="spikes", populations=["b"])
+    assert list(only.spikes) == ["b"] and only.spikes["b"].tobytes() == full.spikes["b"].tobytes()
+    assert only.outputs["o"].tobytes() == full.outputs["o"].tobytes()
+    with pytest.raises(SnnccError, match="not a LIF population"):
+        simulate(g, x, record="spikes", populations=["wb"])

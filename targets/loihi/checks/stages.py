@@ -76,7 +76,7 @@ def population_spikes(graph: Graph, x: np.ndarray, names: list[str], cut=None) -
     from snncc.ir.simulate import simulate   # the float reference: imported where it runs
 
     with one_thread():
-        res = simulate(graph, x, record="spikes")
+        res = simulate(graph, x, record="spikes", populations=names)
     spikes = {n: np.asarray(res.spikes[n]).astype(np.uint8) for n in names}
     return cut(spikes) if cut is not None else spikes
 

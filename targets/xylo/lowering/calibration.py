@@ -86,7 +86,7 @@ def calibrate(ref: Graph, srcs: list[Source], x: np.ndarray) -> None:
     voltage = {s.pop.lif: np.zeros((b, steps, s.theta.size), np.float64) for s in srcs}
     with one_thread():
         for s0 in range(0, b, CALIBRATION_CHUNK):
-            res = simulate(ref, x[s0:s0 + CALIBRATION_CHUNK], record="all")
+            res = simulate(ref, x[s0:s0 + CALIBRATION_CHUNK], record="voltage")
             for name in spikes:
                 spikes[name][s0:s0 + CALIBRATION_CHUNK] = spike_trains(res.spikes[name])
                 voltage[name][s0:s0 + CALIBRATION_CHUNK] = np.asarray(res.voltage[name])
@@ -109,7 +109,7 @@ def float_counts(ref: Graph, x: np.ndarray, last: str) -> np.ndarray:
     from snncc.targets.kit.compute import one_thread
 
     with one_thread():
-        return np.asarray(simulate(ref, x, record="spikes").spikes[last]).sum(axis=1)
+        return np.asarray(simulate(ref, x, record="spikes", populations=[last]).spikes[last]).sum(axis=1)
 
 
 def sample_count(options: XyloOptions) -> int:

@@ -126,7 +126,7 @@ def twin_counts(twin: Graph, timing: XyloTiming, x: np.ndarray) -> np.ndarray:
 
     chip_x = chip_window(np.asarray(x), timing.input_pad, timing.output_lag)
     with one_thread():
-        out = np.asarray(simulate(twin, chip_x, record="spikes").spikes["output"])
+        out = np.asarray(simulate(twin, chip_x, record="spikes", populations=["output"]).spikes["output"])
     return read_window(out, timing.output_lag, x.shape[1]).sum(axis=1)
 
 
