@@ -95,6 +95,7 @@ class LoweredModel:
 
 _RECENT: OrderedDict[str, LoweredModel] = OrderedDict()   # graph content + options -> lowering (this process)
 RECENT_KEPT = 2
+RECENT_MAX_WEIGHTS = 2_000_000     # a graph with more weights is not kept: its copy would double the compile's memory
 
 
 def content_key(graph: Graph, options: LoihiOptions, t_sample: int | None = None) -> str:
@@ -115,7 +116,7 @@ def content_key(graph: Graph, options: LoihiOptions, t_sample: int | None = None
     for key in sorted(arrays):
         a = np.ascontiguousarray(arrays[key])
         h.update(f"{key}{a.dtype}{a.shape}".encode())
-        h.update(a.tobytes())
+        h.update(a.data if a.size else b"")      # the buffer itself: no copy of a large matrix
     return h.hexdigest()
 
 
@@ -124,9 +125,15 @@ def lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None =
     """Timing, quantization and register values (no validation); ``progress(done, total, phase)`` as the
     scale rule's candidates are measured (``--scale auto``). The last ``RECENT_KEPT`` results are kept
     by content (``content_key``), so a check that lowers the model compile just lowered does not redo the
-    calibration; the checks compare what they use with the written bundle anyway (``checks/written.py``)."""
+    calibration; the checks compare what they use with the written bundle anyway (``checks/written.py``).
+    A graph of more than ``RECENT_MAX_WEIGHTS`` weights is lowered afresh each time (a kept copy of its
+    lowering would double the memory a compile needs, and copying it costs what the key saves)."""
     import copy
 
+    from snncc.ir.nodes import Dense
+
+    if sum(int(np.size(op.weight)) for _, op in graph.items() if isinstance(op, Dense)) > RECENT_MAX_WEIGHTS:
+        return _lower_model(graph, options, progress, t_sample)
     key = content_key(graph, options, t_sample)
     if key in _RECENT:
         _RECENT.move_to_end(key)

@@ -84,9 +84,9 @@ def screen(graph: Graph) -> Screen:
     span = chip.WEIGHT_SPAN
     possible = 0 < top <= span
     for dense, m in maxima.items():
-        w = np.abs(graph.node(dense).weight)
-        nz = w[w > 0]
-        med = float(np.median(nz)) if nz.size else 0.0
+        w = graph.node(dense).weight
+        nz = np.abs(w[w != 0])
+        med = float(np.median(nz, overwrite_input=True)) if nz.size else 0.0   # nz is this line's own copy
         if med > 0 and m / med > OUTLIER_RATIO:
             flagged[dense] = Flag(FlagKind.OUTLIERS, f"max|W| is {m / med:.0f}x the median |W|")
         elif possible and m * np.floor(span / top) / span < MIN_RANGE:

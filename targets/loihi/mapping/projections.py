@@ -67,17 +67,38 @@ def _nonzeros(weight, shape: tuple[int, int], where: str):
         if csr.nnz == shape[0] * shape[1]:
             return True, None
         return False, csr
-    if hasattr(weight, "tocsr"):
-        csr = sp.csr_matrix(weight, copy=True)
-    else:
-        w = np.asarray(weight)
-        if np.all(w != 0):
-            return True, None
-        csr = sp.csr_matrix(w)
+    if not hasattr(weight, "tocsr"):
+        return _dense_pattern(np.asarray(weight), shape)
+    csr = sp.csr_matrix(weight, copy=True)
     csr.eliminate_zeros()
     csr.sort_indices()
     if csr.nnz == shape[0] * shape[1]:
         return True, None
+    return False, csr
+
+
+PATTERN_BLOCK = 1 << 20     # entries of a dense matrix scanned at a time for its nonzero pattern
+
+
+def _dense_pattern(w: np.ndarray, shape: tuple[int, int]):
+    """(full, csr) of a dense matrix: only where its synapses are (the mapper reads the pattern, not the
+    values: the csr holds ones), found in blocks of rows, with no coordinate or value copy of the whole."""
+    import scipy.sparse as sp
+
+    rows = max(1, PATTERN_BLOCK // max(1, shape[1]))
+    counts = np.zeros(shape[0], np.int64)
+    columns = []
+    for r0 in range(0, shape[0], rows):
+        present = w[r0:r0 + rows] != 0
+        counts[r0:r0 + present.shape[0]] = present.sum(axis=1)
+        columns.append(np.nonzero(present)[1].astype(np.int32))    # row by row, columns ascending
+    nnz = int(counts.sum())
+    if nnz == shape[0] * shape[1]:
+        return True, None
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    indices = np.concatenate(columns) if columns else np.zeros(0, np.int32)
+    csr = sp.csr_matrix((np.ones(nnz, np.int8), indices, indptr), shape=shape)
+    csr.has_sorted_indices = True
     return False, csr
 
 

@@ -82,3 +82,18 @@ def test_the_measured_candidate_is_reused_only_for_its_registers():
     other.layers[1].weight[0, 0] += 2
     assert not same_registers(other, low.network)
     assert lower.reuse_measured(other) is None
+
+
+def test_a_large_graph_is_lowered_afresh_not_kept(monkeypatch):
+    """Above RECENT_MAX_WEIGHTS weights a lowering is not kept (its copy would double the compile's memory): a
+    second lowering of the same graph measures again, and nothing is added to the kept results."""
+    from snncc.targets.loihi.lowering import lower
+
+    graph = load_model(NIR / "braille_noDelay_noBias_subtract.nir", LoadOptions(dt=1e-4, reset="subtract"))
+    lower._RECENT.clear()
+    monkeypatch.setattr(lower, "RECENT_MAX_WEIGHTS", 10)
+    first = lower_model(graph, LoihiOptions(allow_reset_change=True))
+    assert not lower._RECENT and lower._MEASURED            # measured, not kept
+    second = lower_model(graph, LoihiOptions(allow_reset_change=True))
+    assert second is not first and not lower._RECENT
+    assert np.array_equal(second.network.layers[1].weight, first.network.layers[1].weight)

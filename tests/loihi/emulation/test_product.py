@@ -46,3 +46,13 @@ def test_a_sum_past_2_to_24_is_not_taken_in_float32():
 def test_float_weights_stay_float64():
     w = np.random.default_rng(1).normal(size=(3, 7))
     assert emulator._Product(w).w_t.dtype == np.float64
+
+
+def test_the_float_fallback_is_the_scaled_transpose(monkeypatch):
+    """Float weights with no integer units are held as (w * factor).T, copied in row blocks."""
+    monkeypatch.setattr(emulator, "TRANSPOSE_ROWS", 3)
+    w = np.random.default_rng(4).normal(size=(10, 7))
+    product = emulator._Product(w, 0.25)
+    assert product.w_t.flags.c_contiguous and np.array_equal(product.w_t, (w * 0.25).T)
+    s = (np.random.default_rng(5).random((2, 7)) < 0.5).astype(np.float64)
+    assert np.allclose(product.of(s), s @ (w * 0.25).T, rtol=1e-14, atol=0)
