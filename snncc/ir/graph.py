@@ -80,9 +80,11 @@ class Graph:
     def successors(self, name: str) -> list[str]:
         return list(self.nx.successors(name))
 
-    def copy(self) -> "Graph":
-        """A deep copy: passes return new graphs and never mutate their input."""
-        return copy.deepcopy(self)
+    def copy(self, replaced=()) -> "Graph":
+        """A deep copy: passes return new graphs and never mutate their input. ``replaced``: arrays of this graph
+        the caller assigns anew in the copy before anything reads them (a pass rewriting every weight): they are
+        not copied, the copy holds them until then."""
+        return copy.deepcopy(self, {id(a): a for a in replaced})
 
     def __repr__(self) -> str:
         return f"Graph({self.name!r}, dt={self.dt}, nodes={list(self.nx.nodes)})"

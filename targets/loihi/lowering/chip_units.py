@@ -30,7 +30,9 @@ def _snap(values: np.ndarray) -> np.ndarray:
 def in_chip_units(quantized: Graph, record) -> Graph:
     """``quantized`` with each population (``record.layers``) scaled by its scale s: incoming Dense
     weights and biases, the LIF's threshold and bias. A new graph with the same spikes."""
-    g = quantized.copy()
+    rescaled = [quantized.node(p).weight for lq in record.layers if isinstance(quantized.node(lq.lif), LIF)
+                for p in quantized.predecessors(lq.lif) if isinstance(quantized.node(p), Dense)]
+    g = quantized.copy(replaced=rescaled)         # those weights are assigned anew below
     for lq in record.layers:
         s = float(lq.scale)
         op = g.node(lq.lif)

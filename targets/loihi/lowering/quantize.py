@@ -344,7 +344,8 @@ def quantize_graph(
     if rule not in ("global", "per-layer", "fine"):
         raise SnnccError(f"scale rule must be one of {SCALE_RULES}", field="--scale")
     rounding = "nearest" if rule == "fine" else "truncate"
-    g = graph.copy() if graph_out else None     # graph_out False: the record alone (a candidate being measured)
+    # graph_out False: the record alone (a candidate being measured); the weights quantized below are assigned anew
+    g = graph.copy(replaced=[graph.node(d).weight for d, _ in projections(graph)]) if graph_out else None
     scales, w_scale = layer_scales(graph, rule, fine_step)
     record = QuantizationRecord(rule=rule, reason=reason, w_scale=w_scale,
                                 fine_step=float(fine_step) if rule == "fine" else None)
