@@ -310,9 +310,9 @@ class _Runner:
                         ref = np.where(fired, op.refractory - 1, ref).astype(np.int32, copy=False)
                     st["I"], st["V"], st["ref"] = i_new, v_after, ref
                     out = {"spikes": s, "voltage": v_after}
-                    if want_state:
+                    if want_state and name in reported:
                         records.put((name, "current"), t, i_new)
-                    if want_voltage:
+                    if want_voltage and name in reported:
                         records.put((name, "voltage"), t, v_after)
                 elif isinstance(op, LSTM):
                     w_ih, w_hh, b = self.p[name]

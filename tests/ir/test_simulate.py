@@ -282,3 +282,10 @@ def test_voltage_and_population_records_are_the_full_runs_parts():
     assert only.outputs["o"].tobytes() == full.outputs["o"].tobytes()
     with pytest.raises(SnnccError, match="not a LIF population"):
         simulate(g, x, record="spikes", populations=["wb"])
+
+
+def test_a_population_left_out_records_nothing():
+    g = _two_layer_with_delays()
+    x = (np.random.default_rng(7).random((2, 30, 6)) < 0.4).astype(float)
+    only = simulate(g, x, record="all", populations=["a"])
+    assert list(only.spikes) == list(only.voltage) == list(only.current) == ["a"]

@@ -54,8 +54,8 @@ class MeasuredCandidate:
     run: Any                 # its EmulationResult on ``xp``, record "all"
 
 
-# The candidates the latest ``_lower_model`` measured (cleared when the next one starts; ``lower_artefact`` takes the
-# one with the written bundle's registers, ``reuse_measured``, and clears the rest)
+# The candidates the latest ``_lower_model`` measured, kept only for ``lower_artefact`` (``keep_measured``), which takes
+# the one with the written bundle's registers (``reuse_measured``) and clears the rest; other callers keep nothing
 _MEASURED: list[MeasuredCandidate] = []
 
 
@@ -121,24 +121,25 @@ def content_key(graph: Graph, options: LoihiOptions, t_sample: int | None = None
 
 
 def lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None = None, *,
-                t_sample: int | None = None) -> LoweredModel:
+                t_sample: int | None = None, keep_measured: bool = False) -> LoweredModel:
     """Timing, quantization and register values (no validation); ``progress(done, total, phase)`` as the
     scale rule's candidates are measured (``--scale auto``). The last ``RECENT_KEPT`` results are kept
     by content (``content_key``), so a check that lowers the model compile just lowered does not redo the
     calibration; the checks compare what they use with the written bundle anyway (``checks/written.py``).
     A graph of more than ``RECENT_MAX_WEIGHTS`` weights is lowered afresh each time (a kept copy of its
-    lowering would double the memory a compile needs, and copying it costs what the key saves)."""
+    lowering would double the memory a compile needs, and copying it costs what the key saves). ``keep_measured``:
+    the scale candidates' measurements stay in ``_MEASURED`` for ``reuse_measured``."""
     import copy
 
     from snncc.ir.nodes import Dense
 
     if sum(int(np.size(op.weight)) for _, op in graph.items() if isinstance(op, Dense)) > RECENT_MAX_WEIGHTS:
-        return _lower_model(graph, options, progress, t_sample)
+        return _lower_model(graph, options, progress, t_sample, keep_measured)
     key = content_key(graph, options, t_sample)
     if key in _RECENT:
         _RECENT.move_to_end(key)
         return copy.deepcopy(_RECENT[key])      # a caller may change what it gets; the kept one stays as made
-    lowered = _lower_model(graph, options, progress, t_sample)
+    lowered = _lower_model(graph, options, progress, t_sample, keep_measured)
     _RECENT[key] = copy.deepcopy(lowered)
     while len(_RECENT) > RECENT_KEPT:
         _RECENT.popitem(last=False)
@@ -146,7 +147,7 @@ def lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None =
 
 
 def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None = None,
-                 t_sample: int | None = None) -> LoweredModel:
+                 t_sample: int | None = None, keep_measured: bool = False) -> LoweredModel:
     from snncc.ir.liveness import calibration_spikes, calibration_text
     from snncc.targets.loihi.lowering import scaling
     from snncc.targets.loihi.checks.exactness import (lead_steps, loihi_spikes, pad, twin_spikes, twin_structure,
@@ -269,6 +270,8 @@ def _lower_model(graph: Graph, options: LoihiOptions, progress: Progress | None 
     if replication is not None:
         meta["replication"] = replication
     network = build_network(order, layers, qrec, trec, steps + trec.output_shift, meta)
+    if not keep_measured:
+        _MEASURED.clear()
     return LoweredModel(graph, order, quantized, layers, network, qrec, trec,
                         deployed=None if deployed is graph else deployed, notes=fold.notes(),
                         calibration_float=reference.get("spikes"), validation_float=reference.get("validation"),
@@ -305,7 +308,7 @@ def lower_artefact(graph: Graph, options: LoihiOptions, progress: Progress | Non
     from snncc.targets.loihi.checks.exactness import (lead_steps, pad, twin_structure, validate_lowering,
                                                       validation_spikes)
 
-    lowered = lower_model(graph, options, progress)
+    lowered = lower_model(graph, options, progress, keep_measured=True)
     notes: list[str] = list(lowered.notes)
     replication = lowered.network.metadata.get("replication")
     if replication is not None:

@@ -68,7 +68,10 @@ def test_the_measured_candidate_is_reused_only_for_its_registers():
 
     graph = load_model(NIR / "braille_noDelay_noBias_subtract.nir", LoadOptions(dt=1e-4, reset="subtract"))
     lower._RECENT.clear()                      # measure afresh (lower_model keeps recent results by content)
-    low = lower_model(graph, LoihiOptions(allow_reset_change=True))
+    lower_model(graph, LoihiOptions(allow_reset_change=True))
+    assert not lower._MEASURED                 # a caller other than lower_artefact keeps no measurement
+    lower._RECENT.clear()
+    low = lower_model(graph, LoihiOptions(allow_reset_change=True), keep_measured=True)
     measured = lower.reuse_measured(low.network)
     assert measured is not None and measured.prepared.network is low.network
     again = PreparedNetwork(low.network).run(measured.xp, record="all")
@@ -92,8 +95,9 @@ def test_a_large_graph_is_lowered_afresh_not_kept(monkeypatch):
     graph = load_model(NIR / "braille_noDelay_noBias_subtract.nir", LoadOptions(dt=1e-4, reset="subtract"))
     lower._RECENT.clear()
     monkeypatch.setattr(lower, "RECENT_MAX_WEIGHTS", 10)
-    first = lower_model(graph, LoihiOptions(allow_reset_change=True))
-    assert not lower._RECENT and lower._MEASURED            # measured, not kept
+    first = lower_model(graph, LoihiOptions(allow_reset_change=True), keep_measured=True)
+    assert not lower._RECENT and lower._MEASURED            # measured, the lowering itself not kept
+    lower._MEASURED.clear()
     second = lower_model(graph, LoihiOptions(allow_reset_change=True))
     assert second is not first and not lower._RECENT
     assert np.array_equal(second.network.layers[1].weight, first.network.layers[1].weight)
