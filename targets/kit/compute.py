@@ -9,6 +9,7 @@ Ctrl-C held back while numba imports, memory and time-step bounds checked before
     check_time_steps(steps, what)       refuse a sample longer than MAX_TIME_STEPS
     whole_number(value)                 a count from a file, checked
     integer_units(w)                    w = m * g (m integers, g a power of two) where float32 sums m exactly
+    transposed(a, factor)               (a * factor).T in C order, copied in blocks of rows (cache-friendly)
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ from snncc.interrupts import sigint_deferred
 from snncc.limits import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, check_time_steps, human_bytes, whole_number
 from snncc.rounding import damped, round_with_feedback
 from snncc.threads import one_thread
+from snncc.transpose import transposed
 
 __all__ = ["one_thread", "round_with_feedback", "damped", "sigint_deferred", "check_memory", "check_time_steps",
            "whole_number", "human_bytes", "MAX_TIME_STEPS", "MAX_STREAM_STEPS", "integer_units", "ExactProduct",
-           "FLOAT32_EXACT"]
+           "FLOAT32_EXACT", "transposed"]

@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from snncc.targets.kit import SnnccError
-from snncc.targets.kit.compute import (FLOAT32_EXACT, MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, integer_units,
-                                      whole_number)
+from snncc.targets.kit.compute import (FLOAT32_EXACT, MAX_STREAM_STEPS, MAX_TIME_STEPS,  # noqa: F401  (re-exported)
+                                      check_memory, integer_units, transposed, whole_number)
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.emulation.result import EmulationResult, SparseBlock, _prediction  # noqa: F401  (re-exported)
 from snncc.targets.loihi.network import LoihiNetwork
@@ -118,7 +118,7 @@ class _Product:
             if found is not None:
                 self.w_t, self.scale = found[0], found[1] * float(factor)
         if self.w_t is None:
-            self.w_t = _transposed(np.asarray(w, np.float64), float(factor))
+            self.w_t = transposed(np.asarray(w, np.float64), float(factor))
 
     def of(self, spikes: np.ndarray) -> np.ndarray:
         """(B, n) float64: over the spikes only where they are few (the work follows them, not n_pre x n), else
@@ -139,18 +139,6 @@ class _Product:
             out = out.toarray() if sp.issparse(out) else np.asarray(out)
         out = out.astype(np.float64, copy=False)
         return out * self.scale if self.scale != 1.0 else out
-
-
-TRANSPOSE_ROWS = 256   # rows transposed at a time: a whole large transpose is cache-bound (3-6x slower)
-
-
-def _transposed(w: np.ndarray, factor: float = 1.0) -> np.ndarray:
-    """(w * factor).T, C-contiguous float64, copied in blocks of rows (factor a power of two: exact)."""
-    out = np.empty(w.shape[::-1], np.float64)
-    for r0 in range(0, w.shape[0], TRANSPOSE_ROWS):
-        block = w[r0:r0 + TRANSPOSE_ROWS]
-        out[:, r0:r0 + TRANSPOSE_ROWS] = (block * factor if factor != 1.0 else block).T
-    return out
 
 
 def _delivered(history: list[np.ndarray], t: int, parts: list[tuple[int, _Product]], zero: np.ndarray) -> np.ndarray:

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from snncc.targets.kit import SnnccError
-from snncc.targets.kit.compute import round_with_feedback
+from snncc.targets.kit.compute import round_with_feedback, transposed
 from snncc.targets.xylo.lowering import decays, sigma_delta as relay_rules
 from snncc.targets.xylo.lowering.chip_form import (BIAS_SOURCE, SAFE_WEIGHT_SHIFT, SINGLE_THRESHOLD, STATE_MARGIN,
                                                    STATE_MAX, MIN_GAIN, WEIGHT_MAX, WEIGHT_MIN, HiddenFloat,
@@ -53,9 +53,6 @@ STATE_SAMPLES = 32           # samples whose currents are held at once (``hidden
 SPARSE_BELOW = 0.05          # a weight matrix with fewer non-zero weights than this drives the currents sparse
 
 
-TRANSPOSE_ROWS = 256         # rows transposed at a time (a whole large transpose is cache-bound: 3-6x slower)
-
-
 def _driven(part: np.ndarray, a: float, w: np.ndarray) -> np.ndarray:
     """The synaptic traces of ``part`` (s, T, m spike trains; ``synaptic(part, a)``) through ``w.T`` (w: (n, m)), as
     (s, T, n): dense, or sparse where ``w`` is (a large sparse network's cost then grows with its synapses, not with
@@ -65,9 +62,7 @@ def _driven(part: np.ndarray, a: float, w: np.ndarray) -> np.ndarray:
     if w.size and np.count_nonzero(w) < SPARSE_BELOW * w.size:
         from scipy.sparse import csr_matrix
 
-        traces = np.empty((m, s * t))
-        for r0 in range(0, s * t, TRANSPOSE_ROWS):
-            traces[:, r0:r0 + TRANSPOSE_ROWS] = rows[r0:r0 + TRANSPOSE_ROWS].T
+        traces = transposed(rows)
         del rows
         return (csr_matrix(w) @ traces).T.reshape(s, t, w.shape[0])
     return rows.reshape(s, t, m) @ w.T

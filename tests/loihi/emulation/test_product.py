@@ -50,7 +50,9 @@ def test_float_weights_stay_float64():
 
 def test_the_float_fallback_is_the_scaled_transpose(monkeypatch):
     """Float weights with no integer units are held as (w * factor).T, copied in row blocks."""
-    monkeypatch.setattr(emulator, "TRANSPOSE_ROWS", 3)
+    import snncc.transpose
+
+    monkeypatch.setattr(snncc.transpose, "TRANSPOSE_ROWS", 3)
     w = np.random.default_rng(4).normal(size=(10, 7))
     product = emulator._Product(w, 0.25)
     assert product.w_t.flags.c_contiguous and np.array_equal(product.w_t, (w * 0.25).T)
