@@ -38,8 +38,14 @@ def _resolve(spec: str | Loader, suffix: str, path: Path) -> Loader:
     if callable(spec):
         return spec
     module_name, func = spec.split(":")
+    from snncc.interrupts import sigint_deferred
+
     try:
-        module = importlib.import_module(module_name)
+        # a loader imports its library (torch for .pt files): torch's C++ start-up (pybind11) aborts the process
+        # ("terminate called ... KeyboardInterrupt") when a Ctrl-C lands inside it, so the Ctrl-C waits for the
+        # import to end and is raised then (the CLI says "interrupted", exit 130)
+        with sigint_deferred():
+            module = importlib.import_module(module_name)
     except ModuleNotFoundError as ex:
         if ex.name == module_name:
             raise SnnccError(f"no frontend for {suffix} files is installed in this snncc", file=str(path), field="format") from None
