@@ -9,7 +9,7 @@ data (input copies, classes, encoding, source hash) as plain JSON-able values.
 from __future__ import annotations
 
 import copy
-from typing import Any, Iterator
+from typing import Any, Iterable, Iterator
 
 import networkx as nx
 
@@ -80,7 +80,7 @@ class Graph:
     def successors(self, name: str) -> list[str]:
         return list(self.nx.successors(name))
 
-    def copy(self, replaced=()) -> "Graph":
+    def copy(self, replaced: Iterable[Any] = ()) -> "Graph":
         """A deep copy: passes return new graphs and never mutate their input. ``replaced``: arrays of this graph
         the caller assigns anew in the copy before anything reads them (a pass rewriting every weight): they are
         not copied, the copy holds them until then."""
