@@ -14,7 +14,7 @@ Ctrl-C held back while numba imports, memory and time-step bounds checked before
 
 from __future__ import annotations
 
-from snncc.exact_products import FLOAT32_EXACT, ExactProduct, integer_units
+from snncc.exact_products import FLOAT32_EXACT, integer_units
 from snncc.interrupts import sigint_deferred
 from snncc.limits import MAX_STREAM_STEPS, MAX_TIME_STEPS, check_memory, check_time_steps, human_bytes, whole_number
 from snncc.rounding import damped, round_with_feedback
@@ -22,5 +22,5 @@ from snncc.threads import one_thread
 from snncc.transpose import transposed
 
 __all__ = ["one_thread", "round_with_feedback", "damped", "sigint_deferred", "check_memory", "check_time_steps",
-           "whole_number", "human_bytes", "MAX_TIME_STEPS", "MAX_STREAM_STEPS", "integer_units", "ExactProduct",
+           "whole_number", "human_bytes", "MAX_TIME_STEPS", "MAX_STREAM_STEPS", "integer_units",
            "FLOAT32_EXACT", "transposed"]

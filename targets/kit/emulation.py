@@ -32,8 +32,15 @@ class OutputSpikes:
 
     @property
     def prediction(self) -> np.ndarray:
-        return np.argmax(self.counts, axis=1).astype(np.int64)
+        return _argmax(self.counts)
 
     def output_arrays(self) -> dict[str, np.ndarray]:
-        """``output_spikes``, ``counts`` and ``prediction``: what every emulation's ``arrays()`` holds first."""
-        return {"output_spikes": self.output_spikes, "counts": self.counts, "prediction": self.prediction}
+        """``output_spikes``, ``counts`` and ``prediction``: what every emulation's ``arrays()`` holds first (the
+        counts summed once)."""
+        counts = self.counts
+        return {"output_spikes": self.output_spikes, "counts": counts, "prediction": _argmax(counts)}
+
+
+def _argmax(counts: np.ndarray) -> np.ndarray:
+    """Per sample the output with the most spikes, ties to the lowest index."""
+    return np.argmax(counts, axis=1).astype(np.int64)
