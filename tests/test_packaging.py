@@ -18,6 +18,24 @@ def test_every_package_directory_is_listed_in_pyproject():
     assert found <= listed, f"add to pyproject packages: {sorted(found - listed)}"
 
 
+def test_every_file_besides_python_modules_in_the_packages_is_package_data():
+    """A non-Python file in a package directory (the C kernel's source) must be installed with it: listed in
+    [tool.setuptools.package-data] under its package, or a non-editable install would lack it."""
+    import fnmatch
+    import subprocess
+
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
+    tracked = subprocess.run(["git", "ls-files", "snncc", "targets"], cwd=ROOT, capture_output=True, text=True,
+                             check=True).stdout.split()
+    others = [Path(p) for p in tracked if not p.endswith(".py")]
+    assert others, "the C kernel's source is expected among the package files"
+    for path in others:
+        parts = path.parent.parts
+        package = ".".join(("snncc",) + parts) if parts[0] == "targets" else ".".join(parts)
+        assert any(fnmatch.fnmatch(path.name, pattern) for pattern in data.get(package, [])), \
+            f"add {path.name} to [tool.setuptools.package-data] {package!r}"
+
+
 def test_targets_register_through_entry_points():
     assert {"ir", "loihi", "jetson"} <= set(available_targets())
     for name in ("ir", "loihi", "jetson"):

@@ -222,16 +222,30 @@ def main(argv: list[str] | None = None) -> None:
         bundle, x = th1_bundle(work)
         np.save(work / "x1.npy", x[:1])
         np.save(work / "x2048.npy", x)
-        one_emu = best_of(snncc + ["emulate", str(bundle), "--input", str(work / "x1.npy"), "-o",
-                                   str(work / "o1.npz")], args.repeat + 1)
-        many = best_of(snncc + ["emulate", str(bundle), "--input", str(work / "x2048.npy"), "-o",
-                                str(work / "o.npz")], args.repeat)
+        # the default kernel (C, where the compiler builds it) and the numba kernel side by side, each warm
+        runs = {}
+        for kernel in ("auto", "numba"):
+            env = {"SNNCC_LOIHI_KERNEL": kernel}
+            warm = child_run(snncc + ["emulate", str(bundle), "--input", str(work / "x2048.npy"), "-o",
+                                      str(work / "w.npz"), "--json"], env=env)
+            one_emu = best_of(snncc + ["emulate", str(bundle), "--input", str(work / "x1.npy"), "-o",
+                                       str(work / "o1.npz")], args.repeat + 1, env=env)
+            many = best_of(snncc + ["emulate", str(bundle), "--input", str(work / "x2048.npy"), "-o",
+                                    str(work / "o.npz")], args.repeat, env=env)
+            ran = json.loads(warm["stdout"]).get("implementation")
+            runs[kernel] = {"kernel": ran,
+                            "one_sample": {"cpu_s": one_emu["cpu_best_s"], "wall_s": one_emu["wall_best_s"]},
+                            "samples_2048": {"cpu_s": many["cpu_best_s"], "wall_s": many["wall_best_s"]}}
         loop = torch_loop(bundle, x)
-        out["emulate_th1"] = {"one_sample": {"cpu_s": one_emu["cpu_best_s"], "wall_s": one_emu["wall_best_s"]},
-                              "samples_2048": {"cpu_s": many["cpu_best_s"], "wall_s": many["wall_best_s"]},
+        one_emu, many = runs["auto"]["one_sample"], runs["auto"]["samples_2048"]
+        out["emulate_th1"] = {**runs["auto"], "numba_kernel": runs["numba"],
                               "torch_float32_loop_one_thread": loop,
-                              "ratio_torch_over_emulate_wall": loop["wall_s"] / many["wall_best_s"],
-                              "ratio_torch_over_emulate_cpu": loop["cpu_s"] / many["cpu_best_s"]}
+                              "ratio_torch_over_emulate_wall": loop["wall_s"] / many["wall_s"],
+                              "ratio_torch_over_emulate_cpu": loop["cpu_s"] / many["cpu_s"],
+                              "ratio_torch_over_emulate_numba_kernel_wall":
+                                  loop["wall_s"] / runs["numba"]["samples_2048"]["wall_s"]}
+        one_emu = {"cpu_best_s": one_emu["cpu_s"]}
+        many = {"wall_best_s": many["wall_s"]}
         out["goals"]["emulate_one_sample_cpu_s<=0.8"] = goal(one_emu["cpu_best_s"], 0.8)
         out["goals"]["emulate_2048_vs_torch_loop>=5x"] = goal(loop["wall_s"] / many["wall_best_s"], 5.0, at_most=False)
         helped = best_of(snncc + ["emulate", "--help"], args.repeat + 1)
@@ -240,6 +254,7 @@ def main(argv: list[str] | None = None) -> None:
         imports = {}
         for module in ("snncc.targets.loihi.capabilities", "snncc.targets.loihi.bundle.read",
                        "snncc.targets.loihi.emulation.emulator", "snncc.targets.loihi.emulation.kernel",
+                       "snncc.targets.loihi.emulation.ckernel",
                        "snncc.targets.loihi.lowering.lower"):
             base = child_run([sys.executable, "-c", "import numpy"])["cpu_s"]
             imports[module] = child_run([sys.executable, "-c", f"import numpy, {module}"])["cpu_s"] - base

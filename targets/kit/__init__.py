@@ -23,6 +23,7 @@ and an out-of-tree test target proves a third party needs nothing else. Each mod
     kit.graphs      pure Graph -> Graph passes (linear folding, current biases, reset change)
     kit.models      model records other than a graph (a buffered classifier)
     kit.hdf5        an HDF5 artefact holds its own data: no link or external storage is read through
+    kit.native      a C source compiled once by the system's compiler into a cached library (ctypes)
 
 This module itself imports nothing heavy: the error types, the progress conventions and snncc's version.
 """

@@ -46,8 +46,9 @@ def test_every_verb_is_registered():
 
 
 def test_bundle_verbs_import_no_torch_or_sklearn(tmp_path, small_rsnn_checkpoint, capsys):
-    """emulate / map / report on a bundle need numpy, numba and h5py only (not the compiler's stack); a small
-    emulate run not numba either (``run_bundle.STATEMENT_WORK``)."""
+    """emulate / map / report on a bundle need numpy, numba and h5py only (not the compiler's stack); emulate not
+    numba either: it runs the C kernel (built by the system's compiler), or the numpy statement for a small run
+    (``run_bundle.STATEMENT_WORK``) where only numba's kernel could run."""
     import numpy as np
 
     from snncc_test_helpers import run_cli
@@ -64,7 +65,7 @@ def test_bundle_verbs_import_no_torch_or_sklearn(tmp_path, small_rsnn_checkpoint
         # networkx too: asking every target whether the path is its artefact loads no compiler (the IR's graph)
         assert not set(record["heavy"]) & {"torch", "sklearn", "pandas", "onnx", "onnxruntime", "matplotlib",
                                            "networkx"}, record
-        if args[0] == "emulate":   # a small run takes the numpy statement: numba is not even imported
+        if args[0] == "emulate":   # the C kernel or, for a small run, the numpy statement: numba is not imported
             assert "numba" not in record["heavy"], record
 
 

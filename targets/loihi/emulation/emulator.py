@@ -12,8 +12,9 @@ The chip's arithmetic, per compartment and step t (integers throughout):
 Every edge (input, feed-forward, recurrent) delivers one step after the spike plus its synaptic
 delay. ``reference_run`` states this literally in numpy (also runnable with float arithmetic:
 no truncation, wrap or clip, used to check the lowering with quantization switched off);
-``emulate`` runs the same rules in an event-driven numba kernel (``kernel.py``: spikes accumulate
-into a ring buffer of future q), the samples of a batch spread over threads. Both count overflows.
+``emulate`` runs the same rules in an event-driven kernel (``kernel.c`` built by the system's C compiler, or
+``kernel.py`` in numba where there is none: spikes accumulate into a ring buffer of future q), the samples of a
+batch spread over threads. Both count overflows.
 The widths and formats are ``chip.py``'s (read at call time here; the kernel freezes them when compiled).
 """
 

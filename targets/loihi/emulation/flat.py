@@ -1,7 +1,8 @@
-"""The kernel's program: a network flattened once into the arrays ``kernel.py``'s numba functions read.
+"""The kernel's program: a network flattened once into the arrays the kernel reads (``kernel.c``, built by the
+system's C compiler, ``ckernel.py``; or ``kernel.py``'s numba functions where no compiler builds it).
 
-Numpy only: ``run_flat`` imports the compiled kernel (numba) when a run starts, so building, checking
-or sizing a program costs no numba import. What the narrow types rely on is stated in ``kernel.py``'s
+Numpy only: ``run_flat`` loads the kernel when a run starts (numba only where the C kernel is not used), so
+building, checking or sizing a program costs no numba import. What the narrow types rely on is stated in ``kernel.py``'s
 docstring and checked here (``Flat``: weights divided by their common power of two in the narrowest
 integer type, the accumulator's width, 32-bit lanes where every intermediate fits, wraps skipped where
 q and u cannot leave their ranges).
@@ -14,6 +15,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from snncc.targets.kit import SnnccError
+from snncc.targets.loihi.emulation.ckernel import C_KERNEL, NUMBA_KERNEL, compiled, program, run_chunk
 from snncc.targets.loihi.chip import DECAY_ONE, DECAY_SHIFT, Q_BITS, U_BITS
 
 Q_HALF, Q_MASK = 1 << Q_BITS, (1 << (Q_BITS + 1)) - 1
@@ -260,6 +262,25 @@ def _registers(flat: Flat, wide: bool) -> tuple:
     return lay, wraps, kl, update_groups(lay, inert), np.zeros(0, np.int32 if narrow else np.int64)
 
 
+def default_threads() -> int:
+    """``NUMBA_NUM_THREADS`` where set (for either kernel), else the cores this process may run on."""
+    import os
+
+    given = os.environ.get("NUMBA_NUM_THREADS", "").strip()
+    if given.isdigit() and int(given) > 0:
+        return int(given)
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:          # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def kernel_name(flat: Flat, wide: bool = False) -> str:
+    """Which kernel ``run_flat`` runs for ``flat``: ckernel.C_KERNEL or ckernel.NUMBA_KERNEL."""
+    state = flat.registers(wide)[4].dtype
+    return NUMBA_KERNEL if compiled(flat.acc_dtype, flat.wflat.dtype, state) is None else C_KERNEL
+
+
 def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
     """Flatten ``prog`` and run it on (B, T, C) uint8 ``x`` (see ``run_flat``)."""
     return run_flat(Flat(prog), x, record, wide)
@@ -268,10 +289,9 @@ def run_program(prog, network, x: np.ndarray, record: str, wide: bool = False):
 def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads: int | None = None):
     """Run the kernel on (B, T, C) uint8 ``x`` and wrap the result.
 
-    ``threads``: threads to spread the batch over (default ``NUMBA_NUM_THREADS``, the core
-    count unless set); batch 1 or ``threads=1`` runs on the calling thread.
+    ``threads``: threads to spread the batch over (default ``default_threads()``); batch 1 or ``threads=1``
+    runs on the calling thread. The kernel is the C one where it builds, else numba's (``ckernel.compiled``).
     """
-    from snncc.targets.loihi.emulation.kernel import run_chunk, config
     from snncc.targets.loihi.emulation.result import EmulationResult, _prediction
 
     prog = flat.prog
@@ -291,19 +311,35 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads
     all_v = np.zeros(shape_all, np.int32)
     ovf = np.zeros((batch, 3), np.int64)
     lay, wraps, kl, groups, state_proto = flat.registers(wide)
-    args = (np.ascontiguousarray(x), prog.n, prog.noff, kl, groups, lay, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni,
-            flat.druni, flat.sptr, flat.spost, flat.wsp, flat.rsp, flat.keep_u, flat.keep_v, flat.keep_uf, flat.keep_vf, flat.vth, flat.bias, flat.p32,
-            int(prog.ring),
-            record_all, out, all_s, all_u, all_v, ovf, wraps, np.zeros(0, flat.acc_dtype), state_proto)
-    workers = max(1, min(batch, config.NUMBA_NUM_THREADS if threads is None else int(threads)))
+    x = np.ascontiguousarray(x, np.uint8)
+    c_run = compiled(flat.acc_dtype, flat.wflat.dtype, state_proto.dtype)
+    if c_run is not None:
+        cprog, _alive = program(x, prog.n, prog.noff, kl, groups, lay, flat.wflat, flat.dflat, flat.woff, flat.roff,
+                                flat.duni, flat.druni, flat.sptr, flat.spost, flat.wsp, flat.rsp, flat.keep_u,
+                                flat.keep_v, flat.vth, flat.bias, flat.p32, prog.ring, record_all, out, all_s, all_u,
+                                all_v, ovf, wraps)
+
+        def run(lo: int, hi: int) -> None:
+            run_chunk(c_run, cprog, lo, hi)
+    else:
+        from snncc.targets.loihi.emulation.kernel import run_chunk as numba_run
+
+        args = (x, prog.n, prog.noff, kl, groups, lay, flat.wflat, flat.dflat, flat.woff, flat.roff, flat.duni,
+                flat.druni, flat.sptr, flat.spost, flat.wsp, flat.rsp, flat.keep_u, flat.keep_v, flat.keep_uf,
+                flat.keep_vf, flat.vth, flat.bias, flat.p32, int(prog.ring), record_all, out, all_s, all_u, all_v, ovf,
+                wraps, np.zeros(0, flat.acc_dtype), state_proto)
+
+        def run(lo: int, hi: int) -> None:
+            numba_run(lo, hi, *args)
+    workers = max(1, min(batch, default_threads() if threads is None else int(threads)))
     if workers == 1:
-        run_chunk(0, batch, *args)
-    else:   # samples are independent: chunks on threads (the kernel releases the GIL); small
+        run(0, batch)
+    else:   # samples are independent: chunks on threads (either kernel runs without the GIL); small
         # chunks let a thread that other load slows down take fewer of them
         size = max(1, -(-batch // (4 * workers)))
         bounds = [(lo, min(lo + size, batch)) for lo in range(0, batch, size)]
         with ThreadPoolExecutor(workers) as pool:
-            list(pool.map(lambda lh: run_chunk(lh[0], lh[1], *args), bounds))
+            list(pool.map(lambda lh: run(lh[0], lh[1]), bounds))
     counts = out.sum(axis=1, dtype=np.int64)
     res = EmulationResult(output_spikes=out, counts=counts, prediction=_prediction(counts),
                           overflow={"q_wrap": int(ovf[:, 0].sum()), "u_wrap": int(ovf[:, 1].sum()),

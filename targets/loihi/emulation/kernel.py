@@ -1,5 +1,7 @@
 """The emulator's compiled kernel: the rules of ``emulator.py`` in numba, event-driven (numba code only:
-the program it reads is built by ``flat.py``, which also starts the runs, ``run_flat``).
+the program it reads is built by ``flat.py``, which also starts the runs, ``run_flat``). ``kernel.c`` is the
+same kernel in C, which runs instead wherever the system's C compiler builds it (``ckernel.py``: no numba
+start-up); the two give the same integers (tests/loihi/emulation/test_ckernel.py).
 
 Per sample and step t:
 

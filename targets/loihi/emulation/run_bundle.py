@@ -9,13 +9,14 @@ tSample - output_shift gets output_shift blank steps appended, so every output s
 Batch mode runs ``CHUNK`` samples at a time on one flattened network (the same results as one
 run: samples are independent); stream mode is one continuous run.
 
-A small batch run (at most ``STATEMENT_WORK`` weight-steps: samples x steps x the dense weight entries the
-statement multiplies per step, once per distinct delay; and at most ``STATEMENT_LAYER_STEPS`` layer updates,
-each some twenty numpy calls) runs the chip's rules as ``emulator.reference_run`` states them in numpy
-instead of the numba kernel: the same integers
-(every compile checks the kernel against that statement, spikes, u, v and overflow counts), without the
-kernel's fixed cost of loading numba and its cache (about 0.5 s CPU, against 0.1 s for one th1-sized
-sample in numpy). The result's summary names the implementation that ran.
+The kernel is the C one (``ckernel.py``, built once by the system's C compiler; a warm call loads it in about a
+millisecond) or, on a machine without a compiler, the numba one. Then a small batch run (at most ``STATEMENT_WORK``
+weight-steps: samples x steps x the dense weight entries the statement multiplies per step, once per distinct delay;
+and at most ``STATEMENT_LAYER_STEPS`` layer updates, each some twenty numpy calls) runs the chip's rules as
+``emulator.reference_run`` states them in numpy instead: the same integers (every compile checks the kernel against
+that statement, spikes, u, v and overflow counts), without the numba kernel's fixed cost of loading numba and its
+cache (about 0.5 s CPU, against 0.1 s for one th1-sized sample in numpy). The result's summary names the
+implementation that ran.
 """
 
 from __future__ import annotations
@@ -25,10 +26,12 @@ from typing import Callable
 
 import numpy as np
 
+from snncc.targets.loihi.emulation.ckernel import C_KERNEL, NUMBA_KERNEL
+
 CHUNK = 256
 STATEMENT_WORK = 2e9             # the numpy statement runs a batch up to this many weight-steps
 STATEMENT_LAYER_STEPS = 5_000    # and this many layer updates (steps x layers) (module docstring)
-KERNEL, STATEMENT = "numba kernel", "numpy statement of the chip's rules (emulator.reference_run: a small run)"
+STATEMENT = "numpy statement of the chip's rules (emulator.reference_run: a small run)"
 
 
 @dataclass
@@ -42,7 +45,7 @@ class BundleEmulation:
     padded_steps: int        # blank steps appended for the outputs' shift
     output_shift: int
     input_note: str | None = None   # what was done to take the inputs in the model's own shape
-    implementation: str = KERNEL    # which of the two bit-exact implementations ran (module docstring)
+    implementation: str = C_KERNEL  # which of the bit-exact implementations ran (module docstring)
 
     @property
     def prediction(self) -> np.ndarray:
@@ -98,26 +101,27 @@ def emulate_bundle(network, inputs, *, record: str = "outputs", stream: bool = F
     after each chunk of n samples (batch mode)."""
     from snncc.targets.kit.inputs import InputLayout, to_artefact_layout
     from snncc.targets.kit import SnnccError
-    from snncc.targets.loihi.emulation.emulator import (RECORD_CHOICES, PreparedNetwork, check_inputs, emulate, pad,
-                                                        reference_run)
+    from snncc.targets.loihi.emulation.emulator import RECORD_CHOICES, PreparedNetwork, check_inputs, pad, reference_run
+    from snncc.targets.loihi.emulation.flat import kernel_name
 
     inputs, note = to_artefact_layout(inputs, InputLayout.from_record(network.input_width, network.metadata))
     x = check_inputs(inputs, network.input_width, source=source)
     shift = int(network.metadata.get("output_shift", 0) or 0)
     padded = shift if shift and x.shape[1] + shift == network.t_sample else 0
     x = pad(x, padded)
-    implementation = KERNEL
     if record not in RECORD_CHOICES:
         raise SnnccError(f"record must be one of {RECORD_CHOICES}", field="record")
+    prepared = PreparedNetwork(network)          # flattened once for every chunk
+    implementation = kernel_name(prepared.flat)
     if stream:
-        result = emulate(network, x, record=record, mode="stream", gap=gap)
-    elif gap is None and small(network, *x.shape[:2]):   # a --gap in batch mode: the kernel path refuses it
+        result = prepared.run(x, record=record, mode="stream", gap=gap)
+    elif gap is None and implementation == NUMBA_KERNEL and small(network, *x.shape[:2]):
+        # (a --gap in batch mode: the kernel path refuses it)
         PreparedNetwork.check_size(network, x.shape[0] * x.shape[1], record)
         result, implementation = reference_run(network, x, record=record), STATEMENT
         if progress is not None:
             progress(x.shape[0])
     else:
-        prepared = PreparedNetwork(network)      # flattened once for every chunk
         parts = []
         for start in range(0, x.shape[0], CHUNK):
             parts.append(prepared.run(x[start:start + CHUNK], record=record, gap=gap))

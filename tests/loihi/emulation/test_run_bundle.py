@@ -1,5 +1,6 @@
-"""``snncc emulate``'s batch run: a small run takes the numpy statement of the chip's rules, a large one the numba
-kernel, and both write the same arrays (values and dtypes), overflow counts and summary but for the implementation."""
+"""``snncc emulate``'s batch run: where the numba kernel would run, a small run takes the numpy statement of the chip's
+rules, a large one the kernel; where the C kernel builds, every run takes it. All write the same arrays (values and
+dtypes), overflow counts and summary but for the implementation."""
 
 from __future__ import annotations
 
@@ -19,17 +20,24 @@ def test_the_statement_and_the_kernel_write_the_same_arrays(monkeypatch, seed, k
     x = (np.random.default_rng(seed).random((5, 40, net.input_width)) < 0.3).astype(np.uint8)
     assert run_bundle.small(net, 5, 40)
     for record in ("outputs", "all"):
+        monkeypatch.setenv("SNNCC_LOIHI_KERNEL", "numba")
         statement = run_bundle.emulate_bundle(net, x, record=record)
         monkeypatch.setattr(run_bundle, "STATEMENT_WORK", -1)       # every run is "large": the kernel
-        kernel = run_bundle.emulate_bundle(net, x, record=record)
+        numba_kernel = run_bundle.emulate_bundle(net, x, record=record)
         monkeypatch.undo()
-        assert statement.implementation == run_bundle.STATEMENT and kernel.implementation == run_bundle.KERNEL
-        a, b = statement.arrays(), kernel.arrays()
-        assert a.keys() == b.keys()
-        for key in a:
-            assert a[key].dtype == b[key].dtype and np.array_equal(a[key], b[key]), key
-        assert {k: v for k, v in statement.summary().items() if k != "implementation"} == \
-            {k: v for k, v in kernel.summary().items() if k != "implementation"}
+        monkeypatch.setenv("SNNCC_LOIHI_KERNEL", "c")
+        c_kernel = run_bundle.emulate_bundle(net, x, record=record)   # small, but the C kernel has no start-up
+        monkeypatch.undo()
+        assert statement.implementation == run_bundle.STATEMENT
+        assert numba_kernel.implementation == run_bundle.NUMBA_KERNEL and c_kernel.implementation == run_bundle.C_KERNEL
+        a = statement.arrays()
+        for kernel in (numba_kernel, c_kernel):
+            b = kernel.arrays()
+            assert a.keys() == b.keys()
+            for key in a:
+                assert a[key].dtype == b[key].dtype and np.array_equal(a[key], b[key]), key
+            assert {k: v for k, v in statement.summary().items() if k != "implementation"} == \
+                {k: v for k, v in kernel.summary().items() if k != "implementation"}
     if kwargs.get("big"):
         assert statement.overflow["q_wrap"] > 0      # the overflow counts are compared, not only zeros
 

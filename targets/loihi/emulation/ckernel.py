@@ -1,0 +1,100 @@
+"""The emulator's kernel compiled from C (``kernel.c``): the numba kernel's rules and program, no numba start-up.
+
+``$SNNCC_LOIHI_KERNEL`` chooses: "auto" (default: the C kernel where the system's C compiler builds it, else the
+numba kernel), "c" (the C kernel or an error), "numba". Both give the same integers (``tests/loihi/emulation``
+run every program shape through both and the numpy statement); a run's summary names the one that ran.
+A build per type signature (accumulator, weight, state) is cached (``kit.native``); a warm call loads it in
+about a millisecond, where the numba kernel's import and cache load take about 0.4 s.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from pathlib import Path
+
+import numpy as np
+
+from snncc.targets.kit import SnnccError
+from snncc.targets.kit.native import choice, library
+from snncc.targets.loihi.chip import DECAY_SHIFT
+
+VARIABLE = "SNNCC_LOIHI_KERNEL"
+SOURCE = Path(__file__).with_name("kernel.c")
+C_KERNEL, NUMBA_KERNEL = "C kernel", "numba kernel"
+_C_TYPES = {"int8": "int8_t", "int16": "int16_t", "int32": "int32_t", "int64": "int64_t"}
+
+_P, _I = ctypes.c_void_p, ctypes.c_int64
+_entries: dict[int, tuple] = {}       # id(library) -> (library, its run_chunk), the layout checked once
+
+
+class Program(ctypes.Structure):
+    """``program_t`` of kernel.c, field for field (its size is checked against the compiled one)."""
+
+    _fields_ = [("x", _P), ("steps", _I), ("width", _I),
+                ("n", _P), ("noff", _P), ("kl", _P), ("groups", _P), ("lay", _P), ("layers", _I), ("n_groups", _I),
+                ("wflat", _P), ("dflat", _P),
+                ("woff", _P), ("roff", _P), ("duni", _P), ("druni", _P), ("sptr", _P), ("spost", _P),
+                ("wsp", _P), ("rsp", _P),
+                ("keep_u", _P), ("keep_v", _P), ("vth", _P), ("bias", _P), ("p32", _P),
+                ("ring", _I), ("record_all", _I),
+                ("out_spikes", _P), ("n_out", _I),
+                ("all_s", _P), ("all_u", _P), ("all_v", _P), ("units", _I),
+                ("ovf", _P), ("wraps", _P)]
+
+
+def compiled(acc: np.dtype, weight: np.dtype, state: np.dtype):
+    """The C kernel's ``run_chunk`` for these types, or None where the numba kernel is to run (choice "numba",
+    or "auto" without a working compiler). Choice "c" without a build is an error."""
+    how = choice(VARIABLE)
+    if how == "numba":
+        return None
+    names = [np.dtype(t).name for t in (acc, weight, state)]
+    lib = library(SOURCE, {"ACC_T": _C_TYPES[names[0]], "W_T": _C_TYPES[names[1]], "STATE_T": _C_TYPES[names[2]],
+                           "DECAY_SHIFT": str(DECAY_SHIFT)}, "loihi-kernel-" + "-".join(names))
+    if lib is None:
+        if how == "c":
+            raise SnnccError("the C kernel could not be built (no C compiler found, or it failed); set it to "
+                             "'numba' or 'auto'", field=VARIABLE)
+        return None
+    if id(lib) not in _entries:
+        lib.snncc_loihi_program_size.restype = ctypes.c_int64
+        if lib.snncc_loihi_program_size() != ctypes.sizeof(Program):
+            raise SnnccError("the compiled kernel's program layout differs from ckernel.Program", field=VARIABLE)
+        run = lib.snncc_loihi_run_chunk
+        run.argtypes = [ctypes.POINTER(Program), ctypes.c_int64, ctypes.c_int64]
+        run.restype = ctypes.c_int
+        _entries[id(lib)] = (lib, run)      # the library held, so its id is never reused
+    return _entries[id(lib)][1]
+
+
+def program(x, n, noff, kl, groups, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v,
+            vth, bias, p32, ring, record_all, out, all_s, all_u, all_v, ovf, wraps) -> tuple[Program, list]:
+    """The ``Program`` of run_flat's arrays (checked C-contiguous and typed as kernel.c reads them), and the
+    arrays it points into (keep them alive while the kernel runs)."""
+    typed = {"x": (x, np.uint8), "n": (n, np.int64), "noff": (noff, np.int64), "kl": (kl, np.int64),
+             "groups": (groups, np.int64), "lay": (lay, np.int64), "wflat": (wflat, wflat.dtype),
+             "dflat": (dflat, np.int64), "woff": (woff, np.int64), "roff": (roff, np.int64),
+             "duni": (duni, np.int64), "druni": (druni, np.int64), "sptr": (sptr, np.int64),
+             "spost": (spost, np.int32), "wsp": (wsp, np.int64), "rsp": (rsp, np.int64),
+             "keep_u": (keep_u, np.int64), "keep_v": (keep_v, np.int64), "vth": (vth, np.int64),
+             "bias": (bias, np.int64), "p32": (p32, np.int32), "out_spikes": (out, np.uint8),
+             "all_s": (all_s, np.uint8), "all_u": (all_u, np.int32), "all_v": (all_v, np.int32),
+             "ovf": (ovf, np.int64), "wraps": (wraps, np.int64)}
+    pointers, keep = {}, []
+    for field_name, (a, dtype) in typed.items():
+        if a.dtype != dtype or not a.flags.c_contiguous:
+            raise SnnccError(f"the kernel's array {field_name} must be C-contiguous {np.dtype(dtype).name}",
+                             field=field_name)
+        keep.append(a)
+        pointers[field_name] = a.ctypes.data
+    batch, steps, width = x.shape
+    prog = Program(steps=steps, width=width, layers=n.shape[0], n_groups=groups.shape[0], ring=int(ring),
+                   record_all=int(record_all), n_out=out.shape[2], units=all_s.shape[2] if record_all else 0,
+                   **pointers)
+    return prog, keep
+
+
+def run_chunk(run, prog: Program, lo: int, hi: int) -> None:
+    """Samples lo..hi-1 (ctypes releases the GIL for the call, so chunks run on threads side by side)."""
+    if run(ctypes.byref(prog), lo, hi) != 0:
+        raise MemoryError("the C kernel could not allocate its state")

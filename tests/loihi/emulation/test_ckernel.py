@@ -1,0 +1,155 @@
+"""The C kernel (kernel.c, built by the system's compiler) against the numba kernel and the plain statement: every
+type signature, sparse and dense blocks, delays, wraps, wide and stream runs, threads; and how it is chosen, built
+and cached (snncc.native), with the numba kernel where no compiler builds it."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import snncc.native as native
+from snncc.errors import SnnccError
+from snncc.targets.loihi.emulation import ckernel, emulator
+from snncc.targets.loihi.emulation.flat import KERNEL_SIGNATURES, kernel_name, narrowest_int
+from snncc.targets.loihi.emulation.emulator import PreparedNetwork, reference_run
+from tests.loihi.emulation.test_kernel import _same
+from tests.loihi.emulation.test_sparse_kernel import _thin
+from tests.loihi.helpers import random_network
+
+NETWORKS = [(60, {}), (61, {"big": True}), (62, {"split_exponents": True, "per_synapse_delays": False}),
+            (63, {"profiles": True, "recurrent": False}), (64, {"big": True, "per_synapse_delays": False})]
+
+
+def _forget_built(monkeypatch):
+    """As in a new process: no library loaded or looked up yet."""
+    monkeypatch.setattr(native, "_loaded", {})
+    monkeypatch.setattr(native, "_requested", {})
+
+
+def _inputs(seed, net, batch=5, steps=36, p=0.3):
+    return (np.random.default_rng(seed).random((batch, steps, net.input_width)) < p).astype(np.uint8)
+
+
+def _with_types(prepared, acc, w, state):
+    """``prepared`` running signature (acc, w, state), or None where the network's values do not fit it
+    (a wider accumulator or weight type holds the same integers, so the results must not change)."""
+    flat = prepared.flat
+    weights_fit_int8 = narrowest_int(int(flat.wflat.min(initial=0)), int(flat.wflat.max(initial=0))) is np.int8
+    if np.iinfo(acc).bits < np.iinfo(flat.acc_dtype).bits or (w == "int8" and not weights_fit_int8):
+        return None
+    lay, wraps, kl, groups, proto = flat.registers(False)
+    if np.dtype(proto.dtype).name == "int64" and state == "int32":
+        return None
+    flat.acc_dtype = np.dtype(acc).type
+    flat.wflat = flat.wflat.astype(w)
+    flat._registers[False] = (lay, wraps, kl, groups, np.zeros(0, state))
+    return prepared
+
+
+@pytest.mark.parametrize("acc, w, state", KERNEL_SIGNATURES)
+def test_every_signature_of_both_kernels_gives_the_statements_integers(monkeypatch, acc, w, state):
+    ran = 0
+    for sparse in (False, True):
+        if sparse:   # blocks of >= 60 entries as SparseBlocks: the hidden layer's, not the output layer's
+            monkeypatch.setattr(emulator, "SPARSE_MIN_SIZE", 60)
+            monkeypatch.setattr(emulator, "SPARSE_MAX_DENSITY", 1.0)
+        for seed, kwargs in NETWORKS:
+            net = _thin(random_network(seed, **kwargs), seed) if sparse else random_network(seed, **kwargs)
+            x = _inputs(seed, net)
+            for record in ("outputs", "all"):
+                want = reference_run(net, x, record=record)
+                for how in ("c", "numba"):
+                    monkeypatch.setenv(ckernel.VARIABLE, how)
+                    prepared = _with_types(PreparedNetwork(net), acc, w, state)
+                    if prepared is None:
+                        continue
+                    if record == "all" and state == "int64":
+                        continue    # records are int32 (run_flat refuses state beyond 32 bits for them)
+                    assert kernel_name(prepared.flat) == (ckernel.C_KERNEL if how == "c" else ckernel.NUMBA_KERNEL)
+                    _same(prepared.run(x, record=record, threads=2), want, record)
+                    ran += 1
+    assert ran >= 4, "no network exercised this signature"
+
+
+@pytest.mark.parametrize("seed, kwargs", NETWORKS[:3])
+def test_wide_and_stream_runs_of_the_c_kernel_equal_the_numba_kernels(monkeypatch, seed, kwargs):
+    net = random_network(seed, **kwargs)
+    x = _inputs(seed, net, batch=3)
+    got = {}
+    for how in ("c", "numba"):
+        monkeypatch.setenv(ckernel.VARIABLE, how)
+        prepared = PreparedNetwork(net)
+        got[how] = (prepared.run(x, wide=True, threads=1), prepared.run(x, mode="stream", gap=7),
+                    prepared.run(x, threads=3))
+    for c_run, numba_run in zip(got["c"], got["numba"]):
+        _same(c_run, numba_run, "outputs")
+    assert got["c"][0].overflow == {"q_wrap": 0, "u_wrap": 0, "v_clip": 0}
+    if kwargs.get("big"):
+        assert got["c"][2].overflow["q_wrap"] > 0
+
+
+def test_a_built_kernel_is_cached_and_loaded_without_a_compile(tmp_path, monkeypatch):
+    monkeypatch.setenv("SNNCC_CACHE_DIR", str(tmp_path))
+    _forget_built(monkeypatch)
+    run = ckernel.compiled(np.int32, np.int8, np.int32)
+    assert run is not None
+    (built,) = tmp_path.glob("loihi-kernel-int32-int8-int32-*.so")
+    _forget_built(monkeypatch)
+
+    def no_compile(*args, **kwargs):
+        raise AssertionError("compiled again")
+
+    monkeypatch.setattr(subprocess, "run", no_compile)
+    assert ckernel.compiled(np.int32, np.int8, np.int32) is not None       # loaded from the cache
+    monkeypatch.undo()
+    # a damaged file is built again (in a fresh interpreter: this one has the library mapped, and the dynamic
+    # loader would hand back that copy by its name); a new file, not the mapped one overwritten
+    built.unlink()
+    built.write_bytes(b"not a shared library")
+    probe = ("import numpy as np\nfrom snncc.targets.loihi.emulation import ckernel\n"
+             "assert ckernel.compiled(np.int32, np.int8, np.int32) is not None\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "SNNCC_CACHE_DIR": str(tmp_path), "SNNCC_LOIHI_KERNEL": "auto"})
+    assert done.returncode == 0, done.stderr
+    assert built.read_bytes()[:4] == b"\x7fELF"
+    assert not list(tmp_path.glob(".*.tmp"))                                # no temporary file is left
+
+
+def test_without_a_working_compiler_auto_runs_the_numba_kernel_and_c_is_refused(tmp_path, monkeypatch):
+    net = random_network(65)
+    x = _inputs(65, net, batch=2)
+    want = reference_run(net, x)
+    monkeypatch.setenv("SNNCC_CACHE_DIR", str(tmp_path))
+    for broken in ("false", str(tmp_path / "no-such-compiler")):
+        _forget_built(monkeypatch)
+        monkeypatch.setattr(native, "compiler", lambda: native.shutil.which(broken))   # a failing build, or none
+        prepared = PreparedNetwork(net)
+        monkeypatch.setenv(ckernel.VARIABLE, "auto")
+        assert kernel_name(prepared.flat) == ckernel.NUMBA_KERNEL
+        _same(prepared.run(x), want, "outputs")
+        monkeypatch.setenv(ckernel.VARIABLE, "c")
+        with pytest.raises(SnnccError, match="SNNCC_LOIHI_KERNEL: the C kernel could not be built"):
+            prepared.run(x)
+    assert not list(tmp_path.iterdir())
+
+
+def test_an_unknown_kernel_choice_is_one_error_line(monkeypatch):
+    monkeypatch.setenv(ckernel.VARIABLE, "fortran")
+    with pytest.raises(SnnccError, match="SNNCC_LOIHI_KERNEL: must be one of auto, c, numba"):
+        PreparedNetwork(random_network(66)).run(_inputs(66, random_network(66), batch=1))
+
+
+@pytest.mark.parametrize("acc, w, state", [("int16", "int8", "int32"), ("int64", "int64", "int64")])
+def test_the_c_source_compiles_without_a_warning(tmp_path, acc, w, state):
+    cc = native.compiler()
+    if cc is None:
+        pytest.skip("no C compiler on this machine (the numba kernel runs instead)")
+    types = {name: f"{t}_t" for name, t in (("ACC_T", acc), ("W_T", w), ("STATE_T", state))}
+    done = subprocess.run([cc, *native.FLAGS, "-Wall", "-Wextra", "-Werror", "-DDECAY_SHIFT=12",
+                           *(f"-D{k}={v}" for k, v in types.items()), "-o", str(tmp_path / "k.so"), str(ckernel.SOURCE)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
