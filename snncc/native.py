@@ -103,6 +103,8 @@ def _build(cc: str, source: Path, defines: dict[str, str], path: Path) -> ctypes
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError:
         return None
+    if not os.access(path.parent, os.W_OK):     # a read-only cache: no build (the numba kernel runs instead)
+        return None
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
     args = [f"-D{k}={v}" for k, v in defines.items()]
     try:

@@ -153,3 +153,19 @@ def test_the_c_source_compiles_without_a_warning(tmp_path, acc, w, state):
                            *(f"-D{k}={v}" for k, v in types.items()), "-o", str(tmp_path / "k.so"), str(ckernel.SOURCE)],
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
+
+
+def test_a_cache_that_cannot_be_written_builds_nothing_and_the_numba_kernel_runs(tmp_path, monkeypatch):
+    net = random_network(67)
+    x = _inputs(67, net, batch=2)
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    for cache, writable in ((blocker / "cache", True), (tmp_path / "read-only", False)):
+        monkeypatch.setenv("SNNCC_CACHE_DIR", str(cache))      # under a file: not even a directory can be made
+        monkeypatch.setattr(native.os, "access", lambda path, mode, ok=writable: ok)   # (root writes anywhere)
+        _forget_built(monkeypatch)
+        prepared = PreparedNetwork(net)
+        assert ckernel.compiled(np.int16, np.int8, np.int32) is None
+        assert kernel_name(prepared.flat) == ckernel.NUMBA_KERNEL
+        _same(prepared.run(x), reference_run(net, x), "outputs")
+    assert not (tmp_path / "read-only").exists() or not list((tmp_path / "read-only").iterdir())
