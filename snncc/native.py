@@ -5,6 +5,7 @@ A kernel compiled this way starts in a millisecond where a numba kernel needs it
 
     library(source, defines, name)   the loaded library, compiled on first use; None without a compiler
     choice(variable)                 "auto" / "c" / "numba" from an environment variable (default "auto")
+    settings()                       the environment that decides compiler and cache (a key for memos)
 
 The cache (``$SNNCC_CACHE_DIR``, else ``$XDG_CACHE_HOME/snncc``, else ``~/.cache/snncc``) holds one file per
 source, defines, flags and CPU (the build uses ``-march=native``, so a home directory shared by different
@@ -32,7 +33,9 @@ NATIVE = ("-march=native",)       # tried first; dropped where the compiler refu
 BUILD_TIMEOUT_S = 300
 
 _loaded: dict[Path, ctypes.CDLL | None] = {}       # by file
-_requested: dict[tuple, ctypes.CDLL | None] = {}   # by (source, defines, name, compiler, cache directory)
+_requested: dict[tuple, ctypes.CDLL | None] = {}   # by (source, defines, name, the settings below)
+_ENVIRONMENT = ("SNNCC_CC", "CC", "PATH", "SNNCC_CACHE_DIR", "XDG_CACHE_HOME", "HOME")   # what finds compiler and cache
+_UNSEEN = object()
 _lock = threading.Lock()
 
 
@@ -42,6 +45,11 @@ def choice(variable: str) -> str:
     if value not in CHOICES:
         raise SnnccError(f"must be one of {', '.join(CHOICES)} (got {value!r})", field=variable)
     return value
+
+
+def settings() -> tuple:
+    """The environment that decides which compiler builds and where the cache is (a key for memos)."""
+    return tuple(os.environ.get(k) for k in _ENVIRONMENT)
 
 
 def compiler() -> str | None:
@@ -75,10 +83,14 @@ def library(source: Path, defines: dict[str, str], name: str) -> ctypes.CDLL | N
     """``source`` built with ``defines`` (-D NAME=VALUE) and loaded; compiled on first use and cached.
 
     None when no compiler is found or the build fails (the caller falls back to its numba kernel)."""
+    request = (source, tuple(sorted(defines.items())), name, *settings())
+    found = _requested.get(request, _UNSEEN)
+    if found is not _UNSEEN:                  # looked up before, with the same settings: no file system access
+        return found
     cc = compiler()
     if cc is None:
+        _requested[request] = None
         return None
-    request = (source, tuple(sorted(defines.items())), name, cc, str(cache_dir()))
     with _lock:
         if request not in _requested:     # the source hashed and the cache looked up once per process
             key = hashlib.sha256(b"\0".join([source.read_bytes(), repr(request[1]).encode(), " ".join(FLAGS).encode(),

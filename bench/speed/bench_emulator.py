@@ -20,7 +20,7 @@ Figures, measured in one process, side by side (each ``--repeat`` times; best an
     first ``--ir-samples`` (256) samples in chunks of 256 (memory): samples/s; ratio kernel / reference;
   * the kernel's CPU time per sample on 1 thread and per neuron-step (less inflated by other load);
   * the whole CLI call ``snncc emulate BUNDLE --input x.npy -o out.npz`` on the B samples, in
-    fresh processes: warm (numba cache filled) and cold (an empty NUMBA_CACHE_DIR: the kernel is
+    fresh processes: warm (kernel caches filled) and cold (empty NUMBA_CACHE_DIR and SNNCC_CACHE_DIR: the kernel is
     compiled), beside ``python -c "import snncc.cli.main"`` (import time); with
     ``--baseline-cli-python`` also that interpreter's ``snncc`` (a venv of an earlier revision).
 
@@ -152,7 +152,7 @@ def with_threads(n: int, fn):
 
 
 def cli_calls(net, x: np.ndarray, repeat: int, python: str | None = None) -> dict:
-    """Whole ``snncc emulate`` calls in fresh processes: import, warm and cold (empty numba cache).
+    """Whole ``snncc emulate`` calls in fresh processes: import, warm and cold (empty numba and C kernel caches).
 
     ``python``: the interpreter whose ``snncc`` to call (another venv, e.g. one installed from an
     earlier revision: the before figure); default this one."""
@@ -177,7 +177,7 @@ def cli_calls(net, x: np.ndarray, repeat: int, python: str | None = None) -> dic
         cold_times = []
         for d in cold_dirs:
             t0 = time.perf_counter()
-            run({"NUMBA_CACHE_DIR": str(d)})
+            run({"NUMBA_CACHE_DIR": str(d), "SNNCC_CACHE_DIR": str(d / "c")})   # numba's and the C kernel's
             cold_times.append(time.perf_counter() - t0)
         cold = {"best_s": min(cold_times), "median_s": statistics.median(cold_times), "runs": len(cold_times)}
         # cwd: the temporary folder, so that no checkout in the current folder shadows the install
@@ -215,7 +215,8 @@ def asm_vector_width(net) -> dict:
         bundle = Path(tmp) / "net.net"
         write_bundle(net, bundle)
         out = subprocess.run([sys.executable, "-c", ASM_PROBE, str(bundle)], capture_output=True, text=True,
-                             env={**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "cache")}, cwd=tmp, check=True)
+                             env={**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "cache"),
+                                  "SNNCC_LOIHI_KERNEL": "numba"}, cwd=tmp, check=True)
     found = json.loads(out.stdout.strip().splitlines()[-1])
     found["note"] = ("LLVM's tuning for this CPU prefers 256-bit vectors (prefer-256-bit): numba emits ymm "
                      "(8 int32 lanes) and uses zmm only where it must")
@@ -253,6 +254,7 @@ def main(argv=None) -> dict:
     from snncc.ir.simulate import simulate
     from snncc.targets.loihi import target
     from snncc.targets.loihi.emulation.emulator import PreparedNetwork, program
+    from snncc.targets.loihi.emulation.flat import kernel_name
 
     load_before = os.getloadavg()[0]
     uptime_before = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
@@ -341,6 +343,7 @@ def main(argv=None) -> dict:
                      "timing": "exact (refDelay 2, delays 1/2/1)", "w_scale": art.quantization["w_scale"],
                      "accumulator": str(np.dtype(prepared.flat.acc_dtype)),
                      "weights_stored": str(prepared.flat.wflat.dtype)},
+        "kernel": kernel_name(prepared.flat),       # the C kernel where the compiler builds it (SNNCC_LOIHI_KERNEL)
         "batch": args.batch,
         "kernel_by_threads": kernel,
         "kernel_samples_per_s": {"best": best_emu, "median": med_emu},

@@ -3,10 +3,11 @@
 
     library(source, defines, name)   the loaded library (ctypes), built on first use; None without a compiler
     choice(variable)                 "auto" / "c" / "numba" from an environment variable
+    settings()                       the environment that decides compiler and cache (a key for memos)
 """
 
 from __future__ import annotations
 
-from snncc.native import CHOICES, cache_dir, choice, compiler, library
+from snncc.native import CHOICES, cache_dir, choice, compiler, library, settings
 
-__all__ = ["library", "choice", "compiler", "cache_dir", "CHOICES"]
+__all__ = ["library", "choice", "compiler", "cache_dir", "settings", "CHOICES"]

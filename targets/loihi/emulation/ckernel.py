@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from snncc.targets.kit import SnnccError
-from snncc.targets.kit.native import choice, library
+from snncc.targets.kit.native import choice, library, settings
 from snncc.targets.loihi.chip import DECAY_SHIFT
 
 VARIABLE = "SNNCC_LOIHI_KERNEL"
@@ -24,6 +24,7 @@ C_KERNEL, NUMBA_KERNEL = "C kernel", "numba kernel"
 _C_TYPES = {"int8": "int8_t", "int16": "int16_t", "int32": "int32_t", "int64": "int64_t"}
 
 _P, _I = ctypes.c_void_p, ctypes.c_int64
+_chosen: dict[tuple, object] = {}    # (choice, types, settings) -> run_chunk or None
 _entries: dict[int, tuple] = {}       # id(library) -> (library, its run_chunk), the layout checked once
 
 
@@ -48,6 +49,14 @@ def compiled(acc: np.dtype, weight: np.dtype, state: np.dtype):
     how = choice(VARIABLE)
     if how == "numba":
         return None
+    key = (how, acc, weight, state, *settings())
+    if key not in _chosen:
+        _chosen[key] = _kernel_of(how, acc, weight, state)
+    return _chosen[key]
+
+
+def _kernel_of(how: str, acc, weight, state):
+    """The loaded build's run_chunk for these types (built on first use), or None (numba); "c" without one: an error."""
     names = [np.dtype(t).name for t in (acc, weight, state)]
     lib = library(SOURCE, {"ACC_T": _C_TYPES[names[0]], "W_T": _C_TYPES[names[1]], "STATE_T": _C_TYPES[names[2]],
                            "DECAY_SHIFT": str(DECAY_SHIFT)}, "loihi-kernel-" + "-".join(names))
@@ -67,30 +76,40 @@ def compiled(acc: np.dtype, weight: np.dtype, state: np.dtype):
     return _entries[id(lib)][1]
 
 
-def program(x, n, noff, kl, groups, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v,
-            vth, bias, p32, ring, record_all, out, all_s, all_u, all_v, ovf, wraps) -> tuple[Program, list]:
-    """The ``Program`` of run_flat's arrays (checked C-contiguous and typed as kernel.c reads them), and the
-    arrays it points into (keep them alive while the kernel runs)."""
-    typed = {"x": (x, np.uint8), "n": (n, np.int64), "noff": (noff, np.int64), "kl": (kl, np.int64),
-             "groups": (groups, np.int64), "lay": (lay, np.int64), "wflat": (wflat, wflat.dtype),
-             "dflat": (dflat, np.int64), "woff": (woff, np.int64), "roff": (roff, np.int64),
-             "duni": (duni, np.int64), "druni": (druni, np.int64), "sptr": (sptr, np.int64),
-             "spost": (spost, np.int32), "wsp": (wsp, np.int64), "rsp": (rsp, np.int64),
-             "keep_u": (keep_u, np.int64), "keep_v": (keep_v, np.int64), "vth": (vth, np.int64),
-             "bias": (bias, np.int64), "p32": (p32, np.int32), "out_spikes": (out, np.uint8),
-             "all_s": (all_s, np.uint8), "all_u": (all_u, np.int32), "all_v": (all_v, np.int32),
-             "ovf": (ovf, np.int64), "wraps": (wraps, np.int64)}
+def _pointers(typed: dict) -> tuple[dict[str, int], list]:
+    """Each array's address, checked C-contiguous and of the type kernel.c reads; and the arrays (keep them alive)."""
     pointers, keep = {}, []
     for field_name, (a, dtype) in typed.items():
         if a.dtype != dtype or not a.flags.c_contiguous:
             raise SnnccError(f"the kernel's array {field_name} must be C-contiguous {np.dtype(dtype).name}",
                              field=field_name)
         keep.append(a)
-        pointers[field_name] = a.ctypes.data
+        pointers[field_name] = a.__array_interface__["data"][0]
+    return pointers, keep
+
+
+def network_part(n, noff, kl, groups, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v,
+                 vth, bias, p32, ring, wraps) -> tuple[dict, list]:
+    """The fields of a ``Program`` that describe the network (the same for every run of a flattened network:
+    ``flat.run_flat`` keeps them), and the arrays they point into."""
+    pointers, keep = _pointers({
+        "n": (n, np.int64), "noff": (noff, np.int64), "kl": (kl, np.int64), "groups": (groups, np.int64),
+        "lay": (lay, np.int64), "wflat": (wflat, wflat.dtype), "dflat": (dflat, np.int64), "woff": (woff, np.int64),
+        "roff": (roff, np.int64), "duni": (duni, np.int64), "druni": (druni, np.int64), "sptr": (sptr, np.int64),
+        "spost": (spost, np.int32), "wsp": (wsp, np.int64), "rsp": (rsp, np.int64), "keep_u": (keep_u, np.int64),
+        "keep_v": (keep_v, np.int64), "vth": (vth, np.int64), "bias": (bias, np.int64), "p32": (p32, np.int32),
+        "wraps": (wraps, np.int64)})
+    return {**pointers, "layers": n.shape[0], "n_groups": groups.shape[0], "ring": int(ring)}, keep
+
+
+def program(network: dict, x, record_all, out, all_s, all_u, all_v, ovf) -> tuple[Program, list]:
+    """The ``Program`` of a run: ``network`` (``network_part``) and this run's inputs and outputs; and the arrays
+    it points into (keep them alive while the kernel runs)."""
+    pointers, keep = _pointers({"x": (x, np.uint8), "out_spikes": (out, np.uint8), "all_s": (all_s, np.uint8),
+                                "all_u": (all_u, np.int32), "all_v": (all_v, np.int32), "ovf": (ovf, np.int64)})
     batch, steps, width = x.shape
-    prog = Program(steps=steps, width=width, layers=n.shape[0], n_groups=groups.shape[0], ring=int(ring),
-                   record_all=int(record_all), n_out=out.shape[2], units=all_s.shape[2] if record_all else 0,
-                   **pointers)
+    prog = Program(steps=steps, width=width, record_all=int(record_all), n_out=out.shape[2],
+                   units=all_s.shape[2] if record_all else 0, **network, **pointers)
     return prog, keep
 
 

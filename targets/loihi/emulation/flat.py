@@ -15,7 +15,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from snncc.targets.kit import SnnccError
-from snncc.targets.loihi.emulation.ckernel import C_KERNEL, NUMBA_KERNEL, compiled, program, run_chunk
+from snncc.targets.loihi.emulation.ckernel import C_KERNEL, NUMBA_KERNEL, compiled, network_part, program, run_chunk
 from snncc.targets.loihi.chip import DECAY_ONE, DECAY_SHIFT, Q_BITS, U_BITS
 
 Q_HALF, Q_MASK = 1 << Q_BITS, (1 << (Q_BITS + 1)) - 1
@@ -209,6 +209,7 @@ class Flat:
         self.vth = self.kernel_layout(prog.vth, INT32_MAX)
         self.bias = self.kernel_layout(prog.bias, 0)
         self._registers: dict[bool, tuple] = {}
+        self.c_network: dict[bool, tuple] = {}     # wide -> ckernel.network_part (its arrays held alive with it)
         self.fits32 = np.array([0] + [int(_fits32(prog, i, int(q_max[i]))) for i in range(1, layers)], np.int64)
         self.p32 = np.ascontiguousarray(np.clip(np.stack([self.keep_u, self.keep_v, self.vth, self.bias]),
                                                 INT32_MIN, INT32_MAX).astype(np.int32))
@@ -314,10 +315,12 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads
     x = np.ascontiguousarray(x, np.uint8)
     c_run = compiled(flat.acc_dtype, flat.wflat.dtype, state_proto.dtype)
     if c_run is not None:
-        cprog, _alive = program(x, prog.n, prog.noff, kl, groups, lay, flat.wflat, flat.dflat, flat.woff, flat.roff,
-                                flat.duni, flat.druni, flat.sptr, flat.spost, flat.wsp, flat.rsp, flat.keep_u,
-                                flat.keep_v, flat.vth, flat.bias, flat.p32, prog.ring, record_all, out, all_s, all_u,
-                                all_v, ovf, wraps)
+        if wide not in flat.c_network:        # the network's part of the C kernel's program, once per flat
+            flat.c_network[wide] = network_part(prog.n, prog.noff, kl, groups, lay, flat.wflat, flat.dflat, flat.woff,
+                                                flat.roff, flat.duni, flat.druni, flat.sptr, flat.spost, flat.wsp,
+                                                flat.rsp, flat.keep_u, flat.keep_v, flat.vth, flat.bias, flat.p32,
+                                                prog.ring, wraps)
+        cprog, _alive = program(flat.c_network[wide][0], x, record_all, out, all_s, all_u, all_v, ovf)
 
         def run(lo: int, hi: int) -> None:
             run_chunk(c_run, cprog, lo, hi)

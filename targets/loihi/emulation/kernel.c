@@ -214,8 +214,9 @@ static inline int64_t spike_list(const uint8_t *fired, int64_t m, int32_t *spk) 
     return c;
 }
 
-/* The rows base + spk[c] * m of wflat added into dst[0..m-1], four spikes' rows a pass. Not inlined: gcc vectorises
- * it with its restrict parameters, not always once inlined. */
+/* The rows base + spk[c] * m of wflat added into dst[0..m-1]: four spikes' rows a pass, the last one to three rows
+ * in one more pass (each pass loads and stores the slot once). Not inlined: gcc vectorises it with its restrict
+ * parameters, and not once it is inlined. */
 static __attribute__((noinline)) void add_rows(acc_t *restrict dst, const w_t *restrict w, int64_t base,
                                                const int32_t *spk, int64_t nspk, int64_t m) {
     int64_t c = 0;
@@ -225,10 +226,19 @@ static __attribute__((noinline)) void add_rows(acc_t *restrict dst, const w_t *r
         for (int64_t j = 0; j < m; j++)
             dst[j] = (acc_t)(dst[j] + (acc_t)((acc_t)r0[j] + (acc_t)r1[j] + (acc_t)r2[j] + (acc_t)r3[j]));
     }
-    for (; c < nspk; c++) {
-        const w_t *r = w + base + spk[c] * m;
+    const int64_t rest = nspk - c;
+    if (rest == 3) {
+        const w_t *r0 = w + base + spk[c] * m, *r1 = w + base + spk[c + 1] * m, *r2 = w + base + spk[c + 2] * m;
         for (int64_t j = 0; j < m; j++)
-            dst[j] = (acc_t)(dst[j] + r[j]);
+            dst[j] = (acc_t)(dst[j] + (acc_t)((acc_t)r0[j] + (acc_t)r1[j] + (acc_t)r2[j]));
+    } else if (rest == 2) {
+        const w_t *r0 = w + base + spk[c] * m, *r1 = w + base + spk[c + 1] * m;
+        for (int64_t j = 0; j < m; j++)
+            dst[j] = (acc_t)(dst[j] + (acc_t)((acc_t)r0[j] + (acc_t)r1[j]));
+    } else if (rest == 1) {
+        const w_t *r0 = w + base + spk[c] * m;
+        for (int64_t j = 0; j < m; j++)
+            dst[j] = (acc_t)(dst[j] + r0[j]);
     }
 }
 

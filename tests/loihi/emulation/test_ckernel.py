@@ -28,6 +28,7 @@ def _forget_built(monkeypatch):
     """As in a new process: no library loaded or looked up yet."""
     monkeypatch.setattr(native, "_loaded", {})
     monkeypatch.setattr(native, "_requested", {})
+    monkeypatch.setattr(ckernel, "_chosen", {})
 
 
 def _inputs(seed, net, batch=5, steps=36, p=0.3):
