@@ -9,7 +9,8 @@ Some users copy values when they are built: ``resources.ChipSpec()`` when it is 
 ``resources.LOIHI1`` at import), ``LoihiLayer`` its vmin / vmax when a layer is made, module
 constants derived at import (``fanin.COPY_WEIGHT``, the kernel's wrap masks), and the numba kernel
 (``emulation/kernel.py``) when numba compiles it. Numba's on-disk cache is keyed on ``emulation/kernel.py`` alone,
-so after changing a value the kernel uses (DECAY_SHIFT, DECAY_ONE) remove its cache files.
+so after changing a value the kernel uses (DECAY_SHIFT, DECAY_ONE) remove its cache files. The C kernel
+(``emulation/kernel.c``) gets DECAY_SHIFT when it is built, and its cache is keyed on it.
 """
 
 from __future__ import annotations

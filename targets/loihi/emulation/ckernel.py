@@ -1,8 +1,9 @@
 """The emulator's kernel compiled from C (``kernel.c``): the numba kernel's rules and program, no numba start-up.
 
-``$SNNCC_LOIHI_KERNEL`` chooses: "auto" (default: the C kernel where the system's C compiler builds it, else the
-numba kernel), "c" (the C kernel or an error), "numba". Both give the same integers (``tests/loihi/emulation``
-run every program shape through both and the numpy statement); a run's summary names the one that ran.
+``$SNNCC_LOIHI_KERNEL`` chooses (``targets/loihi/native.py``): "auto" (default: the C kernel where the system's C
+compiler builds it, else the numba kernel), "c" (the C kernel or an error), "numba". Both give the same integers
+(``tests/loihi/emulation`` runs every program shape through both and the numpy statement); a run's summary names
+the one that ran.
 A build per type signature (accumulator, weight, state) is cached (``kit.native``); a warm call loads it in
 about a millisecond, where the numba kernel's import and cache load take about 0.4 s.
 """
@@ -15,10 +16,10 @@ from pathlib import Path
 import numpy as np
 
 from snncc.targets.kit import SnnccError
-from snncc.targets.kit.native import choice, library, settings
+from snncc.targets.kit.native import choice, settings
 from snncc.targets.loihi.chip import DECAY_SHIFT
+from snncc.targets.loihi.native import VARIABLE, c_library
 
-VARIABLE = "SNNCC_LOIHI_KERNEL"
 SOURCE = Path(__file__).with_name("kernel.c")
 C_KERNEL, NUMBA_KERNEL = "C kernel", "numba kernel"
 _C_TYPES = {"int8": "int8_t", "int16": "int16_t", "int32": "int32_t", "int64": "int64_t"}
@@ -58,12 +59,9 @@ def compiled(acc: np.dtype, weight: np.dtype, state: np.dtype):
 def _kernel_of(how: str, acc, weight, state):
     """The loaded build's run_chunk for these types (built on first use), or None (numba); "c" without one: an error."""
     names = [np.dtype(t).name for t in (acc, weight, state)]
-    lib = library(SOURCE, {"ACC_T": _C_TYPES[names[0]], "W_T": _C_TYPES[names[1]], "STATE_T": _C_TYPES[names[2]],
-                           "DECAY_SHIFT": str(DECAY_SHIFT)}, "loihi-kernel-" + "-".join(names))
+    lib = c_library(SOURCE, {"ACC_T": _C_TYPES[names[0]], "W_T": _C_TYPES[names[1]], "STATE_T": _C_TYPES[names[2]],
+                             "DECAY_SHIFT": str(DECAY_SHIFT)}, "loihi-kernel-" + "-".join(names))
     if lib is None:
-        if how == "c":
-            raise SnnccError("the C kernel could not be built (no C compiler found, or it failed); set it to "
-                             "'numba' or 'auto'", field=VARIABLE)
         return None
     if id(lib) not in _entries:
         lib.snncc_loihi_program_size.restype = ctypes.c_int64

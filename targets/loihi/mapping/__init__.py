@@ -10,5 +10,5 @@
     coremap.py      the core map record (CoreMap, CoreRecord, CoreUsage)
     fanin.py        relay plans for fan-in wider than a core's input axons
     relays.py       relayed networks (what the bundle holds when relays are needed)
-    kernels.py      numba kernels of the partitioner
+    kernels.py      the partitioner's kernels: kernels.c (C, built by the system's compiler) or numba_kernels.py
 """

@@ -1,81 +1,93 @@
-"""numba kernels for the partitioner: one pass over a projection's synapses (O(nnz), no sort).
+"""The partitioner's kernels: ``kernels.c`` built by the system's C compiler (no numba start-up), else the numba
+kernels of ``numba_kernels.py`` (``$SNNCC_LOIHI_KERNEL``, ``targets/loihi/native.py``). The same integers either way.
 
-Synapses are read in CSC order (by source, destinations ascending). When every layer slice sits on
-a core with a larger id than the slice before it (``cores_dst`` non-decreasing), a source's
-synapses onto one core are consecutive, so each run is one (core, source) pair: one input axon on
-the core, one synapse list (bits from a lookup table by range size and count) and one output axon
-on the source's core.
+    transpose_indices(indptr, indices, n_cols)      CSC (cptr int64, cidx int32) of a CSR pattern
+    distinct_per_source(cptr, cidx, slice_of)       distinct destination slices per source
+    pair_usage(cptr, cidx, cores_dst, m_core, table, src_core, n_cores)   (axons, bits, out) per core
 """
 
 from __future__ import annotations
 
+import ctypes
+from pathlib import Path
+
 import numpy as np
 
-from snncc.targets.kit.compute import sigint_deferred
+from snncc.targets.kit.native import choice, settings
+from snncc.targets.loihi.native import VARIABLE, c_library
 
-with sigint_deferred():   # numba's C init would turn a Ctrl-C into an ImportError (snncc/interrupts.py)
-    import numba
-
-
-@numba.njit(cache=True, nogil=True)
-def pair_usage(cptr, cidx, cores_dst, m_core, table, src_core, n_cores):
-    """(input axons, synapse bits, output axons) per core; src_core[j] < 0: source j is off-chip."""
-    axons = np.zeros(n_cores, np.int64)
-    bits = np.zeros(n_cores, np.int64)
-    out = np.zeros(n_cores, np.int64)
-    n_pre = cptr.size - 1
-    for j in range(n_pre):
-        prev = -1
-        cnt = 0
-        for e in range(cptr[j], cptr[j + 1]):
-            c = cores_dst[cidx[e]]
-            if c != prev:
-                if prev >= 0:
-                    axons[prev] += 1
-                    bits[prev] += table[m_core[prev], cnt]
-                    if src_core[j] >= 0:
-                        out[src_core[j]] += 1
-                prev = c
-                cnt = 0
-            cnt += 1
-        if prev >= 0:
-            axons[prev] += 1
-            bits[prev] += table[m_core[prev], cnt]
-            if src_core[j] >= 0:
-                out[src_core[j]] += 1
-    return axons, bits, out
+SOURCE = Path(__file__).with_name("kernels.c")
+_P, _I = ctypes.c_void_p, ctypes.c_int64
+_SIGNATURES = {"snncc_loihi_transpose_indices": [_P, _P, _I, _I, _P, _P, _P],
+               "snncc_loihi_distinct_per_source": [_P, _P, _I, _P, _P],
+               "snncc_loihi_pair_usage": [_P, _P, _I, _P, _P, _P, _I, _P, _P, _P, _P]}
+_chosen: dict[tuple, object] = {}
 
 
-@numba.njit(cache=True, nogil=True)
-def distinct_per_source(cptr, cidx, slice_of):
+def _c():
+    """The loaded C library (argument types set), or None where the numba kernels run."""
+    key = (choice(VARIABLE), *settings())
+    if key not in _chosen:
+        lib = c_library(SOURCE, {}, "loihi-mapping")
+        if lib is not None:
+            for name, args in _SIGNATURES.items():
+                getattr(lib, name).argtypes = args
+                getattr(lib, name).restype = None
+        _chosen[key] = lib
+    return _chosen[key]
+
+
+def _i64(a) -> np.ndarray:
+    return np.ascontiguousarray(a, np.int64)
+
+
+def _i32(a) -> np.ndarray:
+    return np.ascontiguousarray(a, np.int32)
+
+
+def _at(a: np.ndarray) -> int:
+    return a.__array_interface__["data"][0]
+
+
+def transpose_indices(indptr, indices, n_cols: int) -> tuple[np.ndarray, np.ndarray]:
+    """CSC (cptr, cidx) of a CSR pattern; rows ascend within each column."""
+    lib = _c()
+    if lib is None:
+        from snncc.targets.loihi.mapping.numba_kernels import transpose_indices as numba_kernel
+
+        return numba_kernel(indptr, indices, n_cols)
+    indptr, indices = _i64(indptr), _i32(indices)
+    cptr = np.zeros(int(n_cols) + 1, np.int64)
+    cidx = np.empty(indices.size, np.int32)
+    fill = np.empty(int(n_cols), np.int64)
+    lib.snncc_loihi_transpose_indices(_at(indptr), _at(indices), indptr.size - 1, int(n_cols), _at(cptr), _at(cidx),
+                                      _at(fill))
+    return cptr, cidx
+
+
+def distinct_per_source(cptr, cidx, slice_of) -> np.ndarray:
     """For each source: how many distinct destination slices its synapses reach (slice_of ascending)."""
-    n_pre = cptr.size - 1
-    out = np.zeros(n_pre, np.int64)
-    for j in range(n_pre):
-        prev = -1
-        for e in range(cptr[j], cptr[j + 1]):
-            c = slice_of[cidx[e]]
-            if c != prev:
-                out[j] += 1
-                prev = c
+    lib = _c()
+    if lib is None:
+        from snncc.targets.loihi.mapping.numba_kernels import distinct_per_source as numba_kernel
+
+        return numba_kernel(cptr, cidx, slice_of)
+    cptr, cidx, slice_of = _i64(cptr), _i32(cidx), _i64(slice_of)
+    out = np.zeros(cptr.size - 1, np.int64)
+    lib.snncc_loihi_distinct_per_source(_at(cptr), _at(cidx), cptr.size - 1, _at(slice_of), _at(out))
     return out
 
 
-@numba.njit(cache=True, nogil=True)
-def transpose_indices(indptr, indices, n_cols):
-    """CSC (cptr, cidx) of a CSR pattern; rows ascend within each column."""
-    nnz = indices.size
-    cptr = np.zeros(n_cols + 1, np.int64)
-    for e in range(nnz):
-        cptr[indices[e] + 1] += 1
-    for j in range(n_cols):
-        cptr[j + 1] += cptr[j]
-    fill = cptr[:-1].copy()
-    cidx = np.empty(nnz, np.int32)
-    n_rows = indptr.size - 1
-    for r in range(n_rows):
-        for e in range(indptr[r], indptr[r + 1]):
-            j = indices[e]
-            cidx[fill[j]] = r
-            fill[j] += 1
-    return cptr, cidx
+def pair_usage(cptr, cidx, cores_dst, m_core, table, src_core, n_cores: int):
+    """(input axons, synapse bits, output axons) per core; src_core[j] < 0: source j is off-chip."""
+    lib = _c()
+    if lib is None:
+        from snncc.targets.loihi.mapping.numba_kernels import pair_usage as numba_kernel
+
+        return numba_kernel(cptr, cidx, cores_dst, m_core, table, src_core, n_cores)
+    cptr, cidx, cores_dst, m_core, src_core = _i64(cptr), _i32(cidx), _i64(cores_dst), _i64(m_core), _i64(src_core)
+    table = _i64(table)
+    axons, bits, out = (np.zeros(int(n_cores), np.int64) for _ in range(3))
+    lib.snncc_loihi_pair_usage(_at(cptr), _at(cidx), cptr.size - 1, _at(cores_dst), _at(m_core), _at(table),
+                               table.shape[1], _at(src_core), _at(axons), _at(bits), _at(out))
+    return axons, bits, out
