@@ -22,6 +22,21 @@ def require(module: str):
         pytest.skip(f"{module} is not installed ({ex})")
 
 
+def need_c_compiler() -> None:
+    """Skip a test of snncc's C kernels where no C compiler is found (the numba kernels run there), but fail in CI
+    (``CI=true``), whose .ci/run installs gcc."""
+    import os
+
+    import pytest
+
+    from snncc.native import compiler
+
+    if compiler() is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail("no C compiler found; CI must install gcc (.ci/run)")
+        pytest.skip("no C compiler found (cc, gcc, $CC or $SNNCC_CC): the numba kernels run instead")
+
+
 PROGRESS = "snncc: progress: "
 
 

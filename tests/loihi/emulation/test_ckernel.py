@@ -14,10 +14,12 @@ import pytest
 import snncc.native as native
 from snncc.errors import SnnccError
 from snncc.targets.loihi.emulation import ckernel, emulator
+from snncc.targets.loihi.mapping import kernels as mapping_kernels
 from snncc.targets.loihi.emulation.flat import KERNEL_SIGNATURES, kernel_name, narrowest_int
 from snncc.targets.loihi.emulation.emulator import PreparedNetwork, reference_run
 from tests.loihi.emulation.test_kernel import _same
 from tests.loihi.emulation.test_sparse_kernel import _thin
+from snncc_test_helpers import need_c_compiler
 from tests.loihi.helpers import random_network
 
 NETWORKS = [(60, {}), (61, {"big": True}), (62, {"split_exponents": True, "per_synapse_delays": False}),
@@ -53,6 +55,7 @@ def _with_types(prepared, acc, w, state):
 
 @pytest.mark.parametrize("acc, w, state", KERNEL_SIGNATURES)
 def test_every_signature_of_both_kernels_gives_the_statements_integers(monkeypatch, acc, w, state):
+    need_c_compiler()
     ran = 0
     for sparse in (False, True):
         if sparse:   # blocks of >= 60 entries as SparseBlocks: the hidden layer's, not the output layer's
@@ -78,6 +81,7 @@ def test_every_signature_of_both_kernels_gives_the_statements_integers(monkeypat
 
 @pytest.mark.parametrize("seed, kwargs", NETWORKS[:3])
 def test_wide_and_stream_runs_of_the_c_kernel_equal_the_numba_kernels(monkeypatch, seed, kwargs):
+    need_c_compiler()
     net = random_network(seed, **kwargs)
     x = _inputs(seed, net, batch=3)
     got = {}
@@ -94,6 +98,8 @@ def test_wide_and_stream_runs_of_the_c_kernel_equal_the_numba_kernels(monkeypatc
 
 
 def test_a_built_kernel_is_cached_and_loaded_without_a_compile(tmp_path, monkeypatch):
+    need_c_compiler()
+    monkeypatch.setenv(ckernel.VARIABLE, "auto")
     monkeypatch.setenv("SNNCC_CACHE_DIR", str(tmp_path))
     _forget_built(monkeypatch)
     run = ckernel.compiled(np.int32, np.int8, np.int32)
@@ -144,15 +150,17 @@ def test_an_unknown_kernel_choice_is_one_error_line(monkeypatch):
         PreparedNetwork(random_network(66)).run(_inputs(66, random_network(66), batch=1))
 
 
-@pytest.mark.parametrize("acc, w, state", [("int16", "int8", "int32"), ("int64", "int64", "int64")])
-def test_the_c_source_compiles_without_a_warning(tmp_path, acc, w, state):
+@pytest.mark.parametrize("source, defines", [
+    (ckernel.SOURCE, {"ACC_T": "int16_t", "W_T": "int8_t", "STATE_T": "int32_t", "DECAY_SHIFT": "12"}),
+    (ckernel.SOURCE, {"ACC_T": "int64_t", "W_T": "int64_t", "STATE_T": "int64_t", "DECAY_SHIFT": "12"}),
+    (mapping_kernels.SOURCE, {}),
+])
+def test_the_c_sources_compile_without_a_warning(tmp_path, source, defines):
+    need_c_compiler()
     cc = native.compiler()
-    if cc is None:
-        pytest.skip("no C compiler on this machine (the numba kernel runs instead)")
-    types = {name: f"{t}_t" for name, t in (("ACC_T", acc), ("W_T", w), ("STATE_T", state))}
-    done = subprocess.run([cc, *native.FLAGS, "-Wall", "-Wextra", "-Werror", "-DDECAY_SHIFT=12",
-                           *(f"-D{k}={v}" for k, v in types.items()), "-o", str(tmp_path / "k.so"), str(ckernel.SOURCE)],
-                          capture_output=True, text=True, timeout=300)
+    flags = [*native.FLAGS, "-Wall", "-Wextra", "-Werror", *(f"-D{k}={v}" for k, v in defines.items())]
+    done = subprocess.run([cc, *flags, "-o", str(tmp_path / "k.so"), str(source)], capture_output=True, text=True,
+                          timeout=300)
     assert done.returncode == 0, done.stderr
 
 
@@ -161,6 +169,7 @@ def test_a_cache_that_cannot_be_written_builds_nothing_and_the_numba_kernel_runs
     x = _inputs(67, net, batch=2)
     blocker = tmp_path / "a-file"
     blocker.write_text("")
+    monkeypatch.setenv(ckernel.VARIABLE, "auto")
     for cache, writable in ((blocker / "cache", True), (tmp_path / "read-only", False)):
         monkeypatch.setenv("SNNCC_CACHE_DIR", str(cache))      # under a file: not even a directory can be made
         monkeypatch.setattr(native.os, "access", lambda path, mode, ok=writable: ok)   # (root writes anywhere)

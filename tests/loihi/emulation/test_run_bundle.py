@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from snncc.targets.loihi.emulation import run_bundle
+from snncc_test_helpers import need_c_compiler
 from tests.loihi.helpers import random_network
 
 
@@ -16,6 +17,7 @@ from tests.loihi.helpers import random_network
     (54, {"recurrent": False, "profiles": True}),
 ])
 def test_the_statement_and_the_kernel_write_the_same_arrays(monkeypatch, seed, kwargs):
+    need_c_compiler()
     net = random_network(seed, **kwargs)
     x = (np.random.default_rng(seed).random((5, 40, net.input_width)) < 0.3).astype(np.uint8)
     assert run_bundle.small(net, 5, 40)

@@ -10,6 +10,7 @@ import scipy.sparse as sp
 from snncc.targets.loihi.mapping import kernels, numba_kernels
 from snncc.targets.loihi.mapping.partition import map_network
 from snncc.targets.loihi.native import VARIABLE
+from snncc_test_helpers import need_c_compiler
 from tests.loihi.helpers import random_network
 
 
@@ -21,6 +22,7 @@ def _pattern(seed, n_rows, n_cols, density):
 @pytest.mark.parametrize("seed, n_rows, n_cols, density", [(0, 40, 30, 0.2), (1, 1, 500, 0.5), (2, 300, 7, 0.9),
                                                            (3, 50, 60, 0.0), (4, 200, 200, 0.03)])
 def test_the_c_kernels_give_the_numba_kernels_integers(monkeypatch, seed, n_rows, n_cols, density):
+    need_c_compiler()
     monkeypatch.setenv(VARIABLE, "c")
     indptr, indices = _pattern(seed, n_rows, n_cols, density)
     cptr, cidx = kernels.transpose_indices(indptr, indices, n_cols)
@@ -44,6 +46,7 @@ def test_the_c_kernels_give_the_numba_kernels_integers(monkeypatch, seed, n_rows
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_a_core_map_is_the_same_with_either_kernel(monkeypatch, seed):
+    need_c_compiler()
     net = random_network(seed, recurrent=bool(seed))
     maps = {}
     for how in ("c", "numba"):
