@@ -20,6 +20,7 @@ import hashlib
 import os
 import platform
 import shutil
+import stat
 import subprocess
 import sys
 import threading
@@ -104,7 +105,12 @@ def library(source: Path, defines: dict[str, str], name: str) -> ctypes.CDLL | N
 
 
 def _load(path: Path) -> ctypes.CDLL | None:
+    """The library at ``path``, if it loads and is this user's own file that no one else may write (code is loaded
+    only from there: a cache directory shared with others must not hand this process their code)."""
     try:
+        info = path.stat()
+        if info.st_uid != os.geteuid() or info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+            return None
         return ctypes.CDLL(str(path))
     except OSError:
         return None
@@ -127,7 +133,11 @@ def _build(cc: str, source: Path, defines: dict[str, str], path: Path) -> ctypes
             except (OSError, subprocess.TimeoutExpired):
                 return None
             if done.returncode == 0:
-                os.replace(tmp, path)
+                try:
+                    os.chmod(tmp, 0o755)        # nobody else may write it (``_load``), whatever the umask
+                    os.replace(tmp, path)
+                except OSError:                 # e.g. another user's file in a shared directory
+                    return None
                 return _load(path)
         return None
     finally:

@@ -124,6 +124,12 @@ def test_a_built_kernel_is_cached_and_loaded_without_a_compile(tmp_path, monkeyp
     assert done.returncode == 0, done.stderr
     assert built.read_bytes()[:4] == b"\x7fELF"
     assert not list(tmp_path.glob(".*.tmp"))                                # no temporary file is left
+    built.chmod(0o777)              # a file others may write is never loaded (nor replaced: it is not rebuilt)
+    _forget_built(monkeypatch)
+    monkeypatch.setenv(ckernel.VARIABLE, "auto")
+    monkeypatch.setenv("SNNCC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(native, "_build", lambda *args: None)
+    assert ckernel.compiled(np.int32, np.int8, np.int32) is None
 
 
 def test_without_a_working_compiler_auto_runs_the_numba_kernel_and_c_is_refused(tmp_path, monkeypatch):
