@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import functools
 import re
 import shlex
 import shutil
@@ -247,13 +248,28 @@ def run_snncc(argv: list[str]) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
+@functools.lru_cache(maxsize=None)
+def _click_command(verb: str | None):
+    """The click command of ``snncc`` with only ``verb`` registered (all verbs for None), built once per verb: the
+    inline commands name the same few verbs hundreds of times."""
+    import typer
+
+    from snncc.cli.main import build_app
+
+    return typer.main.get_command(build_app([verb] if verb else []))
+
+
+def _command_of(argv: list[str]):
+    return _click_command(argv[0] if argv and not argv[0].startswith("-") else None)
+
+
 def parses(argv: list[str]) -> None:
     """Parse ``snncc argv`` with the real command (options and arguments checked), without running it."""
     import typer
 
     from snncc.cli.main import build_app
 
-    command = typer.main.get_command(build_app(argv))
+    command = _command_of(argv)
     names = []
     while hasattr(command, "commands") and argv and argv[0] in command.commands:
         names.append(argv[0])
@@ -375,7 +391,7 @@ def names_exist(argv: list[str]) -> list[str]:
 
     from snncc.cli.main import build_app
 
-    command = typer.main.get_command(build_app(argv))
+    command = _command_of(argv)
     while hasattr(command, "commands") and argv and not argv[0].startswith("-"):
         if argv[0] not in command.commands:
             return [f"no command {argv[0]!r}"]

@@ -22,6 +22,10 @@ from tests.loihi.emulation.test_sparse_kernel import _thin
 from snncc_test_helpers import need_c_compiler
 from tests.loihi.helpers import random_network
 
+# the numba kernel (the fallback where no C compiler is found) is compared on three signatures that cover every
+# accumulator, both weight kinds and both state types, on every network below: a cold numba compile of one signature
+# takes 5-7 s, and CI starts with an empty numba cache
+NUMBA_CHECKED = {("int16", "int8", "int32"), ("int32", "int32", "int64"), ("int64", "int64", "int64")}
 NETWORKS = [(60, {}), (61, {"big": True}), (62, {"split_exponents": True, "per_synapse_delays": False}),
             (63, {"profiles": True, "recurrent": False}), (64, {"big": True, "per_synapse_delays": False})]
 
@@ -54,7 +58,7 @@ def _with_types(prepared, acc, w, state):
 
 
 @pytest.mark.parametrize("acc, w, state", KERNEL_SIGNATURES)
-def test_every_signature_of_both_kernels_gives_the_statements_integers(monkeypatch, acc, w, state):
+def test_every_signature_of_the_c_kernel_gives_the_statements_integers_and_numbas(monkeypatch, acc, w, state):
     need_c_compiler()
     ran = 0
     for sparse in (False, True):
@@ -66,7 +70,7 @@ def test_every_signature_of_both_kernels_gives_the_statements_integers(monkeypat
             x = _inputs(seed, net)
             for record in ("outputs", "all"):
                 want = reference_run(net, x, record=record)
-                for how in ("c", "numba"):
+                for how in ("c", "numba") if (acc, w, state) in NUMBA_CHECKED else ("c",):
                     monkeypatch.setenv(ckernel.VARIABLE, how)
                     prepared = _with_types(PreparedNetwork(net), acc, w, state)
                     if prepared is None:
@@ -76,7 +80,7 @@ def test_every_signature_of_both_kernels_gives_the_statements_integers(monkeypat
                     assert kernel_name(prepared.flat) == (ckernel.C_KERNEL if how == "c" else ckernel.NUMBA_KERNEL)
                     _same(prepared.run(x, record=record, threads=2), want, record)
                     ran += 1
-    assert ran >= 4, "no network exercised this signature"
+    assert ran >= 2, "too few networks exercised this signature"
 
 
 @pytest.mark.parametrize("seed, kwargs", NETWORKS[:3])
