@@ -109,7 +109,8 @@ def _load(path: Path) -> ctypes.CDLL | None:
     only from there: a cache directory shared with others must not hand this process their code)."""
     try:
         info = path.stat()
-        if info.st_uid != os.geteuid() or info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        owner = os.geteuid() if hasattr(os, "geteuid") else info.st_uid      # (no user ids to compare off POSIX)
+        if info.st_uid != owner or info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
             return None
         return ctypes.CDLL(str(path))
     except OSError:
