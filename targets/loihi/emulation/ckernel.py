@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 
 from snncc.targets.kit import SnnccError
-from snncc.targets.kit.native import choice, settings
 from snncc.targets.loihi.chip import DECAY_SHIFT
 from snncc.targets.loihi.native import VARIABLE, c_library
 
@@ -25,8 +24,7 @@ C_KERNEL, NUMBA_KERNEL = "C kernel", "numba kernel"
 _C_TYPES = {"int8": "int8_t", "int16": "int16_t", "int32": "int32_t", "int64": "int64_t"}
 
 _P, _I = ctypes.c_void_p, ctypes.c_int64
-_chosen: dict[tuple, object] = {}    # (choice, types, settings) -> run_chunk or None
-_entries: dict[int, tuple] = {}       # id(library) -> (library, its run_chunk), the layout checked once
+_BUILDS: dict[tuple, tuple] = {}     # (acc, weight, state) -> (the build's -D defines, its cache name)
 
 
 class Program(ctypes.Structure):
@@ -47,31 +45,24 @@ class Program(ctypes.Structure):
 def compiled(acc: np.dtype, weight: np.dtype, state: np.dtype):
     """The C kernel's ``run_chunk`` for these types, or None where the numba kernel is to run (choice "numba",
     or "auto" without a working compiler). Choice "c" without a build is an error."""
-    how = choice(VARIABLE)
-    if how == "numba":
-        return None
-    key = (how, acc, weight, state, *settings())
-    if key not in _chosen:
-        _chosen[key] = _kernel_of(how, acc, weight, state)
-    return _chosen[key]
+    if (acc, weight, state) not in _BUILDS:
+        names = [np.dtype(t).name for t in (acc, weight, state)]
+        _BUILDS[acc, weight, state] = ({"ACC_T": _C_TYPES[names[0]], "W_T": _C_TYPES[names[1]],
+                                        "STATE_T": _C_TYPES[names[2]], "DECAY_SHIFT": str(DECAY_SHIFT)},
+                                       "loihi-kernel-" + "-".join(names))
+    defines, name = _BUILDS[acc, weight, state]
+    return c_library(SOURCE, defines, name, prepare=_run_chunk_of)
 
 
-def _kernel_of(how: str, acc, weight, state):
-    """The loaded build's run_chunk for these types (built on first use), or None (numba); "c" without one: an error."""
-    names = [np.dtype(t).name for t in (acc, weight, state)]
-    lib = c_library(SOURCE, {"ACC_T": _C_TYPES[names[0]], "W_T": _C_TYPES[names[1]], "STATE_T": _C_TYPES[names[2]],
-                             "DECAY_SHIFT": str(DECAY_SHIFT)}, "loihi-kernel-" + "-".join(names))
-    if lib is None:
-        return None
-    if id(lib) not in _entries:
-        lib.snncc_loihi_program_size.restype = ctypes.c_int64
-        if lib.snncc_loihi_program_size() != ctypes.sizeof(Program):
-            raise SnnccError("the compiled kernel's program layout differs from ckernel.Program", field=VARIABLE)
-        run = lib.snncc_loihi_run_chunk
-        run.argtypes = [ctypes.POINTER(Program), ctypes.c_int64, ctypes.c_int64]
-        run.restype = ctypes.c_int
-        _entries[id(lib)] = (lib, run)      # the library held, so its id is never reused
-    return _entries[id(lib)][1]
+def _run_chunk_of(lib):
+    """The library's run_chunk, typed, once its program layout is checked against ``Program``."""
+    lib.snncc_loihi_program_size.restype = ctypes.c_int64
+    if lib.snncc_loihi_program_size() != ctypes.sizeof(Program):
+        raise SnnccError("the compiled kernel's program layout differs from ckernel.Program", field=VARIABLE)
+    run = lib.snncc_loihi_run_chunk
+    run.argtypes = [ctypes.POINTER(Program), ctypes.c_int64, ctypes.c_int64]
+    run.restype = ctypes.c_int
+    return run
 
 
 def _pointers(typed: dict) -> tuple[dict[str, int], list]:
@@ -86,18 +77,21 @@ def _pointers(typed: dict) -> tuple[dict[str, int], list]:
     return pointers, keep
 
 
-def network_part(n, noff, kl, groups, lay, wflat, dflat, woff, roff, duni, druni, sptr, spost, wsp, rsp, keep_u, keep_v,
-                 vth, bias, p32, ring, wraps) -> tuple[dict, list]:
-    """The fields of a ``Program`` that describe the network (the same for every run of a flattened network:
-    ``flat.run_flat`` keeps them), and the arrays they point into."""
+def network_part(flat, registers: tuple) -> tuple[dict, list]:
+    """The fields of a ``Program`` that describe the network: ``flat`` (``flat.Flat``) and its ``registers`` for the
+    run (the same for every run of a flattened network: ``flat.run_flat`` keeps them); and the arrays they point
+    into."""
+    prog = flat.prog
+    lay, wraps, kl, groups, _ = registers
     pointers, keep = _pointers({
-        "n": (n, np.int64), "noff": (noff, np.int64), "kl": (kl, np.int64), "groups": (groups, np.int64),
-        "lay": (lay, np.int64), "wflat": (wflat, wflat.dtype), "dflat": (dflat, np.int64), "woff": (woff, np.int64),
-        "roff": (roff, np.int64), "duni": (duni, np.int64), "druni": (druni, np.int64), "sptr": (sptr, np.int64),
-        "spost": (spost, np.int32), "wsp": (wsp, np.int64), "rsp": (rsp, np.int64), "keep_u": (keep_u, np.int64),
-        "keep_v": (keep_v, np.int64), "vth": (vth, np.int64), "bias": (bias, np.int64), "p32": (p32, np.int32),
-        "wraps": (wraps, np.int64)})
-    return {**pointers, "layers": n.shape[0], "n_groups": groups.shape[0], "ring": int(ring)}, keep
+        "n": (prog.n, np.int64), "noff": (prog.noff, np.int64), "kl": (kl, np.int64), "groups": (groups, np.int64),
+        "lay": (lay, np.int64), "wflat": (flat.wflat, flat.wflat.dtype), "dflat": (flat.dflat, np.int64),
+        "woff": (flat.woff, np.int64), "roff": (flat.roff, np.int64), "duni": (flat.duni, np.int64),
+        "druni": (flat.druni, np.int64), "sptr": (flat.sptr, np.int64), "spost": (flat.spost, np.int32),
+        "wsp": (flat.wsp, np.int64), "rsp": (flat.rsp, np.int64), "keep_u": (flat.keep_u, np.int64),
+        "keep_v": (flat.keep_v, np.int64), "vth": (flat.vth, np.int64), "bias": (flat.bias, np.int64),
+        "p32": (flat.p32, np.int32), "wraps": (wraps, np.int64)})
+    return {**pointers, "layers": prog.n.shape[0], "n_groups": groups.shape[0], "ring": int(prog.ring)}, keep
 
 
 def program(network: dict, x, record_all, out, all_s, all_u, all_v, ovf) -> tuple[Program, list]:

@@ -388,7 +388,7 @@ class PreparedNetwork:
 
     def run(self, inputs, *, record: str = "outputs", mode: str = "batch", gap: int | None = None,
             wide: bool = False, threads: int | None = None) -> EmulationResult:
-        """``threads``: threads the samples of a batch are spread over (default: NUMBA_NUM_THREADS)."""
+        """``threads``: threads the samples of a batch are spread over (default: ``flat.default_threads()``)."""
         from snncc.targets.loihi.emulation.flat import run_flat
 
         if record not in RECORD_CHOICES:

@@ -316,10 +316,7 @@ def run_flat(flat: Flat, x: np.ndarray, record: str, wide: bool = False, threads
     c_run = compiled(flat.acc_dtype, flat.wflat.dtype, state_proto.dtype)
     if c_run is not None:
         if wide not in flat.c_network:        # the network's part of the C kernel's program, once per flat
-            flat.c_network[wide] = network_part(prog.n, prog.noff, kl, groups, lay, flat.wflat, flat.dflat, flat.woff,
-                                                flat.roff, flat.duni, flat.druni, flat.sptr, flat.spost, flat.wsp,
-                                                flat.rsp, flat.keep_u, flat.keep_v, flat.vth, flat.bias, flat.p32,
-                                                prog.ring, wraps)
+            flat.c_network[wide] = network_part(flat, flat.registers(wide))
         cprog, _alive = program(flat.c_network[wide][0], x, record_all, out, all_s, all_u, all_v, ovf)
 
         def run(lo: int, hi: int) -> None:

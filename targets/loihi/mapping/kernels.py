@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 
-from snncc.targets.kit.native import choice, settings
 from snncc.targets.loihi.native import VARIABLE, c_library
 
 SOURCE = Path(__file__).with_name("kernels.c")
@@ -21,20 +20,19 @@ _P, _I = ctypes.c_void_p, ctypes.c_int64
 _SIGNATURES = {"snncc_loihi_transpose_indices": [_P, _P, _I, _I, _P, _P, _P],
                "snncc_loihi_distinct_per_source": [_P, _P, _I, _P, _P],
                "snncc_loihi_pair_usage": [_P, _P, _I, _P, _P, _P, _I, _P, _P, _P, _P]}
-_chosen: dict[tuple, object] = {}
+
+
+def _typed(lib):
+    """The library with its functions' argument types set."""
+    for name, args in _SIGNATURES.items():
+        getattr(lib, name).argtypes = args
+        getattr(lib, name).restype = None
+    return lib
 
 
 def _c():
     """The loaded C library (argument types set), or None where the numba kernels run."""
-    key = (choice(VARIABLE), *settings())
-    if key not in _chosen:
-        lib = c_library(SOURCE, {}, "loihi-mapping")
-        if lib is not None:
-            for name, args in _SIGNATURES.items():
-                getattr(lib, name).argtypes = args
-                getattr(lib, name).restype = None
-        _chosen[key] = lib
-    return _chosen[key]
+    return c_library(SOURCE, {}, "loihi-mapping", prepare=_typed)
 
 
 def _i64(a) -> np.ndarray:

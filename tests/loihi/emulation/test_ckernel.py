@@ -13,6 +13,7 @@ import pytest
 
 import snncc.native as native
 from snncc.errors import SnnccError
+from snncc.targets.loihi import native as loihi_native
 from snncc.targets.loihi.emulation import ckernel, emulator
 from snncc.targets.loihi.mapping import kernels as mapping_kernels
 from snncc.targets.loihi.emulation.flat import KERNEL_SIGNATURES, kernel_name, narrowest_int
@@ -34,7 +35,7 @@ def _forget_built(monkeypatch):
     """As in a new process: no library loaded or looked up yet."""
     monkeypatch.setattr(native, "_loaded", {})
     monkeypatch.setattr(native, "_requested", {})
-    monkeypatch.setattr(ckernel, "_chosen", {})
+    monkeypatch.setattr(loihi_native, "_prepared", {})
 
 
 def _inputs(seed, net, batch=5, steps=36, p=0.3):
