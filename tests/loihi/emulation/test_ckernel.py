@@ -155,10 +155,23 @@ def test_without_a_working_compiler_auto_runs_the_numba_kernel_and_c_is_refused(
     assert not list(tmp_path.iterdir())
 
 
-def test_an_unknown_kernel_choice_is_one_error_line(monkeypatch):
+def test_an_unknown_kernel_choice_is_one_error_line(monkeypatch, tmp_path, capsys):
     monkeypatch.setenv(ckernel.VARIABLE, "fortran")
     with pytest.raises(SnnccError, match="SNNCC_LOIHI_KERNEL: must be one of auto, c, numba"):
         PreparedNetwork(random_network(66)).run(_inputs(66, random_network(66), batch=1))
+    # the command: one line, exit 2, no output file; the bundle and the inputs untouched
+    from snncc.targets.loihi.bundle.write import write_bundle
+    from snncc_test_helpers import run_cli
+
+    net = random_network(66)
+    bundle, inputs, out = tmp_path / "n.net", tmp_path / "x.npy", tmp_path / "o.npz"
+    write_bundle(net, bundle)
+    np.save(inputs, _inputs(66, net, batch=2))
+    before = {p: p.read_bytes() for p in (bundle, inputs)}
+    code, _, err = run_cli(["emulate", bundle, "--input", inputs, "-o", out], capsys)
+    assert code == 2 and err.strip().count("\n") == 0, err
+    assert err.startswith("snncc: error: ") and "SNNCC_LOIHI_KERNEL: must be one of auto, c, numba" in err
+    assert not out.exists() and {p: p.read_bytes() for p in before} == before
 
 
 @pytest.mark.parametrize("source, defines", [
