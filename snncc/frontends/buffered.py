@@ -46,10 +46,13 @@ def read_buffered(path: str | Path, options: LoadOptions | None = None) -> Buffe
     if p.suffix.lower() not in SUFFIXES or not p.is_file():
         return None
     from snncc.atomic import file_sha256
-    from snncc.frontends.checkpoint import is_checkpoint, model_metadata, module_from_checkpoint
-    from snncc.frontends.load_options import refuse_options
-    from snncc.frontends.torchfile import load_torch_file
-    from snncc.models.baselines import BASELINE_KINDS
+    from snncc.interrupts import sigint_deferred
+
+    with sigint_deferred():   # torch's C++ start-up aborts on a Ctrl-C inside it (as in frontends._resolve)
+        from snncc.frontends.checkpoint import is_checkpoint, model_metadata, module_from_checkpoint
+        from snncc.frontends.load_options import refuse_options
+        from snncc.frontends.torchfile import load_torch_file
+        from snncc.models.baselines import BASELINE_KINDS
 
     try:
         obj = load_torch_file(p)

@@ -24,8 +24,8 @@ from snncc_test_helpers import need_c_compiler
 from tests.loihi.helpers import random_network
 
 # the numba kernel (the fallback where no C compiler is found) is compared on three signatures that cover every
-# accumulator, both weight kinds and both state types, on every network below: a cold numba compile of one signature
-# takes 5-7 s, and CI starts with an empty numba cache
+# accumulator, both weight kinds and both state types, on every network below, and every other numba run of these
+# tests uses one of them: a cold numba compile of one signature takes 5-7 s, and CI starts with an empty numba cache
 NUMBA_CHECKED = {("int16", "int8", "int32"), ("int32", "int32", "int64"), ("int64", "int64", "int64")}
 NETWORKS = [(60, {}), (61, {"big": True}), (62, {"split_exponents": True, "per_synapse_delays": False}),
             (63, {"profiles": True, "recurrent": False}), (64, {"big": True, "per_synapse_delays": False})]
@@ -93,6 +93,8 @@ def test_wide_and_stream_runs_of_the_c_kernel_equal_the_numba_kernels(monkeypatc
     for how in ("c", "numba"):
         monkeypatch.setenv(ckernel.VARIABLE, how)
         prepared = PreparedNetwork(net)
+        # int32 accumulator and weights, int64 state (the same integers): a numba signature of NUMBA_CHECKED
+        prepared = _with_types(prepared, "int32", "int32", "int64")
         got[how] = (prepared.run(x, wide=True, threads=1), prepared.run(x, mode="stream", gap=7),
                     prepared.run(x, threads=3))
     for c_run, numba_run in zip(got["c"], got["numba"]):
@@ -145,7 +147,7 @@ def test_without_a_working_compiler_auto_runs_the_numba_kernel_and_c_is_refused(
     for broken in ("false", str(tmp_path / "no-such-compiler")):
         _forget_built(monkeypatch)
         monkeypatch.setattr(native, "compiler", lambda: native.shutil.which(broken))   # a failing build, or none
-        prepared = PreparedNetwork(net)
+        prepared = _with_types(PreparedNetwork(net), "int32", "int32", "int64")   # a NUMBA_CHECKED signature
         monkeypatch.setenv(ckernel.VARIABLE, "auto")
         assert kernel_name(prepared.flat) == ckernel.NUMBA_KERNEL
         _same(prepared.run(x), want, "outputs")
@@ -198,7 +200,7 @@ def test_a_cache_that_cannot_be_written_builds_nothing_and_the_numba_kernel_runs
         monkeypatch.setenv("SNNCC_CACHE_DIR", str(cache))      # under a file: not even a directory can be made
         monkeypatch.setattr(native.os, "access", lambda path, mode, ok=writable: ok)   # (root writes anywhere)
         _forget_built(monkeypatch)
-        prepared = PreparedNetwork(net)
+        prepared = _with_types(PreparedNetwork(net), "int32", "int32", "int64")   # a NUMBA_CHECKED signature
         assert ckernel.compiled(np.int16, np.int8, np.int32) is None
         assert kernel_name(prepared.flat) == ckernel.NUMBA_KERNEL
         _same(prepared.run(x), reference_run(net, x), "outputs")
