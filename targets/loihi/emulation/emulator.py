@@ -26,7 +26,8 @@ import numpy as np
 
 from snncc.targets.kit import SnnccError
 from snncc.targets.kit.compute import (FLOAT32_EXACT, MAX_STREAM_STEPS, MAX_TIME_STEPS,  # noqa: F401  (re-exported)
-                                      check_memory, integer_units, transposed, whole_number)
+                                      UnitsProduct, check_memory, integer_units, spike_products, transposed,
+                                      whole_number)
 from snncc.targets.loihi import chip
 from snncc.targets.loihi.emulation.result import EmulationResult, SparseBlock, _prediction  # noqa: F401  (re-exported)
 from snncc.targets.loihi.network import LoihiNetwork
@@ -103,11 +104,13 @@ class _Product:
     times a common power of two g whose every partial sum is an integer below 2**24 in units of g
     (max_j sum_i |w_ji| / g < 2**24: each sum, in any order, is exact -- the same bits as float64 -- and half the
     memory is read per step; chip weights, and the float twin of a graph quantized in chip units:
-    ``kit.compute.integer_units``), else float64."""
+    ``kit.compute.integer_units``; multiplied by ``kit.compute.UnitsProduct``, in C where the matrix is large), else
+    float64 (``kit.compute.spike_products.float_sums`` where the spikes are few enough: ascending-order sums, as
+    the sparse product below takes them)."""
 
     def __init__(self, w: np.ndarray, factor=1):
         self.scale = 1.0
-        self.w_t = None
+        self.w_t = self.units = None
         if w.size >= SPARSE_MIN_SIZE and np.count_nonzero(w) <= SPARSE_MAX_DENSITY * w.size:
             import scipy.sparse as sp
 
@@ -118,16 +121,25 @@ class _Product:
             found = integer_units(w)
             if found is not None:
                 self.w_t, self.scale = found[0], found[1] * float(factor)
+                self.units = UnitsProduct(found[0], found[2], SPARSE_MAX_DENSITY)
         if self.w_t is None:
             self.w_t = transposed(np.asarray(w, np.float64), float(factor))
 
     def of(self, spikes: np.ndarray) -> np.ndarray:
         """(B, n) float64: over the spikes only where they are few (the work follows them, not n_pre x n), else
         a dense product."""
+        if self.units is not None:       # exact integer sums (spikes are 0 or 1)
+            out = self.units.of(spikes)
+            return out * self.scale if self.scale != 1.0 else out
         w_t = self.w_t
         active = np.count_nonzero(spikes)
         if active == 0:
             return np.zeros((spikes.shape[0], w_t.shape[1]))
+        if isinstance(w_t, np.ndarray) and spike_products.worth_it(w_t.size, spikes.shape[0], active, w_t.shape[0],
+                                                                   spike_products.FLOAT_MAX_ACTIVE):
+            out = spike_products.float_sums(np.ascontiguousarray(spikes, np.uint8), w_t)   # 0/1 spikes
+            if out is not None:
+                return out
         if active > SPARSE_MAX_DENSITY * spikes.size:
             out = np.asarray(spikes.astype(w_t.dtype) @ w_t)
         else:
