@@ -104,15 +104,15 @@ class UnitsProduct:
     def narrow(self) -> np.ndarray | None:
         """units_t in int8 or int16 where its entries fit (made on first use), else None."""
         if self._narrow is _UNSET:
-            top = float(np.abs(self.units_t).max()) if self.units_t.size else 0.0
+            u = self.units_t         # max |u| from its extremes: no temporary as large as the matrix
+            top = max(abs(float(u.max())), abs(float(u.min()))) if u.size else 0.0
             kind = np.int8 if top <= 127 else np.int16 if top <= 32767 else None
             self._narrow = None if kind is None else self.units_t.astype(kind)
         return self._narrow
 
     def _by_kernel(self, x: np.ndarray, active: int) -> np.ndarray | None:
         n_in = self.units_t.shape[0]
-        if x.ndim != 2 or not spike_products.worth_it(self.units_t.size, x.shape[0], active, n_in,
-                                                       spike_products.INTEGER_MAX_ACTIVE):
+        if x.ndim != 2 or not spike_products.worth_it("integer", self.units_t.size, x.shape[0], active, n_in):
             return None
         c = spike_products.counts(x)
         narrow = None if c is None else self.narrow()

@@ -9,8 +9,9 @@ weights in 8 or 16 bits sum exactly in int32 (a quarter of float32's memory for 
 double in ascending input order, each term exact: the order of a sequential sum, the order this machine's OpenBLAS
 takes too (the same bits, measured), and a BLAS that blocks its sums differently may differ in the last bit.
 
+    available()                   whether the kernels are built here (else BLAS runs every product)
     counts(x)                     x as uint8 where it holds integers 0..255, else None
-    worth_it(size, batch, active, n_in, per_row)   whether the kernel beats BLAS for this product
+    worth_it(kind, size, batch, active, n_in)      whether the kernel beats BLAS for this product
     integer_sums(c, m_t)          (batch, n_out) int32 for int8 / int16 m_t, or None without a compiler
     float_sums(c, m_t)            (batch, n_out) float64 for float32 / float64 m_t, or None without a compiler
     FloatProduct(w)               x @ w.T by the kernel where it is faster, else BLAS (the IR reference's products)
@@ -24,12 +25,16 @@ from pathlib import Path
 import numpy as np
 
 SOURCE = Path(__file__).with_name("spike_products.c")
-MIN_SIZE = 1 << 16     # matrices this large (smaller: BLAS, nothing to build or load)
-MAX_BATCH = 256        # spike_products.c's MAX_BATCH
-INTEGER_MAX_ACTIVE = 8  # nonzero inputs per matrix row, averaged over the batch, above which float32 BLAS wins
-FLOAT_MAX_ACTIVE = 4    # the same against float64 BLAS (measured at 3,600 x 3,600, one thread: integer batch 4 at
-                        # 40 % density 0.23x BLAS's time, batch 16 at 40 % 0.8x, batch 64 at 40 % 1.5x; float
-                        # batch 4 at 40 % 0.56x, batch 8 at 40 % 0.72x, batch 16 at 40 % 1.2x)
+# When the kernel beats BLAS (bench/speed/bench_spike_products.py, one thread): on matrices from about 600 x 600
+# (integer units; float32 BLAS reads smaller ones from cache faster) or 450 x 450 (float weights), and while the
+# batch's nonzero inputs per matrix row stay few (at 3,600 x 3,600: integer batch 4 at 40 % density in 0.23x BLAS's
+# time, batch 16 at 40 % 0.8x, batch 64 at 40 % 1.5x; float batch 4 at 40 % 0.56x, batch 16 at 40 % 1.2x;
+# at 900 x 900 batch 12 at 40 % both about 1.0x).
+INTEGER_MIN_SIZE = 1 << 19   # entries (smaller: BLAS, nothing to build or load)
+FLOAT_MIN_SIZE = 1 << 18
+INTEGER_MAX_ACTIVE = 6       # nonzero inputs per matrix row, averaged over the batch, above which BLAS is faster
+FLOAT_MAX_ACTIVE = 4
+MAX_BATCH = 256              # spike_products.c's MAX_BATCH
 _FUNCTIONS = {np.dtype(np.int8): "snncc_spike_product_i8", np.dtype(np.int16): "snncc_spike_product_i16",
               np.dtype(np.float32): "snncc_spike_product_f32", np.dtype(np.float64): "snncc_spike_product_f64"}
 
@@ -49,16 +54,23 @@ def _library():
     return lib
 
 
+def available() -> bool:
+    """Whether the kernels are built here (a C compiler found, the cache writable); else every product uses BLAS."""
+    return _library() is not None
+
+
 def counts(x: np.ndarray) -> np.ndarray | None:
     """x as C-contiguous uint8 where every entry is an integer 0..255, else None."""
     c = x.astype(np.uint8)
     return np.ascontiguousarray(c) if np.array_equal(c, x) else None
 
 
-def worth_it(size: int, batch: int, active: int, n_in: int, per_row: int) -> bool:
-    """Whether the kernel is taken for a ``size``-entry matrix and ``batch`` rows of x with ``active`` nonzero
-    entries: large matrices, batches the kernel takes, at most ``per_row`` active entries per matrix row."""
-    return size >= MIN_SIZE and 0 < batch <= MAX_BATCH and active <= per_row * n_in
+def worth_it(kind: str, size: int, batch: int, active: int, n_in: int) -> bool:
+    """Whether the ``kind`` ("integer" or "float") kernel is taken for a ``size``-entry matrix with ``n_in`` rows
+    and ``batch`` rows of x holding ``active`` nonzero entries (the thresholds above)."""
+    min_size, per_row = ((INTEGER_MIN_SIZE, INTEGER_MAX_ACTIVE) if kind == "integer"
+                         else (FLOAT_MIN_SIZE, FLOAT_MAX_ACTIVE))
+    return size >= min_size and 0 < batch <= MAX_BATCH and active <= per_row * n_in
 
 
 def _run(c: np.ndarray, m_t: np.ndarray, out_type) -> np.ndarray | None:
@@ -115,7 +127,7 @@ class FloatProduct:
     def of(self, x: np.ndarray) -> np.ndarray:
         """(..., n_out) float64."""
         flat = x.reshape(-1, x.shape[-1])
-        if worth_it(self.w.size, flat.shape[0], int(np.count_nonzero(flat)), self.w.shape[1], FLOAT_MAX_ACTIVE):
+        if worth_it("float", self.w.size, flat.shape[0], int(np.count_nonzero(flat)), self.w.shape[1]):
             c = counts(flat)
             w_t = None if c is None else self.transposed()
             if w_t is not None and (w_t.dtype == np.float32 or c.max(initial=0) <= 1):

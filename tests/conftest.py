@@ -37,14 +37,24 @@ def shared_nir():
     return Path(__file__).resolve().parent / "data" / "nir"
 
 
-@pytest.fixture
-def small_rsnn_checkpoint(tmp_path):
+def _rsnn_checkpoint(path, **meta):
     torch.manual_seed(0)
     model = SpikingClassifier(SNNConfig(n_hidden=32, n_outputs=28))
     model.reset_parameters(fwd_weight_scale=3.0, weight_scale_factor=0.2)
-    path = tmp_path / "rsnn.pt"
-    save_checkpoint(model, path, {"dt": 0.005, "note": "test model"})
+    save_checkpoint(model, path, {"dt": 0.005, "note": "test model", **meta})
     return path
+
+
+@pytest.fixture
+def small_rsnn_checkpoint(tmp_path):
+    return _rsnn_checkpoint(tmp_path / "rsnn.pt")
+
+
+@pytest.fixture
+def short_rsnn_checkpoint(tmp_path):
+    """small_rsnn_checkpoint's model (the same seeded weights) stating a 0.1 s recording: 20 steps of 5 ms,
+    so a Jetson artefact unrolls 20 steps instead of the model's default 270 (an export ~10x cheaper)."""
+    return _rsnn_checkpoint(tmp_path / "rsnn.pt", recording_length_s=0.1)
 
 
 @pytest.fixture

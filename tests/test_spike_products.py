@@ -15,6 +15,14 @@ from snncc.spike_products import FloatProduct, counts, float_sums, integer_sums
 from snncc_test_helpers import need_c_compiler
 
 
+@pytest.fixture(autouse=True)
+def _kernel_from_small_sizes(monkeypatch):
+    """The kernels take matrices from 64 K entries in these tests (their own thresholds are larger: kept small
+    here so that every test runs in milliseconds)."""
+    monkeypatch.setattr(spike_products, "INTEGER_MIN_SIZE", 1 << 16)
+    monkeypatch.setattr(spike_products, "FLOAT_MIN_SIZE", 1 << 16)
+
+
 def _ascending(c: np.ndarray, m_t: np.ndarray) -> np.ndarray:
     """The float kernel's rule written out: for each sample, the rows of its nonzero inputs added one after another
     in ascending input order, in float64."""
@@ -74,7 +82,7 @@ def test_units_products_equal_the_float64_product_with_and_without_the_kernel(ba
     compiler at all; the same bits as float64 BLAS every time."""
     need_c_compiler()
     rng = np.random.default_rng(batch)
-    w = _chip_like(rng, 300, 260)                                   # 78,000 entries: above MIN_SIZE
+    w = _chip_like(rng, 300, 260)                                   # 78,000 entries: above 64 K
     x = (rng.random((batch, 260)) < density).astype(np.float64)
     product = ExactProduct(w)
     with_kernel = product.of(x)
@@ -93,6 +101,7 @@ def test_the_kernel_is_taken_where_it_is_worth_it(monkeypatch):
     product = UnitsProduct(units_t, bound)
     product.of((rng.random((4, 260)) < 0.3).astype(np.float64))          # 4 samples, 30 %: the kernel
     product.of(np.ones((64, 260)))                                        # every input of 64 samples: BLAS
+    product.of((rng.random((12, 260)) < 0.6).astype(np.float64))         # 7.2 active per row: BLAS
     product.of(np.full((2, 260), 0.5) * 2)                                # 1.0 everywhere, 2 samples: the kernel
     UnitsProduct(units_t[:10, :10].copy(), bound).of(np.ones((1, 10)))    # a small matrix: BLAS, nothing built
     assert calls == [(4, 260), (2, 260)]

@@ -71,7 +71,7 @@ def graph_fingerprint(g: Graph) -> str:
     for key in sorted(arrays):
         a = np.ascontiguousarray(arrays[key])
         h.update(f"\n{key} {a.dtype.str} {a.shape}\n".encode("utf-8"))
-        h.update(a.tobytes())
+        h.update(a.tobytes() if a.dtype.hasobject else a.reshape(-1).view(np.uint8))   # tobytes()'s bytes, uncopied
     return h.hexdigest()
 
 

@@ -72,12 +72,14 @@ def test_jetson_output_into_a_user_directory_deletes_nothing(tmp_path, small_rsn
     user_dir.mkdir()
     (user_dir / "thesis.tex").write_text("years of work")
     before = snapshot(tmp_path)
-    code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "jetson", "-o", user_dir], capsys)
+    code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "jetson", "-o", user_dir, "--time-steps", "20"],
+                           capsys)
     assert "not replaceable" in one_error_line(code, err)
     assert snapshot(tmp_path) == before
     monkeypatch.chdir(user_dir)
     for name in (".", ".."):
-        code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "jetson", "-o", name], capsys)
+        code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", "jetson", "-o", name, "--time-steps", "20"],
+                               capsys)
         one_error_line(code, err)
     assert snapshot(tmp_path) == before
 

@@ -217,7 +217,7 @@ def test_check_through_the_cli(compiled, capsys, tmp_path):
     x = seeded_events(6, STEPS, 6, seed=12).astype(np.uint8)
     np.savez(tmp_path / "d.npz", inputs=x, labels=np.array([0, 1, 2, 3, 4, 0], np.int64))
     code, stdout, err = run_cli(["check", compiled / "model.pt", "--target", "jetson", "--data", tmp_path / "d.npz",
-                                 "--json"], capsys)
+                                 "--time-steps", 20, "--json"], capsys)   # a 20-step export, not 270; data: 30 steps
     assert code == 0, err
     rec = json.loads(stdout)
     assert rec["target"] == "jetson" and rec["samples"] == 6 and rec["steps"] == STEPS

@@ -68,7 +68,8 @@ def test_lstm_score_mismatch_is_caught(graphs):
 
 
 def test_check_reports_accuracy_agreement_and_fp16(graphs):
-    g = graphs["rsnn"]
+    g = graphs["rsnn"].copy()
+    g.metadata["recording_length_s"] = STEPS * g.dt   # check compiles model.onnx for 30 steps, not 270: cheaper
     x = seeded_inputs(g, 10, 12, seed=31)
     labels = np.arange(10) % 5
     rec = target.check(g, x, labels, {})
@@ -85,13 +86,11 @@ def test_check_reports_accuracy_agreement_and_fp16(graphs):
     assert "output spike agreement" in console.export_text()
 
 
-def test_check_names_its_data_and_says_when_it_is_synthetic(graphs, tmp_path):
+def test_check_names_its_data_and_says_when_it_is_synthetic(artefacts):
     """``check(data=, synthetic=)`` are honoured: a data error names the file, synthetic data is said so (one
-    artefact compiled for the three checks)."""
-    g = graphs["rsnn"]
+    artefact for the three checks: the session's, lowered once from the same graph)."""
+    g, _, written = artefacts["rsnn"]
     x = seeded_inputs(g, 4, 12, seed=5)
-    written = tmp_path / "rsnn_j"
-    target.lower(g, {}).write(written)
     rec = target.check(g, x, np.arange(4) % 5, {}, artefact=written, data="d.npz", synthetic=True)
     assert "the data set is synthetic: these accuracies are not the paper's" in rec.notes
     assert not any("synthetic" in n for n in

@@ -139,14 +139,12 @@ def test_small_cnn_loihi_bundle_emulates_the_quantized_ir_exactly(small_cnn, tmp
     assert emu[lowered.layers[-1].lif].sum() > 0
 
 
-def test_cnn_sinabs_compiles_for_both_targets(tmp_path, capsys):
+def test_cnn_sinabs_compiles_for_both_targets(tmp_path, capsys, cnn_loihi_bundle):
     code, _, err = run_cli(["compile", CNN, "--target", "jetson", "-o", tmp_path / "jet", "--time-steps", 4], capsys)
     assert code == 0, err
     assert (tmp_path / "jet" / "model.onnx").exists()
-    code, stdout, err = run_cli(["compile", CNN, "--target", "loihi", "-o", tmp_path / "cnn.net", "--time-steps", 12],
-                                capsys)
-    assert code == 0, err
-    net = read_bundle(tmp_path / "cnn.net")
+    bundle, _ = cnn_loihi_bundle(capsys)   # snncc compile CNN --target loihi --time-steps 12 (exit 0), once a session
+    net = read_bundle(bundle)
     assert [lay.n for lay in net.layers] == [2312, 4096, 4096, 512, 256, 10]
     assert int(np.count_nonzero(net.layers[2].weight)) < 0.05 * net.layers[2].weight.size   # conv: sparse synapses
     # the bundle emulated on a reduced N-MNIST-shaped input, against the float graph (bounds below the

@@ -30,10 +30,15 @@ def _run(capsys, args):
     return json.loads(out)
 
 
-def _same_as_compile(capsys, name, target, out, compile_flags):
-    """compile, check the model, check the written artefact: one hash, one set of figures."""
+def _same_as_compile(capsys, name, target, out, compile_flags, compiled=None):
+    """compile, check the model, check the written artefact: one hash, one set of figures. ``compiled``: the
+    (artefact, JSON report) of that compile where a session fixture already ran it."""
     src = DATA / name
-    report = _run(capsys, ["compile", src, "--target", target, "-o", out, "--json", *_load_flags(name), *compile_flags])
+    if compiled is None:
+        report = _run(capsys, ["compile", src, "--target", target, "-o", out, "--json", *_load_flags(name),
+                               *compile_flags])
+    else:
+        out, report = compiled
     here = _run(capsys, ["check", src, "--target", target, "--json", *LIMIT, *_load_flags(name), *compile_flags])
     written = _run(capsys, ["check", src, "--artefact", out, "--json", *LIMIT, *_load_flags(name)])
     a, b = here.pop("artefact"), written.pop("artefact")
@@ -76,9 +81,11 @@ def test_a_jetson_artefact_of_a_trained_graph_checks_like_compile(tmp_path, caps
 
 
 @pytest.mark.parametrize("target, flags", [("loihi", ["--time-steps", "12"]), ("jetson", ["--time-steps", "12"])])
-def test_cnn_sinabs_checks_on_both_targets(target, flags, tmp_path, capsys):
-    out = tmp_path / ("cnn.net" if target == "loihi" else "cnn_jetson")
-    report, rec = _same_as_compile(capsys, "cnn_sinabs.nir", target, out, flags)
+def test_cnn_sinabs_checks_on_both_targets(target, flags, tmp_path, capsys, cnn_loihi_bundle):
+    # Loihi: the session's bundle (compile --target loihi --time-steps 12 --json, as compiled here before)
+    compiled = cnn_loihi_bundle(capsys) if target == "loihi" else None
+    out = compiled[0] if compiled else tmp_path / "cnn_jetson"
+    report, rec = _same_as_compile(capsys, "cnn_sinabs.nir", target, out, flags, compiled)
     assert rec["samples"] == 4
     _never_over_silence(rec, False)
     assert set(rec["liveness"]["float"]) == {"1", "3", "6", "10", "12"}

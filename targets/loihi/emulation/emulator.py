@@ -135,8 +135,8 @@ class _Product:
         active = np.count_nonzero(spikes)
         if active == 0:
             return np.zeros((spikes.shape[0], w_t.shape[1]))
-        if isinstance(w_t, np.ndarray) and spike_products.worth_it(w_t.size, spikes.shape[0], active, w_t.shape[0],
-                                                                   spike_products.FLOAT_MAX_ACTIVE):
+        if isinstance(w_t, np.ndarray) and spike_products.worth_it("float", w_t.size, spikes.shape[0], active,
+                                                                   w_t.shape[0]):
             out = spike_products.float_sums(np.ascontiguousarray(spikes, np.uint8), w_t)   # 0/1 spikes
             if out is not None:
                 return out

@@ -261,8 +261,10 @@ def bias_carrier(graph: Graph, lif: str) -> str | None:
 
 
 def projection_max(graph: Graph, dense: str, lif: str) -> float:
-    """max |W| of the projection, including the current-bias columns it carries."""
-    m = float(np.max(np.abs(graph.node(dense).weight))) if graph.node(dense).weight.size else 0.0
+    """max |W| of the projection, including the current-bias columns it carries (max |W| = the larger of |max W|
+    and |min W|: no temporary as large as W)."""
+    w = graph.node(dense).weight
+    m = max(abs(float(np.max(w))), abs(float(np.min(w)))) if w.size else 0.0
     if bias_carrier(graph, lif) == dense:
         m = max(m, max_abs_bias(graph, lif))
     return m

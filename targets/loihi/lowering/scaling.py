@@ -85,8 +85,8 @@ def screen(graph: Graph) -> Screen:
     possible = 0 < top <= span
     for dense, m in maxima.items():
         w = graph.node(dense).weight
-        nz = np.abs(w[w != 0])
-        med = float(np.median(nz, overwrite_input=True)) if nz.size else 0.0   # nz is this line's own copy
+        nz = w[w != 0]                                   # this line's own copy: made absolute and sorted in place
+        med = float(np.median(np.abs(nz, out=nz), overwrite_input=True)) if nz.size else 0.0
         if med > 0 and m / med > OUTLIER_RATIO:
             flagged[dense] = Flag(FlagKind.OUTLIERS, f"max|W| is {m / med:.0f}x the median |W|")
         elif possible and m * np.floor(span / top) / span < MIN_RANGE:
