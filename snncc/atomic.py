@@ -180,9 +180,19 @@ def _prepare(dest: Path, directory: bool) -> None:
     clean_leftovers(dest)
 
 
-def preflight(dest: str | os.PathLike, *, directory: bool = False) -> None:
+def _refuse_unreplaceable(dest: Path, replaceable: Callable[[Path], str | None] | None) -> None:
+    """The one-line refusal of an existing directory ``dest`` unless ``replaceable(dest)`` returns None."""
+    why = "snncc replaces only a directory it wrote itself" if replaceable is None else replaceable(dest)
+    if why is not None:
+        raise SnnccError(f"exists and is not replaceable: {why}; choose a new name or remove it yourself",
+                         file=str(dest), field="output")
+
+
+def preflight(dest: str | os.PathLike, *, directory: bool = False,
+              replaceable: Callable[[Path], str | None] | None = None) -> None:
     """Before long work, the refusals an atomic write to ``dest`` would meet at its end: an input of
-    the command, ``.``/``..``, the wrong kind (a directory for a file), and a directory where
+    the command, ``.``/``..``, the wrong kind (a directory for a file), an existing directory that
+    ``replaceable`` refuses (``atomic_dir``'s rule; not asked without it), and a directory where
     nothing can be written (read-only, no permission: probed by creating and removing a hidden
     ``.part`` file in the nearest existing directory). A full disk shows only when writing, where
     the atomic write keeps the old file."""
@@ -191,6 +201,8 @@ def preflight(dest: str | os.PathLike, *, directory: bool = False) -> None:
         check_destination(dest)
         return
     _refuse_kind(dest, directory)
+    if directory and replaceable is not None and dest.is_dir():
+        _refuse_unreplaceable(dest, replaceable)
     parent = dest.parent
     while not parent.exists() and parent != parent.parent:
         parent = parent.parent
@@ -290,10 +302,7 @@ def atomic_dir(dest: str | os.PathLike, replaceable: Callable[[Path], str | None
     dest = Path(dest)
     _prepare(dest, directory=True)
     if dest.exists():
-        why = "snncc replaces only a directory it wrote itself" if replaceable is None else replaceable(dest)
-        if why is not None:
-            raise SnnccError(f"exists and is not replaceable: {why}; choose a new name or remove it yourself",
-                             file=str(dest), field="output")
+        _refuse_unreplaceable(dest, replaceable)
     tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.{os.getpid()}.", suffix=".part", dir=dest.parent))
     try:
         yield tmp

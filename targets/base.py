@@ -659,7 +659,9 @@ CAPABILITIES: dict[str, type] = {
 class Target(Protocol):
     """What every target states (class attributes will do): ``output_kind`` is "file" or "directory".
     Optional: ``output_suffix``, the file suffix that names its artefact (".net"), so that ``compile -o
-    x.net`` needs no --target (a target without one, e.g. a directory, is always named); ``model_kinds``."""
+    x.net`` needs no --target (a target without one, e.g. a directory, is always named); ``model_kinds``;
+    ``replace_refusal(path)`` (a directory target: why an existing directory may not be replaced, None where it
+    may, as its writer decides: ``compile`` refuses before lowering instead of after)."""
 
     @property
     def name(self) -> str: ...

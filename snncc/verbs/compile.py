@@ -105,8 +105,10 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
         takers_ = " or ".join(f"--target {t}" for t in offering("finetune")) or "no installed target"
         raise SnnccError(f"target '{name}' has no fine-tuning in this snncc (it is offered by {takers_})",
                          field="--finetune")
-    # an output that cannot be written is refused now, not after the compilation and its checks
-    preflight(output, directory=getattr(get_target(name), "output_kind", "file") == "directory")
+    # an output that cannot be written (or an existing directory the target would not replace) is refused now, not
+    # after the compilation and its checks
+    preflight(output, directory=getattr(get_target(name), "output_kind", "file") == "directory",
+              replaceable=getattr(get_target(name), "replace_refusal", None))
     model = Path(model)
     tuned_out = options.get("finetune_out")
     if tuning and tuned_out is not None:

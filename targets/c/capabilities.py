@@ -47,6 +47,12 @@ class CTarget:
     output_kind = "directory"
     options_type = COptions
 
+    def replace_refusal(self, path) -> str | None:
+        """Why an existing directory ``path`` may not be replaced by this target's artefact (None: it may)."""
+        from snncc.targets.c.artefact.package import ARTEFACT
+
+        return ARTEFACT.replace_refusal(path)
+
     def _options(self, options: Given, capability: str) -> COptions:
         opts = target_options(self, options, capability)
         assert isinstance(opts, COptions)

@@ -41,6 +41,12 @@ class JetsonTarget:
     options_type = JetsonOptions
     model_kinds = ("graph", "buffered")
 
+    def replace_refusal(self, path) -> str | None:
+        """Why an existing directory ``path`` may not be replaced by this target's artefact (None: it may)."""
+        from snncc.targets.jetson.artefact_format import JETSON_FORMAT
+
+        return JETSON_FORMAT.replace_refusal(path)
+
     def _options(self, options: Given, capability: str) -> JetsonOptions:
         opts = target_options(self, options, capability)
         assert isinstance(opts, JetsonOptions)

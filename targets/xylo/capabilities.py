@@ -47,6 +47,12 @@ class XyloTarget:
     output_suffix = ".xylo"
     options_type = XyloOptions
 
+    def replace_refusal(self, path) -> str | None:
+        """Why an existing directory ``path`` may not be replaced by this target's artefact (None: it may)."""
+        from snncc.targets.xylo.artefact.format import MANIFEST_FORMAT
+
+        return MANIFEST_FORMAT.replace_refusal(path)
+
     def _options(self, options: Given, capability: str) -> XyloOptions:
         opts = target_options(self, options, capability)
         assert isinstance(opts, XyloOptions)

@@ -263,3 +263,21 @@ def test_compile_checks_its_output_before_compiling(tmp_path, small_rsnn_checkpo
         code, _, err = run_cli(["compile", small_rsnn_checkpoint, "-t", target, "-o", out], capsys)
         assert says in one_error_line(code, err)
     assert snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize("target", ["jetson", "xylo", "c"])
+def test_a_user_directory_is_refused_before_anything_is_lowered(target, tmp_path, shared_nir, capsys, monkeypatch):
+    """A directory target refuses an existing directory it did not write at once (the writer's own rule, asked
+    before the compilation and its checks), not after minutes of lowering: the lowering is never reached."""
+    def lowering(*args, **kwargs):
+        raise AssertionError("the model was lowered before the output was refused")
+
+    monkeypatch.setattr("snncc.targets.capability", lowering)
+    user_dir = tmp_path / "mine"
+    user_dir.mkdir()
+    (user_dir / "notes.txt").write_text("mine")
+    before = snapshot(tmp_path)
+    code, _, err = run_cli(["compile", shared_nir / "braille_noDelay_noBias_subtract.nir", "--dt", "1e-4", "--reset",
+                            "subtract", "-t", target, "-o", user_dir], capsys)
+    assert "not replaceable" in one_error_line(code, err)
+    assert snapshot(tmp_path) == before
