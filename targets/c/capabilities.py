@@ -47,7 +47,7 @@ class CTarget:
     output_kind = "directory"
     options_type = COptions
 
-    def replace_refusal(self, path) -> str | None:
+    def replace_refusal(self, path: str | Path) -> str | None:
         """Why an existing directory ``path`` may not be replaced by this target's artefact (None: it may)."""
         from snncc.targets.c.artefact.package import ARTEFACT
 

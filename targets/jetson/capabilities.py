@@ -41,7 +41,7 @@ class JetsonTarget:
     options_type = JetsonOptions
     model_kinds = ("graph", "buffered")
 
-    def replace_refusal(self, path) -> str | None:
+    def replace_refusal(self, path: str | Path) -> str | None:
         """Why an existing directory ``path`` may not be replaced by this target's artefact (None: it may)."""
         from snncc.targets.jetson.artefact_format import JETSON_FORMAT
 

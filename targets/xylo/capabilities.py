@@ -47,7 +47,7 @@ class XyloTarget:
     output_suffix = ".xylo"
     options_type = XyloOptions
 
-    def replace_refusal(self, path) -> str | None:
+    def replace_refusal(self, path: str | Path) -> str | None:
         """Why an existing directory ``path`` may not be replaced by this target's artefact (None: it may)."""
         from snncc.targets.xylo.artefact.format import MANIFEST_FORMAT
 
