@@ -67,10 +67,11 @@ def counts(x: np.ndarray) -> np.ndarray | None:
 
 def worth_it(kind: str, size: int, batch: int, active: int, n_in: int) -> bool:
     """Whether the ``kind`` ("integer" or "float") kernel is taken for a ``size``-entry matrix with ``n_in`` rows
-    and ``batch`` rows of x holding ``active`` nonzero entries (the thresholds above)."""
+    and ``batch`` rows of x holding ``active`` nonzero entries (the thresholds above), and is built here (asked
+    last: a product that would not take it builds nothing, and without a compiler no copy is made for it)."""
     min_size, per_row = ((INTEGER_MIN_SIZE, INTEGER_MAX_ACTIVE) if kind == "integer"
                          else (FLOAT_MIN_SIZE, FLOAT_MAX_ACTIVE))
-    return size >= min_size and 0 < batch <= MAX_BATCH and active <= per_row * n_in
+    return size >= min_size and 0 < batch <= MAX_BATCH and active <= per_row * n_in and available()
 
 
 def _run(c: np.ndarray, m_t: np.ndarray, out_type) -> np.ndarray | None:

@@ -140,6 +140,20 @@ def test_float_product_takes_the_kernel_for_spikes_and_blas_otherwise(monkeypatc
     assert FloatProduct(w64).of(2 * spikes).tobytes() == ((2 * spikes) @ w64.T).tobytes()   # counts: BLAS
 
 
+def test_without_a_compiler_no_copy_is_made_for_the_kernel(monkeypatch):
+    """Where the kernels do not build, products go straight to BLAS: no int8 or transposed copy of the matrix."""
+    monkeypatch.setattr(spike_products, "_library", lambda: None)
+    rng = np.random.default_rng(8)
+    x = (rng.random((4, 260)) < 0.3).astype(np.float64)
+    exact = ExactProduct(_chip_like(rng, 300, 260))
+    floats = FloatProduct(rng.normal(size=(300, 260)))
+    assert exact.of(x).tobytes() == (x @ exact.w.T).tobytes()
+    assert floats.of(x).tobytes() == (x @ floats.w.T).tobytes()
+    from snncc import exact_products
+
+    assert floats._w_t is FloatProduct._UNMADE and exact.units._narrow is exact_products._UNSET
+
+
 def test_a_non_finite_weight_leaves_the_product_to_blas():
     w = np.ones((300, 260))
     w[5, 7] = np.inf
