@@ -107,8 +107,9 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
                          field="--finetune")
     # an output that cannot be written (or an existing directory the target would not replace) is refused now, not
     # after the compilation and its checks
-    preflight(output, directory=getattr(get_target(name), "output_kind", "file") == "directory",
-              replaceable=getattr(get_target(name), "replace_refusal", None))
+    tgt = get_target(name)
+    preflight(output, directory=getattr(tgt, "output_kind", "file") == "directory",
+              replaceable=getattr(tgt, "replace_refusal", None))
     model = Path(model)
     tuned_out = options.get("finetune_out")
     if tuning and tuned_out is not None:
@@ -116,7 +117,6 @@ def compile_model(model: str | Path, *, output: str | Path, target: str | None =
         _check_finetune_out(Path(str(tuned_out)), [model] + ([Path(str(data))] if data is not None else []),
                             Path(output))
     loaded = load_compilable(model, LoadOptions(params=None if params is None else Path(params), dt=dt, reset=reset))
-    tgt = get_target(name)
     kind = getattr(loaded, "model_kind", "graph")
     if kind not in getattr(tgt, "model_kinds", ("graph",)):
         assert isinstance(loaded, BufferedModel)
