@@ -74,6 +74,7 @@ def load_array(path, field: str = "--input") -> np.ndarray:
     """A .npy array (no pickles), or a .npz data set's ``inputs`` array (what ``snncc data`` writes and
     ``check --data`` reads: every verb takes the same files)."""
     import zipfile
+    import zlib
     from pathlib import Path
 
     path = Path(path)
@@ -81,15 +82,15 @@ def load_array(path, field: str = "--input") -> np.ndarray:
         raise SnnccError("file does not exist", file=str(path), field=field)
     try:
         obj = np.load(path, allow_pickle=False)
-    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as ex:   # not .npy / a broken .npz
-        raise SnnccError(f"not a readable .npy/.npz array ({type(ex).__name__})", file=str(path), field=field) from None
-    if isinstance(obj, np.lib.npyio.NpzFile):
+        if not isinstance(obj, np.lib.npyio.NpzFile):
+            return obj
         with obj:
             if "inputs" not in obj.files:
                 raise SnnccError(f"a .npz input needs an 'inputs' array (has {sorted(obj.files)})", file=str(path),
                                  field="inputs")
             return obj["inputs"]
-    return obj
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile, zlib.error) as ex:   # not .npy / a broken .npz
+        raise SnnccError(f"not a readable .npy/.npz array ({type(ex).__name__})", file=str(path), field=field) from None
 
 
 class RandomSpikes:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -110,7 +111,7 @@ def load_dataset(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, dict[
             inputs, labels, meta_arr = z["inputs"], z["labels"], z["meta"]
     except SnnccError:
         raise
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as ex:
+    except (zipfile.BadZipFile, zlib.error, ValueError, OSError, EOFError, KeyError) as ex:
         raise SnnccError(f"not a readable .npz data set ({type(ex).__name__})", file=f, field="format") from None
     if meta_arr.ndim != 0 or meta_arr.dtype.kind != "U":
         raise SnnccError("meta must be a JSON string", file=f, field="meta")

@@ -47,7 +47,7 @@ def _classify(path: Path) -> str:
         try:
             with zipfile.ZipFile(path) as zf:
                 names = zf.namelist()
-        except zipfile.BadZipFile:
+        except (zipfile.BadZipFile, ValueError, OSError, EOFError):   # ValueError: a member name flagged UTF-8 but not
             return "a truncated or damaged zip archive, not a readable torch file"
         if not any(n.endswith("data.pkl") for n in names):
             return "a zip archive that is not a torch file (no data.pkl inside)"

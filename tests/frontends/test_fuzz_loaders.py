@@ -61,3 +61,69 @@ def test_params_parser(text):
         parse_params(text)
     except SnnccError:
         pass
+
+
+def _zip_with_a_bad_utf8_name(path, member_bytes: bytes) -> None:
+    """A zip whose member name is flagged UTF-8 (bit 11) but holds bytes that are not UTF-8 (what a fuzzed byte
+    in a torch archive's central directory once made: zipfile raises UnicodeDecodeError, not BadZipFile)."""
+    import zipfile
+
+    with zipfile.ZipFile(path, "w") as zf:
+        zf.writestr("archive/\u00e9data.pkl", member_bytes)
+    raw = path.read_bytes()
+    assert raw.count("\u00e9".encode()) == 2        # the local header and the central directory
+    path.write_bytes(raw.replace("\u00e9".encode(), b"\xa5\xa5"))
+
+
+def test_a_torch_archive_with_a_name_that_is_not_utf8_is_one_line(tmp_path):
+    import pytest
+
+    p = tmp_path / "m.pt"
+    _zip_with_a_bad_utf8_name(p, b"\x80\x02}q\x00.")
+    with pytest.raises(SnnccError, match="damaged zip archive"):
+        load_model(p, LoadOptions())
+
+
+def test_an_input_npz_with_a_damaged_member_is_one_line(tmp_path):
+    import io
+    import zipfile
+
+    import pytest
+
+    from snncc.inputs import load_array
+
+    bad_name = tmp_path / "names.npz"
+    buf = io.BytesIO()
+    np.save(buf, np.zeros((2, 3, 4), np.uint8))
+    _zip_with_a_bad_utf8_name(bad_name, buf.getvalue())
+    crc = tmp_path / "crc.npz"
+    np.savez_compressed(crc, inputs=np.arange(4096, dtype=np.int64).reshape(8, 16, 32) % 7)
+    raw = bytearray(crc.read_bytes())
+    with zipfile.ZipFile(crc) as zf:
+        start = zf.getinfo("inputs.npy").header_offset + 30 + len("inputs.npy")   # the compressed bytes
+    for at in range(start + 40, start + 60):
+        raw[at] ^= 0x5A
+    crc.write_bytes(bytes(raw))
+    for path in (bad_name, crc):
+        with pytest.raises(SnnccError, match="not a readable .npy/.npz array"):
+            load_array(path)
+
+
+def test_a_data_set_with_a_damaged_member_is_one_line(tmp_path):
+    import zipfile
+
+    import pytest
+
+    from snncc.data.dataset_file import load_dataset
+
+    p = tmp_path / "d.npz"
+    np.savez_compressed(p, inputs=np.arange(4096, dtype=np.int64).reshape(8, 16, 32) % 7, labels=np.zeros(8, np.int64),
+                        meta=np.array("{}"))
+    raw = bytearray(p.read_bytes())
+    with zipfile.ZipFile(p) as zf:
+        start = zf.getinfo("inputs.npy").header_offset + 30 + len("inputs.npy")
+    for at in range(start + 40, start + 60):
+        raw[at] ^= 0x5A
+    p.write_bytes(bytes(raw))
+    with pytest.raises(SnnccError, match="not a readable .npz data set"):
+        load_dataset(p)
