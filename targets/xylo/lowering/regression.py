@@ -130,24 +130,41 @@ def accumulate(blocks: Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]], neur
                ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Per neuron j of ``neurons``: (H, b) = (A^T A, A^T y) of its weighted rows, A = w_j * features on the rows
     with w_j >= ROW_FLOOR, summed over the (features, targets, weights) ``blocks`` in order, each block used by
-    every neuron while it is in cache."""
+    every neuron while it is in cache.
+
+    A feature that is zero on every row of a block (a source silent in the block's samples: a third of the
+    columns of the relayed Braille RSNN's blocks) adds exactly nothing to H or b there, so each block's products
+    run over its other columns only (``a_block^T a_block`` added into those rows and columns of H): the same
+    sums without the zero terms, which BLAS may group differently in the last bit."""
     from snncc.targets.xylo.lowering.compiled import gather_scaled
 
     neurons = [int(j) for j in neurons]
     h = np.zeros((len(neurons), f_count, f_count))
     b = np.zeros((len(neurons), f_count))
-    buffer = np.empty((ROW_BLOCK, f_count))
+    buffer = np.empty(ROW_BLOCK * f_count)
     for block, target, weight in blocks:
         block = np.ascontiguousarray(block, np.float64)
+        cols = np.flatnonzero(block.any(axis=0))
+        if not cols.size:
+            continue
+        whole = cols.size == f_count
+        if not whole:
+            block = np.ascontiguousarray(block[:, cols])
+            square = (cols[:, None] * f_count + cols[None, :]).ravel()     # those rows and columns of H, flat
+        rows_out = buffer[:block.shape[0] * cols.size].reshape(block.shape[0], cols.size)
         for at, j in enumerate(neurons):
             w = weight[:, j]
             keep = np.flatnonzero(w >= ROW_FLOOR)
             if not keep.size:
                 continue
             wk = w[keep]
-            a = gather_scaled(block, keep, wk, buffer)        # block[keep] * wk, into the reused buffer
-            h[at] += a.T @ a
-            b[at] += a.T @ (target[keep, j] * wk)
+            a = gather_scaled(block, keep, wk, rows_out)      # block[keep] * wk, into the reused buffer
+            if whole:
+                h[at] += a.T @ a
+                b[at] += a.T @ (target[keep, j] * wk)
+            else:
+                h[at].reshape(-1)[square] += (a.T @ a).ravel()
+                b[at][cols] += a.T @ (target[keep, j] * wk)
     return list(zip(h, b))
 
 
