@@ -114,6 +114,25 @@ def test_normal_equations_summed_by_blocks_equal_the_whole_rows():
         np.testing.assert_allclose(b, a.T @ (d.target[keep, j] * d.weight[keep, j]), rtol=1e-12)
 
 
+def test_normal_equations_leave_out_the_features_a_block_never_sees():
+    """A feature zero on every row of a block (a silent source) is left out of that block's products: H and b
+    are the sums over the whole rows all the same, and a feature no block sees has exact zeros in H and b."""
+    rng = np.random.default_rng(7)
+    rows = 3 * identify.ROW_BLOCK + 77
+    f = rng.normal(size=(rows, 6)) * (rng.random((rows, 6)) < 0.5)
+    f[:identify.ROW_BLOCK, [1, 4]] = 0.0                               # silent in the first block
+    f[identify.ROW_BLOCK:2 * identify.ROW_BLOCK] = 0.0                 # a block where nothing is seen
+    f[:, 5] = 0.0                                                      # never seen
+    d = identify.Design(f, rng.normal(size=(rows, 2)), rng.random((rows, 2)) ** 3)
+    for j, (h, b) in zip([1, 0], identify.normal_equations(d, [1, 0])):
+        keep = d.weight[:, j] >= identify.ROW_FLOOR
+        a = d.features[keep] * d.weight[keep, j, None]
+        np.testing.assert_allclose(h, a.T @ a, rtol=1e-12)
+        np.testing.assert_allclose(b, a.T @ (d.target[keep, j] * d.weight[keep, j]), rtol=1e-12)
+        assert not np.any(h[5]) and not np.any(h[:, 5]) and b[5] == 0.0
+        assert np.all(np.diag(h)[:5] > 0)
+
+
 def test_gains_fill_eight_bits_where_states_allow():
     state = np.array([1000.0, 1000.0, 50.0])
     wmax = [np.array([2.0, 10.0, 2.0])]
