@@ -166,7 +166,7 @@ class _Records:
         rec = self.series.get(key)
         if rec is None:
             rec = self.series[key] = np.empty((self.batch, self.steps) + value.shape[1:], value.dtype)
-        elif np.result_type(rec.dtype, value.dtype) != rec.dtype:
+        elif value.dtype != rec.dtype and np.result_type(rec.dtype, value.dtype) != rec.dtype:
             rec = self.series[key] = rec.astype(np.result_type(rec.dtype, value.dtype))
         rec[:, t] = value
 
@@ -251,23 +251,20 @@ class _Runner:
         want_voltage = self.record in ("voltage", "all")
         want_spikes = self.record in ("spikes", "voltage", "all")
 
-        def fetch(src: str, dst: str, t: int) -> np.ndarray | None:
-            d = g.delay(src, dst)
-            if src in self.static:
-                return None  # already in static_drive
-            if t - d < 0:
-                return None
-            value = hist[(src, g.port(src, dst))][t - d]
-            if value is None:      # released by the window below: a bug, never an absent input
-                raise RuntimeError(f"step {t - d} of '{src}' was released before the edge to '{dst}' read it")
-            return value
+        # what each dynamic node reads from the others, looked up in the graph once: (source, its history, the
+        # edge's delay) in predecessor order (the static ones are in static_drive already)
+        feeds = {name: [(src, hist[(src, g.port(src, name))], g.delay(src, name)) for src in g.predecessors(name)
+                        if src not in self.static] for name in dynamic}
 
         def drive(name: str, t: int, width: int) -> np.ndarray:
             total = static_drive[name][:, t] if name in static_drive else None
-            for p in g.predecessors(name):
-                v = fetch(p, name, t)
-                if v is not None:
-                    total = v if total is None else total + v
+            for src, series, d in feeds[name]:
+                if t - d < 0:
+                    continue
+                v = series[t - d]
+                if v is None:      # released by the window below: a bug, never an absent input
+                    raise RuntimeError(f"step {t - d} of '{src}' was released before the edge to '{name}' read it")
+                total = v if total is None else total + v
             return total if total is not None else np.zeros((batch, width), dtype=self.dtype)
 
         # a step's output is kept while an edge may still read it (its longest delay); what the result reports is
@@ -280,9 +277,9 @@ class _Runner:
                     or (isinstance(g.node(n), LSTM) and want_state)}
         records = _Records(batch, steps)
         ports_of = {n: [p for (m, p) in hist if m == n] for n in dynamic}
+        steps_of = [(name, g.node(name)) for name in dynamic]
         for t in range(steps):
-            for name in dynamic:
-                op = g.node(name)
+            for name, op in steps_of:
                 if isinstance(op, LINEAR):
                     out = {"spikes": self.linear(name, drive(name, t, op.in_size))}
                 elif isinstance(op, LIF):
