@@ -151,6 +151,8 @@ def accumulate(blocks: Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]], neur
         if not whole:
             block = np.ascontiguousarray(block[:, cols])
             square = (cols[:, None] * f_count + cols[None, :]).ravel()     # those rows and columns of H, flat
+        if block.shape[0] * cols.size > buffer.size:       # a block longer than ROW_BLOCK (a caller's own blocks)
+            buffer = np.empty(block.shape[0] * cols.size)
         rows_out = buffer[:block.shape[0] * cols.size].reshape(block.shape[0], cols.size)
         for at, j in enumerate(neurons):
             w = weight[:, j]

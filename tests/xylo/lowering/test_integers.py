@@ -133,6 +133,18 @@ def test_normal_equations_leave_out_the_features_a_block_never_sees():
         assert np.all(np.diag(h)[:5] > 0)
 
 
+def test_a_block_longer_than_row_block_is_summed_whole():
+    """``accumulate`` takes its caller's blocks as they come: one longer than ROW_BLOCK gets a buffer of its size."""
+    rng = np.random.default_rng(1)
+    rows = 2 * identify.ROW_BLOCK + 5
+    f, y, w = rng.normal(size=(rows, 4)), rng.normal(size=(rows, 2)), rng.random((rows, 2))
+    [(h, b)] = identify.accumulate(iter([(f, y, w)]), [1], 4)
+    keep = w[:, 1] >= identify.ROW_FLOOR
+    a = f[keep] * w[keep, 1, None]
+    np.testing.assert_allclose(h, a.T @ a, rtol=1e-12)
+    np.testing.assert_allclose(b, a.T @ (y[keep, 1] * w[keep, 1]), rtol=1e-12)
+
+
 def test_gains_fill_eight_bits_where_states_allow():
     state = np.array([1000.0, 1000.0, 50.0])
     wmax = [np.array([2.0, 10.0, 2.0])]
