@@ -27,7 +27,7 @@ import numpy as np
 
 from snncc.errors import SnnccError
 from snncc.exact_products import ExactProduct
-from snncc.spike_products import FloatProduct
+from snncc import spike_products
 from snncc.ir.graph import Graph
 from snncc.ir.nodes import LIF, LINEAR, LSTM, Conv, Dense, Input, Output, Readout
 
@@ -112,7 +112,8 @@ EXACT_MIN_SIZE = 1 << 16       # float64 weights this large that are integers ti
 def _weight_matrix(op, dtype: np.dtype):
     """The node's weight as the matrix y = x @ W.T uses: dense, scipy CSR where large and sparse (and always
     for a Conv, its connection matrix), an ``ExactProduct`` where large and integer times a power of two, else a
-    ``spike_products.FloatProduct`` where large (spikes summed over the nonzero inputs in C, ascending order)."""
+    ``spike_products.FloatProduct`` where large enough for its kernel (spikes summed over the nonzero inputs in C,
+    ascending order)."""
     if isinstance(op, Conv):
         from snncc.ir.conv import conv_matrix
 
@@ -126,7 +127,8 @@ def _weight_matrix(op, dtype: np.dtype):
         product = ExactProduct(w)
         if product.units_t is not None:
             return product
-        return FloatProduct(w)
+        if w.size >= spike_products.FLOAT_MIN_SIZE:     # smaller: BLAS on every call, no wrapper to ask
+            return spike_products.FloatProduct(w)
     return w
 
 
@@ -205,7 +207,7 @@ class _Runner:
         w, b = self.p[name]
         if isinstance(w, np.ndarray):
             y = x @ w.T
-        elif isinstance(w, (ExactProduct, FloatProduct)):   # exact float32 / int sums, the spike kernel, else BLAS
+        elif isinstance(w, (ExactProduct, spike_products.FloatProduct)):   # exact sums, the spike kernel, or BLAS
             y = w.of(x)
         else:                                  # y^T = W x^T, W sparse (a convolution, a folded one)
             flat = x.reshape(-1, x.shape[-1])
